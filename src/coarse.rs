@@ -1,0 +1,223 @@
+//! Six-position coarse calibration (the paper's eq. 6) and the GA search intervals it sets.
+//!
+//! For each axis the poses that point it up and down are found by their dominant axis; per axis
+//! `k = (V_up - V_down) / (2 g0)` and `b = (V_up + V_down) / 2` (poses of the same face are averaged).
+//! The sensor reads `Ka^-1 (g_b + B)`, so the coarse model is `S = 1/k`, `B = b/k`, `M = 0`. The
+//! intervals are centred there: scale relative, non-orthogonality around 0, bias with an *absolute*
+//! width (the coarse bias can miss by ~10 % of the bias itself).
+//!
+//! ```
+//! use accelcal::coarse::{CoarseCalibration, SearchWidths};
+//! let g = 9.80665;
+//! let means = [[g + 0.1, 0.0, 0.0], [-g + 0.1, 0.0, 0.0], [0.0, g, 0.0], [0.0, -g, 0.0],
+//!     [0.0, 0.0, g - 0.2], [0.0, 0.0, -g - 0.2]];
+//! let coarse = CoarseCalibration::from_means(&means, g).unwrap();
+//! assert!((coarse.params().bias[0] - 0.1).abs() < 1e-5);
+//! let intervals = coarse.intervals(&SearchWidths::DEFAULT);
+//! assert!(intervals[3].0 < 1.0 && intervals[3].1 > 1.0); // Sxx
+//! ```
+
+use crate::frame::{Deviation, Frame, FrameError};
+use crate::ga::{GaError, SearchBox};
+use crate::model::{PARAM_COUNT, Params};
+
+/// Why a coarse calibration could not be made.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum CoarseError {
+    /// No pose points this axis up (`up == true`) or down.
+    MissingAxisPair {
+        /// Axis index 0..3 (x, y, z).
+        axis: u8,
+        /// Which half of the pair is missing.
+        up: bool,
+    },
+    /// Gravity must be finite and positive.
+    InvalidGravity,
+    /// A pose mean is not finite.
+    NonFinitePose,
+    /// The up and down readings of an axis coincide or are reversed.
+    DegenerateAxis {
+        /// Axis index.
+        axis: u8,
+    },
+}
+
+impl core::fmt::Display for CoarseError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::MissingAxisPair { axis, up } => write!(
+                f,
+                "no pose with the {} axis pointing {}: capture one to calibrate that axis",
+                crate::axis_name(*axis),
+                if *up { "up" } else { "down" }
+            ),
+            Self::InvalidGravity => f.write_str("gravity must be finite and positive"),
+            Self::NonFinitePose => f.write_str("a pose mean is not finite"),
+            Self::DegenerateAxis { axis } => {
+                write!(f, "the up and down readings of the {} axis do not differ", crate::axis_name(*axis))
+            }
+        }
+    }
+}
+
+impl core::error::Error for CoarseError {}
+
+impl From<FrameError> for CoarseError {
+    fn from(e: FrameError) -> Self {
+        match e {
+            FrameError::InvalidGravity => Self::InvalidGravity,
+            FrameError::DegenerateGain { axis } => Self::DegenerateAxis { axis },
+            FrameError::NonFiniteOffset => Self::NonFinitePose,
+        }
+    }
+}
+
+/// Half-widths of the GA search intervals around the coarse estimate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SearchWidths {
+    /// Bias half-width as a fraction of gravity (absolute, not relative to the bias). Defaults to 0.01
+    /// (10 mg).
+    pub bias_g: f32,
+    /// Scale half-width, relative. Defaults to 0.01 (1 %).
+    pub scale_rel: f32,
+    /// Non-orthogonality half-width, dimensionless (rad). Defaults to 0.03.
+    pub nonorth: f32,
+}
+
+impl SearchWidths {
+    /// The documented defaults.
+    pub const DEFAULT: Self = Self { bias_g: 0.01, scale_rel: 0.01, nonorth: 0.03 };
+
+    /// The box in the deviation coordinates of [`crate::frame`], centred on `center`.
+    pub fn search_box(&self, center: &Deviation) -> Result<SearchBox<PARAM_COUNT>, GaError> {
+        let half = [
+            self.bias_g,
+            self.bias_g,
+            self.bias_g,
+            self.scale_rel,
+            self.scale_rel,
+            self.scale_rel,
+            self.nonorth,
+            self.nonorth,
+            self.nonorth,
+        ];
+        let mut lower = [0.0; PARAM_COUNT];
+        let mut upper = [0.0; PARAM_COUNT];
+        for i in 0..PARAM_COUNT {
+            lower[i] = center[i] - half[i];
+            upper[i] = center[i] + half[i];
+        }
+        SearchBox::new(lower, upper)
+    }
+}
+
+impl Default for SearchWidths {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// The coarse (six-position) calibration.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct CoarseCalibration {
+    frame: Frame,
+    /// Poses averaged into `V_up` / `V_down` per axis.
+    pub poses_used: [[u16; 2]; 3],
+}
+
+/// Fraction of a pose's normalised reading on its dominant axis for it to count as up or down
+/// (cos 25 deg).
+const DOMINANCE: f32 = 0.906;
+
+impl CoarseCalibration {
+    /// Coarse calibration from pose means (input unit) against `gravity` (output unit).
+    pub fn from_means(means: &[[f32; 3]], gravity: f32) -> Result<Self, CoarseError> {
+        if !(gravity.is_finite() && gravity > 0.0) {
+            return Err(CoarseError::InvalidGravity);
+        }
+        if means.iter().flatten().any(|v| !v.is_finite()) {
+            return Err(CoarseError::NonFinitePose);
+        }
+        // Centre and half-range per axis from the extremes: removes the large offsets of raw counts.
+        let mut lo = [f32::INFINITY; 3];
+        let mut hi = [f32::NEG_INFINITY; 3];
+        for m in means {
+            for a in 0..3 {
+                lo[a] = lo[a].min(m[a]);
+                hi[a] = hi[a].max(m[a]);
+            }
+        }
+        let mut sums = [[0.0f32; 2]; 3];
+        let mut counts = [[0u16; 2]; 3];
+        for m in means {
+            let mut normalized = [0.0; 3];
+            for a in 0..3 {
+                let half_range = 0.5 * (hi[a] - lo[a]);
+                normalized[a] = if half_range > 0.0 { (m[a] - 0.5 * (hi[a] + lo[a])) / half_range } else { 0.0 };
+            }
+            let norm = libm::sqrtf(normalized.iter().map(|v| v * v).sum());
+            for a in 0..3 {
+                if norm > 0.0 && normalized[a].abs() >= DOMINANCE * norm {
+                    let side = usize::from(normalized[a] < 0.0);
+                    sums[a][side] += m[a];
+                    counts[a][side] = counts[a][side].saturating_add(1);
+                }
+            }
+        }
+        let mut offset = [0.0; 3];
+        let mut gain = [0.0; 3];
+        for a in 0..3 {
+            for (side, up) in [(0, true), (1, false)] {
+                if counts[a][side] == 0 {
+                    return Err(CoarseError::MissingAxisPair { axis: a as u8, up });
+                }
+            }
+            let v_up = sums[a][0] / f32::from(counts[a][0]);
+            let v_down = sums[a][1] / f32::from(counts[a][1]);
+            if !(v_up > v_down) {
+                return Err(CoarseError::DegenerateAxis { axis: a as u8 });
+            }
+            gain[a] = (v_up - v_down) / (2.0 * gravity);
+            offset[a] = 0.5 * (v_up + v_down);
+        }
+        Ok(Self { frame: Frame::new(offset, gain, gravity)?, poses_used: counts })
+    }
+
+    /// The normalising frame (offset `b`, gain `k`, gravity).
+    pub fn frame(&self) -> &Frame {
+        &self.frame
+    }
+
+    /// The coarse model in the paper's convention: `S = 1/k`, `B = b/k`, `M = 0`.
+    pub fn params(&self) -> Params {
+        self.frame.to_params(&[0.0; PARAM_COUNT])
+    }
+
+    /// The search intervals `(lower, upper)` per parameter in the paper's convention
+    /// ([`Params::to_array`] order): centre +- half-width, the bias half-width being `bias_g * g`.
+    pub fn intervals(&self, widths: &SearchWidths) -> [(f32, f32); PARAM_COUNT] {
+        let center = self.params().to_array();
+        let k = self.frame.gain;
+        let g = self.frame.gravity;
+        let half = [
+            widths.bias_g * g,
+            widths.bias_g * g,
+            widths.bias_g * g,
+            widths.scale_rel * center[3].abs(),
+            widths.scale_rel * center[4].abs(),
+            widths.scale_rel * center[5].abs(),
+            widths.nonorth / k[0].abs(),
+            widths.nonorth / k[0].abs(),
+            widths.nonorth / k[1].abs(),
+        ];
+        let mut out = [(0.0, 0.0); PARAM_COUNT];
+        for i in 0..PARAM_COUNT {
+            out[i] = (center[i] - half[i], center[i] + half[i]);
+        }
+        out
+    }
+}

@@ -1,0 +1,272 @@
+//! The normalised problem the optimisers solve: small numbers where the arithmetic happens.
+//!
+//! Raw pose means can be near 33 000 counts; fitting `Ka` and `B` to them directly in `f32` loses most
+//! digits to cancellation. A [`Frame`] (from the coarse calibration) maps each pose mean `m` to a unit
+//! vector `u = (m - c) / (k * g)` and the model to the *deviation* vector
+//! `x = [beta0, beta1, beta2, a0, a1, a2, m0, m1, m2]` with `A = I + diag(a) + lower(m)`,
+//! `f_b / g = A u - beta`. Every entry of `x` is near 0, and the per-pose modulus error is evaluated as
+//! `E = q + 2 u.d + |d|^2` with `d = (A - I) u - beta` and `q = |u|^2 - 1` precomputed, so no term is
+//! formed from two nearly equal large numbers.
+//!
+//! In the paper's convention: `Ka = A diag(1/k)`, `B = g beta + Ka c`.
+//!
+//! ```
+//! use accelcal::frame::Frame;
+//! use accelcal::model::Params;
+//! let frame = Frame::new([32768.0; 3], [836.0; 3], 9.80665).unwrap();
+//! let p = Params { bias: [0.1; 3], scale: [0.0012; 3], nonorth: [1e-5, 0.0, 2e-5] };
+//! let back = frame.to_params(&frame.to_deviation(&p));
+//! assert!((back.bias[0] - 0.1).abs() < 1e-4);
+//! ```
+
+use crate::model::{PARAM_COUNT, Params};
+
+/// Deviation vector `x` of the normalised model (see the [module docs](self)).
+pub type Deviation = [f32; PARAM_COUNT];
+
+/// One pose in the normalised frame: the unit-gravity direction estimate `u` and `q = |u|^2 - 1`.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct NormPose {
+    /// `(m - c) / (k g)`, dimensionless, near unit length.
+    pub u: [f32; 3],
+    /// `|u|^2 - 1`.
+    pub q: f32,
+}
+
+/// Offsets and gains that normalise pose means (from the coarse calibration).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Frame {
+    /// Per-axis offset `c`, input unit.
+    pub offset: [f32; 3],
+    /// Per-axis gain `k`, input unit per output unit.
+    pub gain: [f32; 3],
+    /// Gravity `g`, output unit.
+    pub gravity: f32,
+}
+
+/// Why a [`Frame`] cannot be built.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum FrameError {
+    /// Gravity must be finite and positive.
+    InvalidGravity,
+    /// A gain is zero or not finite (the up/down readings of that axis coincide).
+    DegenerateGain {
+        /// Axis index 0..3 (x, y, z).
+        axis: u8,
+    },
+    /// An offset is not finite.
+    NonFiniteOffset,
+}
+
+impl core::fmt::Display for FrameError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::InvalidGravity => f.write_str("gravity must be finite and positive"),
+            Self::DegenerateGain { axis } => {
+                write!(f, "axis {} has a zero or non-finite gain", crate::axis_name(*axis))
+            }
+            Self::NonFiniteOffset => f.write_str("an axis offset is not finite"),
+        }
+    }
+}
+
+impl core::error::Error for FrameError {}
+
+impl Frame {
+    /// A frame with per-axis `offset` and `gain` (input unit per output unit) and `gravity` (output unit).
+    pub fn new(offset: [f32; 3], gain: [f32; 3], gravity: f32) -> Result<Self, FrameError> {
+        if !(gravity.is_finite() && gravity > 0.0) {
+            return Err(FrameError::InvalidGravity);
+        }
+        for (axis, &k) in gain.iter().enumerate() {
+            if !(k.is_finite() && k != 0.0) {
+                return Err(FrameError::DegenerateGain { axis: axis as u8 });
+            }
+        }
+        if offset.iter().any(|c| !c.is_finite()) {
+            return Err(FrameError::NonFiniteOffset);
+        }
+        Ok(Self { offset, gain, gravity })
+    }
+
+    /// Normalises one pose mean (input unit).
+    #[inline]
+    pub fn normalize(&self, mean: [f32; 3]) -> NormPose {
+        let mut u = [0.0; 3];
+        for i in 0..3 {
+            u[i] = (mean[i] - self.offset[i]) / (self.gain[i] * self.gravity);
+        }
+        NormPose { u, q: u[0] * u[0] + u[1] * u[1] + u[2] * u[2] - 1.0 }
+    }
+
+    /// Paper-convention parameters for a deviation vector.
+    pub fn to_params(&self, x: &Deviation) -> Params {
+        let k = self.gain;
+        let scale = [(1.0 + x[3]) / k[0], (1.0 + x[4]) / k[1], (1.0 + x[5]) / k[2]];
+        let nonorth = [x[6] / k[0], x[7] / k[0], x[8] / k[1]];
+        let ka_only = Params { bias: [0.0; 3], scale, nonorth };
+        let kc = ka_only.ka_times(self.offset);
+        let g = self.gravity;
+        Params { bias: [g * x[0] + kc[0], g * x[1] + kc[1], g * x[2] + kc[2]], scale, nonorth }
+    }
+
+    /// Deviation vector for paper-convention parameters (inverse of [`Frame::to_params`]).
+    pub fn to_deviation(&self, p: &Params) -> Deviation {
+        let k = self.gain;
+        let kc = p.ka_times(self.offset);
+        let g = self.gravity;
+        [
+            (p.bias[0] - kc[0]) / g,
+            (p.bias[1] - kc[1]) / g,
+            (p.bias[2] - kc[2]) / g,
+            p.scale[0] * k[0] - 1.0,
+            p.scale[1] * k[1] - 1.0,
+            p.scale[2] * k[2] - 1.0,
+            p.nonorth[0] * k[0],
+            p.nonorth[1] * k[0],
+            p.nonorth[2] * k[1],
+        ]
+    }
+
+    /// Jacobian of the paper-convention parameters with respect to the deviation vector:
+    /// `J[i][j] = d params[i] / d x[j]` (both in [`Params::to_array`] order). The mapping is affine.
+    pub fn params_jacobian(&self, x: &Deviation) -> [[f32; PARAM_COUNT]; PARAM_COUNT] {
+        let k = self.gain;
+        let c = self.offset;
+        let g = self.gravity;
+        let mut j = [[0.0; PARAM_COUNT]; PARAM_COUNT];
+        // Scale and non-orthogonality: linear in a and m.
+        j[3][3] = 1.0 / k[0];
+        j[4][4] = 1.0 / k[1];
+        j[5][5] = 1.0 / k[2];
+        j[6][6] = 1.0 / k[0];
+        j[7][7] = 1.0 / k[0];
+        j[8][8] = 1.0 / k[1];
+        // Bias: B = g beta + Ka c.
+        for i in 0..3 {
+            j[i][i] = g;
+        }
+        j[0][3] = c[0] / k[0];
+        j[1][6] = c[0] / k[0];
+        j[1][4] = c[1] / k[1];
+        j[2][7] = c[0] / k[0];
+        j[2][8] = c[1] / k[1];
+        j[2][5] = c[2] / k[2];
+        let _ = x; // the map is affine: the Jacobian does not depend on x
+        j
+    }
+}
+
+/// `d = (A - I) u - beta` for deviation `x`.
+#[inline]
+pub fn deviation_residual(x: &Deviation, u: [f32; 3]) -> [f32; 3] {
+    [
+        x[3] * u[0] - x[0],
+        x[6] * u[0] + x[4] * u[1] - x[1],
+        x[7] * u[0] + x[8] * u[1] + x[5] * u[2] - x[2],
+    ]
+}
+
+/// Normalised modulus error of one pose, `E / g^2 = |A u - beta|^2 - 1`, evaluated without cancellation.
+#[inline]
+pub fn modulus_error(x: &Deviation, pose: &NormPose) -> f32 {
+    let u = pose.u;
+    let d = deviation_residual(x, u);
+    pose.q
+        + 2.0 * (u[0] * d[0] + u[1] * d[1] + u[2] * d[2])
+        + (d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+}
+
+/// Normalised objective `fE / g^4 = mean(E^2)` (the function every optimiser here minimises).
+/// `f32::INFINITY` for no poses.
+pub fn objective(x: &Deviation, poses: &[NormPose]) -> f32 {
+    if poses.is_empty() {
+        return f32::INFINITY;
+    }
+    let mut sum = 0.0;
+    for pose in poses {
+        let e = modulus_error(x, pose);
+        sum += e * e;
+    }
+    sum / poses.len() as f32
+}
+
+/// Modulus error of one pose and its gradient with respect to `x`.
+#[inline]
+pub fn modulus_error_gradient(x: &Deviation, pose: &NormPose) -> (f32, Deviation) {
+    let u = pose.u;
+    let d = deviation_residual(x, u);
+    let r = [u[0] + d[0], u[1] + d[1], u[2] + d[2]];
+    let e = modulus_error(x, pose);
+    let grad = [
+        -2.0 * r[0],
+        -2.0 * r[1],
+        -2.0 * r[2],
+        2.0 * r[0] * u[0],
+        2.0 * r[1] * u[1],
+        2.0 * r[2] * u[2],
+        2.0 * r[1] * u[0],
+        2.0 * r[2] * u[0],
+        2.0 * r[2] * u[1],
+    ];
+    (e, grad)
+}
+
+/// Rows of `d r / d x` (3 x 9) for one pose; `r = A u - beta` is linear in `x`.
+#[inline]
+pub fn residual_jacobian(u: [f32; 3]) -> [[f32; PARAM_COUNT]; 3] {
+    let mut j = [[0.0; PARAM_COUNT]; 3];
+    j[0][0] = -1.0;
+    j[0][3] = u[0];
+    j[1][1] = -1.0;
+    j[1][4] = u[1];
+    j[1][6] = u[0];
+    j[2][2] = -1.0;
+    j[2][5] = u[2];
+    j[2][7] = u[0];
+    j[2][8] = u[1];
+    j
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn error_matches_direct_evaluation() {
+        let frame = Frame::new([32768.0, 32700.0, 32900.0], [830.0, 840.0, 850.0], 9.80665).unwrap();
+        let p = Params { bias: [40.0, 39.0, 38.0], scale: [0.0012, 0.00119, 0.00118], nonorth: [1e-5, -2e-5, 3e-5] };
+        let x = frame.to_deviation(&p);
+        let mean = [33500.0, 32000.0, 33100.0];
+        let pose = frame.normalize(mean);
+        let e_norm = modulus_error(&x, &pose) * 9.80665f32 * 9.80665;
+        let e_direct = p.modulus_error(mean, 9.80665);
+        assert!((e_norm - e_direct).abs() < 1e-3 * e_direct.abs().max(1.0), "{e_norm} vs {e_direct}");
+    }
+
+    #[test]
+    fn gradient_matches_finite_differences() {
+        let pose = NormPose { u: [0.3, -0.5, 0.8], q: 0.3f32 * 0.3 + 0.25 + 0.64 - 1.0 };
+        let x = [0.01, -0.02, 0.005, 0.01, -0.01, 0.02, 0.003, -0.004, 0.002];
+        let (_, g) = modulus_error_gradient(&x, &pose);
+        for i in 0..PARAM_COUNT {
+            let h = 1e-3;
+            let (mut xp, mut xm) = (x, x);
+            xp[i] += h;
+            xm[i] -= h;
+            let fd = (modulus_error(&xp, &pose) - modulus_error(&xm, &pose)) / (2.0 * h);
+            assert!((fd - g[i]).abs() < 1e-3, "param {i}: {fd} vs {}", g[i]);
+        }
+    }
+
+    #[test]
+    fn rejects_bad_frames() {
+        assert_eq!(Frame::new([0.0; 3], [1.0; 3], 0.0), Err(FrameError::InvalidGravity));
+        assert_eq!(Frame::new([0.0; 3], [1.0, 0.0, 1.0], 9.8), Err(FrameError::DegenerateGain { axis: 1 }));
+        assert_eq!(Frame::new([f32::NAN, 0.0, 0.0], [1.0; 3], 9.8), Err(FrameError::NonFiniteOffset));
+    }
+}

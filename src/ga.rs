@@ -1,0 +1,597 @@
+//! A fixed-size, real-coded adaptive genetic algorithm with the paper's three operator policies.
+//!
+//! - **Problem**: any [`CostFunction`] (smaller is better) over a [`SearchBox`].
+//! - **Solver**: [`GaConfig`] (operator policy, elitism, termination) and [`Ga`] (the state).
+//! - **Fitness transform**: `f = -cost`. The adaptive formulas use `(f - f_avg) / (f_max - f_avg)`, which
+//!   is invariant to affine transforms of `f` but not to e.g. `1 / (1 + cost)`; with `-cost` the policies
+//!   see the cost differences as they are.
+//! - **Operators** (choices the paper leaves open): binary tournament selection; BLX-alpha blend
+//!   crossover (alpha = 0.5) on parent pairs with probability `Pc`; per-gene mutation with probability
+//!   `Pm` by a triangular step whose width follows the population's spread of that gene (never below
+//!   `mutation_floor` of the box width), reflected into the box; `elites` best kept unchanged.
+//!
+//! ```
+//! use accelcal::ga::{Ga, GaConfig, SearchBox, rastrigin};
+//! use rand_xoshiro::Xoshiro128PlusPlus;
+//! use rand_core::SeedableRng;
+//! let bounds = SearchBox::new([-5.12; 2], [5.12; 2]).unwrap();
+//! let config = GaConfig { max_generations: 150, ..GaConfig::DEFAULT };
+//! let mut ga: Ga<_, 40, 2> = Ga::new(config, bounds, Xoshiro128PlusPlus::seed_from_u64(1), &rastrigin).unwrap();
+//! let report = ga.run(&rastrigin);
+//! assert!(report.cost < 1e-2);
+//! ```
+
+use rand_core::Rng;
+
+/// Something to minimise over `DIM` real genes.
+pub trait CostFunction<const DIM: usize> {
+    /// The cost of `x` (smaller is better). Non-finite values are treated as the worst possible.
+    fn cost(&self, x: &[f32; DIM]) -> f32;
+}
+
+impl<F: Fn(&[f32; DIM]) -> f32, const DIM: usize> CostFunction<DIM> for F {
+    fn cost(&self, x: &[f32; DIM]) -> f32 {
+        self(x)
+    }
+}
+
+/// The paper's multimodal test function: Rastrigin, `20 + sum(x_i^2 - 10 cos(2 pi x_i))` in 2-D.
+pub fn rastrigin(x: &[f32; 2]) -> f32 {
+    let mut s = 20.0;
+    for &v in x {
+        s += v * v - 10.0 * libm::cosf(2.0 * core::f32::consts::PI * v);
+    }
+    s
+}
+
+/// Cost given to non-finite evaluations: finite, so population averages stay finite.
+const WORST_COST: f32 = 1.0e30;
+
+/// Why a GA cannot be set up.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum GaError {
+    /// Interval `dim` is empty, inverted or not finite (`lower >= upper`).
+    InvalidInterval {
+        /// The gene index.
+        dim: u8,
+    },
+    /// `elites` must leave at least two places for offspring.
+    TooManyElites,
+    /// A probability constant of the operator policy is not finite.
+    InvalidOperators,
+}
+
+impl core::fmt::Display for GaError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::InvalidInterval { dim } => write!(f, "search interval {dim} is empty, inverted or not finite"),
+            Self::TooManyElites => f.write_str("elites leave fewer than two places for offspring"),
+            Self::InvalidOperators => f.write_str("an operator constant is not finite"),
+        }
+    }
+}
+
+impl core::error::Error for GaError {}
+
+/// The search box: gene `i` lives in `[lower[i], upper[i]]`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SearchBox<const DIM: usize> {
+    lower: [f32; DIM],
+    upper: [f32; DIM],
+}
+
+impl<const DIM: usize> SearchBox<DIM> {
+    /// A box; every interval must be finite with `lower < upper`.
+    pub fn new(lower: [f32; DIM], upper: [f32; DIM]) -> Result<Self, GaError> {
+        for i in 0..DIM {
+            if !(lower[i].is_finite() && upper[i].is_finite() && lower[i] < upper[i]) {
+                return Err(GaError::InvalidInterval { dim: i as u8 });
+            }
+        }
+        Ok(Self { lower, upper })
+    }
+
+    /// Lower bounds.
+    pub fn lower(&self) -> &[f32; DIM] {
+        &self.lower
+    }
+
+    /// Upper bounds.
+    pub fn upper(&self) -> &[f32; DIM] {
+        &self.upper
+    }
+
+    /// Reflects `v` at the bounds of gene `i` and clamps what is still outside.
+    fn reflect(&self, i: usize, v: f32) -> f32 {
+        let (lo, hi) = (self.lower[i], self.upper[i]);
+        let r = if v < lo {
+            2.0 * lo - v
+        } else if v > hi {
+            2.0 * hi - v
+        } else {
+            v
+        };
+        r.clamp(lo, hi)
+    }
+}
+
+/// The adaptive crossover / mutation policy (fitness `f = -cost`, larger is better).
+///
+/// All probabilities are clamped to `[0, 1]`: TAGA's `Pc1 = 1/(2 + lg N) + phi` exceeds 1 for
+/// `N < 1000` with the paper's `phi = 0.8`, so its crossover is certain early on.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Operators {
+    /// Srinivas & Patnaik: `Pc = k1 (f_max - f') / (f_max - f_avg)` if `f' >= f_avg` else `k3`;
+    /// `Pm = k2 (f_max - f) / (f_max - f_avg)` if `f >= f_avg` else `k4`. As printed, the best
+    /// individual gets `Pc = Pm = 0`: once clones of it fill the population the search freezes.
+    Aga {
+        /// Crossover factor for above-average pairs (paper: 0.8).
+        k1: f32,
+        /// Mutation factor for above-average individuals (paper: 0.8).
+        k2: f32,
+        /// Crossover probability below average (paper: 0.05).
+        k3: f32,
+        /// Mutation probability below average (paper: 0.03).
+        k4: f32,
+    },
+    /// Linear adaptive: `Pc = Pc1 - (Pc1 - Pc2)(f' - f_avg)/(f_max - f_avg)` if `f' >= f_avg` else `Pc1`,
+    /// the same form for `Pm`. The paper prints `Pc1 = Pc2 = 0.8`, so its crossover is not adaptive.
+    Laga {
+        /// Crossover probability at and below average (paper: 0.8).
+        pc1: f32,
+        /// Crossover probability of the best (paper: 0.8).
+        pc2: f32,
+        /// Mutation probability at and below average (paper: 0.05).
+        pm1: f32,
+        /// Mutation probability of the best (paper: 0.03).
+        pm2: f32,
+    },
+    /// The paper's TAGA, eqs. (8)-(9): sinusoidal between `Pc1(N)` and `Pc2`, with
+    /// `Pc1 = 1/(2 + lg N) + phi` and `Pm1 = -0.1/(2 + 0.8 lg N) + varphi`, `N` the generation (from 1).
+    Taga {
+        /// Limit of `Pc1` (paper: 0.8).
+        phi: f32,
+        /// Crossover probability of the best (paper: 0.8).
+        pc2: f32,
+        /// Limit of `Pm1` (paper: 0.13).
+        varphi: f32,
+        /// Mutation probability of the best (paper: 0.01).
+        pm2: f32,
+    },
+}
+
+impl Operators {
+    /// AGA with the paper's constants.
+    pub const AGA_PAPER: Self = Self::Aga { k1: 0.8, k2: 0.8, k3: 0.05, k4: 0.03 };
+    /// LAGA ("IAGA" in the paper) with the paper's constants.
+    pub const LAGA_PAPER: Self = Self::Laga { pc1: 0.8, pc2: 0.8, pm1: 0.05, pm2: 0.03 };
+    /// TAGA with the paper's constants.
+    pub const TAGA_PAPER: Self = Self::Taga { phi: 0.8, pc2: 0.8, varphi: 0.13, pm2: 0.01 };
+
+    fn constants(&self) -> [f32; 4] {
+        match *self {
+            Self::Aga { k1, k2, k3, k4 } => [k1, k2, k3, k4],
+            Self::Laga { pc1, pc2, pm1, pm2 } => [pc1, pc2, pm1, pm2],
+            Self::Taga { phi, pc2, varphi, pm2 } => [phi, pc2, varphi, pm2],
+        }
+    }
+
+    /// Crossover probability for a pair whose better parent has fitness `f_better`.
+    pub fn crossover_probability(&self, f_better: f32, stats: &FitnessStats, generation: u32) -> f32 {
+        let p = match *self {
+            Self::Aga { k1, k3, .. } => stats.above_average(f_better).map_or(k3, |t| k1 * (1.0 - t)),
+            Self::Laga { pc1, pc2, .. } => stats.above_average(f_better).map_or(pc1, |t| pc1 - (pc1 - pc2) * t),
+            Self::Taga { phi, pc2, .. } => {
+                let pc1 = 1.0 / (2.0 + lg(generation)) + phi;
+                stats.above_average(f_better).map_or(pc1, |t| sine_blend(pc1, pc2, t))
+            }
+        };
+        p.clamp(0.0, 1.0)
+    }
+
+    /// Per-gene mutation probability for an individual of fitness `f`.
+    pub fn mutation_probability(&self, f: f32, stats: &FitnessStats, generation: u32) -> f32 {
+        let p = match *self {
+            Self::Aga { k2, k4, .. } => stats.above_average(f).map_or(k4, |t| k2 * (1.0 - t)),
+            Self::Laga { pm1, pm2, .. } => stats.above_average(f).map_or(pm1, |t| pm1 - (pm1 - pm2) * t),
+            Self::Taga { varphi, pm2, .. } => {
+                let pm1 = -0.1 / (2.0 + 0.8 * lg(generation)) + varphi;
+                stats.above_average(f).map_or(pm1, |t| sine_blend(pm1, pm2, t))
+            }
+        };
+        p.clamp(0.0, 1.0)
+    }
+}
+
+impl Default for Operators {
+    fn default() -> Self {
+        Self::TAGA_PAPER
+    }
+}
+
+fn lg(generation: u32) -> f32 {
+    libm::log10f(generation.max(1) as f32)
+}
+
+/// `(p1 + p2)/2 - (p1 - p2)/2 sin(pi/2 t)`.
+fn sine_blend(p1: f32, p2: f32, t: f32) -> f32 {
+    0.5 * (p1 + p2) - 0.5 * (p1 - p2) * libm::sinf(core::f32::consts::FRAC_PI_2 * t)
+}
+
+/// Population fitness statistics the adaptive policies need (`f = -cost`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct FitnessStats {
+    /// Largest fitness.
+    pub max: f32,
+    /// Mean fitness.
+    pub avg: f32,
+}
+
+impl FitnessStats {
+    /// `Some(t)` with `t = (f - f_avg) / (f_max - f_avg)` in `[0, 1]` when `f >= f_avg`, else `None`.
+    /// A population of equal fitness gives `t = 1` (everyone is the best).
+    pub fn above_average(&self, f: f32) -> Option<f32> {
+        if f < self.avg {
+            return None;
+        }
+        let spread = self.max - self.avg;
+        if spread > 0.0 { Some(((f - self.avg) / spread).clamp(0.0, 1.0)) } else { Some(1.0) }
+    }
+}
+
+/// Solver settings. Every field is documented with its default ([`GaConfig::DEFAULT`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct GaConfig {
+    /// Operator policy. Defaults to [`Operators::TAGA_PAPER`].
+    pub operators: Operators,
+    /// Best individuals copied unchanged into the next generation. Defaults to 2.
+    pub elites: usize,
+    /// Stop after this many generations. Defaults to 100.
+    pub max_generations: u32,
+    /// Stop once the best cost is at or below this. Defaults to `f32::NEG_INFINITY` (off).
+    pub target_cost: f32,
+    /// Stop after this many generations without a relative improvement of the best cost by more than
+    /// `1e-6`. Defaults to 0 (off).
+    pub stall_generations: u32,
+    /// BLX-alpha crossover extension. Defaults to 0.5.
+    pub blend_alpha: f32,
+    /// Smallest mutation step width as a fraction of the box width. Defaults to 1e-6.
+    pub mutation_floor: f32,
+}
+
+impl GaConfig {
+    /// The documented defaults.
+    pub const DEFAULT: Self = Self {
+        operators: Operators::TAGA_PAPER,
+        elites: 2,
+        max_generations: 100,
+        target_cost: f32::NEG_INFINITY,
+        stall_generations: 0,
+        blend_alpha: 0.5,
+        mutation_floor: 1e-6,
+    };
+}
+
+impl Default for GaConfig {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// Why [`Ga::run`] stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Termination {
+    /// `max_generations` reached.
+    MaxGenerations,
+    /// `target_cost` reached.
+    TargetReached,
+    /// No improvement for `stall_generations`.
+    Stalled,
+}
+
+/// What a GA run found.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct GaReport<const DIM: usize> {
+    /// The best genes.
+    pub best: [f32; DIM],
+    /// Their cost.
+    pub cost: f32,
+    /// Generations run.
+    pub generations: u32,
+    /// Cost function evaluations.
+    pub evaluations: u32,
+    /// Why it stopped.
+    pub termination: Termination,
+}
+
+/// The GA state: a population of `POP` individuals of `DIM` genes, and the caller's seeded RNG `R`.
+pub struct Ga<R, const POP: usize, const DIM: usize> {
+    config: GaConfig,
+    bounds: SearchBox<DIM>,
+    rng: R,
+    population: [[f32; DIM]; POP],
+    costs: [f32; POP],
+    offspring: [[f32; DIM]; POP],
+    generation: u32,
+    evaluations: u32,
+    best_index: usize,
+    stall: u32,
+}
+
+impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
+    const VALID: () = {
+        assert!(POP >= 4, "a GA population needs at least 4 individuals");
+        assert!(DIM >= 1, "a GA needs at least one gene");
+    };
+
+    /// A population drawn uniformly from `bounds` and evaluated (generation 0).
+    pub fn new(
+        config: GaConfig,
+        bounds: SearchBox<DIM>,
+        rng: R,
+        cost: &impl CostFunction<DIM>,
+    ) -> Result<Self, GaError> {
+        let () = Self::VALID;
+        if config.elites + 2 > POP {
+            return Err(GaError::TooManyElites);
+        }
+        if config.operators.constants().iter().any(|c| !c.is_finite())
+            || !config.blend_alpha.is_finite()
+            || !config.mutation_floor.is_finite()
+        {
+            return Err(GaError::InvalidOperators);
+        }
+        let mut ga = Self {
+            config,
+            bounds,
+            rng,
+            population: [[0.0; DIM]; POP],
+            costs: [0.0; POP],
+            offspring: [[0.0; DIM]; POP],
+            generation: 0,
+            evaluations: 0,
+            best_index: 0,
+            stall: 0,
+        };
+        for i in 0..POP {
+            for d in 0..DIM {
+                let u = ga.uniform();
+                ga.population[i][d] = bounds.lower[d] + u * (bounds.upper[d] - bounds.lower[d]);
+            }
+            ga.costs[i] = ga.evaluate(cost, i);
+        }
+        ga.best_index = argmin(&ga.costs);
+        Ok(ga)
+    }
+
+    /// Replaces the worst individual by `x` (clamped into the box), e.g. a prior estimate.
+    pub fn inject(&mut self, x: &[f32; DIM], cost: &impl CostFunction<DIM>) {
+        let worst = argmax(&self.costs);
+        for d in 0..DIM {
+            self.population[worst][d] = self.bounds.reflect(d, x[d]);
+        }
+        self.costs[worst] = self.evaluate(cost, worst);
+        self.best_index = argmin(&self.costs);
+    }
+
+    fn evaluate(&mut self, cost: &impl CostFunction<DIM>, i: usize) -> f32 {
+        self.evaluations = self.evaluations.saturating_add(1);
+        let c = cost.cost(&self.population[i]);
+        if c.is_finite() { c.min(WORST_COST) } else { WORST_COST }
+    }
+
+    /// Uniform in `[0, 1)`.
+    fn uniform(&mut self) -> f32 {
+        (self.rng.next_u32() >> 8) as f32 * (1.0 / 16_777_216.0)
+    }
+
+    fn index(&mut self) -> usize {
+        ((self.rng.next_u32() as u64 * POP as u64) >> 32) as usize
+    }
+
+    fn tournament(&mut self) -> usize {
+        let (a, b) = (self.index(), self.index());
+        if self.costs[a] <= self.costs[b] { a } else { b }
+    }
+
+    /// Fitness statistics of the current population (`f = -cost`).
+    pub fn fitness_stats(&self) -> FitnessStats {
+        let sum: f32 = self.costs.iter().sum();
+        FitnessStats { max: -self.costs[self.best_index], avg: -(sum / POP as f32) }
+    }
+
+    /// Runs one generation: elitism, selection, crossover, mutation, evaluation.
+    pub fn step(&mut self, cost: &impl CostFunction<DIM>) {
+        let stats = self.fitness_stats();
+        let generation = self.generation + 1;
+        let spread = self.gene_spread();
+        let previous_best = self.costs[self.best_index];
+
+        // Elites: repeatedly take the best not yet taken (POP is small; no sort, no allocation).
+        let mut taken = [false; POP];
+        let mut elite_costs = [0.0f32; POP];
+        let elites = self.config.elites;
+        for e in 0..elites {
+            let mut best = usize::MAX;
+            for i in 0..POP {
+                if !taken[i] && (best == usize::MAX || self.costs[i] < self.costs[best]) {
+                    best = i;
+                }
+            }
+            if let Some(flag) = taken.get_mut(best) {
+                *flag = true;
+                self.offspring[e] = self.population[best];
+                elite_costs[e] = self.costs[best];
+            }
+        }
+
+        let mut parent_fitness = [0.0f32; POP];
+        let mut slot = elites;
+        while slot < POP {
+            let (a, b) = (self.tournament(), self.tournament());
+            let (fa, fb) = (-self.costs[a], -self.costs[b]);
+            let pc = self.config.operators.crossover_probability(fa.max(fb), &stats, generation);
+            let (mut c1, mut c2) = (self.population[a], self.population[b]);
+            if self.uniform() < pc {
+                self.blend(&mut c1, &mut c2);
+            }
+            for (child, f) in [(c1, fa), (c2, fb)] {
+                if slot < POP {
+                    self.offspring[slot] = child;
+                    parent_fitness[slot] = f;
+                    slot += 1;
+                }
+            }
+        }
+        for i in elites..POP {
+            let pm = self.config.operators.mutation_probability(parent_fitness[i], &stats, generation);
+            for d in 0..DIM {
+                if self.uniform() < pm {
+                    let step = self.triangular() * spread[d];
+                    self.offspring[i][d] = self.bounds.reflect(d, self.offspring[i][d] + step);
+                }
+            }
+        }
+
+        core::mem::swap(&mut self.population, &mut self.offspring);
+        // Elites keep their costs; only offspring are evaluated.
+        for i in 0..POP {
+            self.costs[i] = if i < elites { elite_costs[i] } else { self.evaluate(cost, i) };
+        }
+        self.best_index = argmin(&self.costs);
+        self.generation = generation;
+        let best = self.costs[self.best_index];
+        if best < previous_best - 1e-6 * previous_best.abs() {
+            self.stall = 0;
+        } else {
+            self.stall = self.stall.saturating_add(1);
+        }
+    }
+
+    /// BLX-alpha: each child gene uniform in the parents' interval extended by alpha on both sides.
+    fn blend(&mut self, c1: &mut [f32; DIM], c2: &mut [f32; DIM]) {
+        let alpha = self.config.blend_alpha;
+        for d in 0..DIM {
+            let (lo, hi) = if c1[d] <= c2[d] { (c1[d], c2[d]) } else { (c2[d], c1[d]) };
+            let ext = alpha * (hi - lo);
+            let (a, b) = (lo - ext, hi + ext);
+            let (u1, u2) = (self.uniform(), self.uniform());
+            c1[d] = self.bounds.reflect(d, a + u1 * (b - a));
+            c2[d] = self.bounds.reflect(d, a + u2 * (b - a));
+        }
+    }
+
+    /// Triangular on `[-1, 1]`.
+    fn triangular(&mut self) -> f32 {
+        self.uniform() + self.uniform() - 1.0
+    }
+
+    /// Per-gene mutation width: twice the population's standard deviation of that gene, at least
+    /// `mutation_floor` of the box width.
+    fn gene_spread(&self) -> [f32; DIM] {
+        let mut out = [0.0; DIM];
+        for d in 0..DIM {
+            let mean = self.population.iter().map(|x| x[d]).sum::<f32>() / POP as f32;
+            let var = self.population.iter().map(|x| (x[d] - mean) * (x[d] - mean)).sum::<f32>() / POP as f32;
+            let floor = self.config.mutation_floor * (self.bounds.upper[d] - self.bounds.lower[d]);
+            out[d] = (2.0 * libm::sqrtf(var)).max(floor);
+        }
+        out
+    }
+
+    /// Runs generations until a termination criterion holds.
+    pub fn run(&mut self, cost: &impl CostFunction<DIM>) -> GaReport<DIM> {
+        loop {
+            if let Some(termination) = self.termination() {
+                return self.report(termination);
+            }
+            self.step(cost);
+        }
+    }
+
+    /// The criterion that holds now, if any.
+    pub fn termination(&self) -> Option<Termination> {
+        if self.best_cost() <= self.config.target_cost {
+            Some(Termination::TargetReached)
+        } else if self.config.stall_generations > 0 && self.stall >= self.config.stall_generations {
+            Some(Termination::Stalled)
+        } else if self.generation >= self.config.max_generations {
+            Some(Termination::MaxGenerations)
+        } else {
+            None
+        }
+    }
+
+    fn report(&self, termination: Termination) -> GaReport<DIM> {
+        GaReport {
+            best: *self.best(),
+            cost: self.best_cost(),
+            generations: self.generation,
+            evaluations: self.evaluations,
+            termination,
+        }
+    }
+
+    /// The best individual so far.
+    pub fn best(&self) -> &[f32; DIM] {
+        &self.population[self.best_index]
+    }
+
+    /// Cost of [`Ga::best`].
+    pub fn best_cost(&self) -> f32 {
+        self.costs[self.best_index]
+    }
+
+    /// Mean cost of the population.
+    pub fn mean_cost(&self) -> f32 {
+        self.costs.iter().sum::<f32>() / POP as f32
+    }
+
+    /// Generations run so far.
+    pub fn generation(&self) -> u32 {
+        self.generation
+    }
+
+    /// Cost evaluations so far.
+    pub fn evaluations(&self) -> u32 {
+        self.evaluations
+    }
+
+    /// The current population.
+    pub fn population(&self) -> &[[f32; DIM]; POP] {
+        &self.population
+    }
+
+    /// Gives the RNG back.
+    pub fn into_rng(self) -> R {
+        self.rng
+    }
+}
+
+fn argmin(v: &[f32]) -> usize {
+    let mut best = 0;
+    for (i, &c) in v.iter().enumerate() {
+        if c < v[best] {
+            best = i;
+        }
+    }
+    best
+}
+
+fn argmax(v: &[f32]) -> usize {
+    let mut worst = 0;
+    for (i, &c) in v.iter().enumerate() {
+        if c > v[worst] {
+            worst = i;
+        }
+    }
+    worst
+}

@@ -1,0 +1,162 @@
+//! Small dense linear algebra on the stack: `N x N` solves for the 9-parameter normal equations.
+//!
+//! ```
+//! use accelcal::linalg::solve_lu;
+//! let a = [[4.0, 1.0], [1.0, 3.0]];
+//! let x = solve_lu(a, [1.0, 2.0]).unwrap();
+//! assert!((4.0 * x[0] + x[1] - 1.0).abs() < 1e-6);
+//! ```
+
+/// A square matrix, row-major.
+pub type Matrix<const N: usize> = [[f32; N]; N];
+
+/// Why a linear solve failed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum LinalgError {
+    /// The matrix is singular (or not positive definite, for Cholesky) to working precision.
+    Singular,
+}
+
+impl core::fmt::Display for LinalgError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str("matrix is singular to working precision")
+    }
+}
+
+impl core::error::Error for LinalgError {}
+
+/// Solves `a x = b` by Gaussian elimination with partial pivoting.
+pub fn solve_lu<const N: usize>(mut a: Matrix<N>, mut b: [f32; N]) -> Result<[f32; N], LinalgError> {
+    let scale = a.iter().flatten().fold(0.0f32, |m, v| m.max(v.abs()));
+    if !(scale.is_finite() && scale > 0.0) {
+        return Err(LinalgError::Singular);
+    }
+    let tiny = scale * f32::EPSILON * N as f32;
+    for col in 0..N {
+        let mut pivot = col;
+        for row in col + 1..N {
+            if a[row][col].abs() > a[pivot][col].abs() {
+                pivot = row;
+            }
+        }
+        if !(a[pivot][col].abs() > tiny) {
+            return Err(LinalgError::Singular);
+        }
+        a.swap(col, pivot);
+        b.swap(col, pivot);
+        for row in col + 1..N {
+            let factor = a[row][col] / a[col][col];
+            for k in col..N {
+                a[row][k] -= factor * a[col][k];
+            }
+            b[row] -= factor * b[col];
+        }
+    }
+    let mut x = [0.0; N];
+    for row in (0..N).rev() {
+        let mut s = b[row];
+        for k in row + 1..N {
+            s -= a[row][k] * x[k];
+        }
+        x[row] = s / a[row][row];
+    }
+    if x.iter().all(|v| v.is_finite()) { Ok(x) } else { Err(LinalgError::Singular) }
+}
+
+/// Cholesky factor `L` (lower) of a symmetric positive definite matrix, with `a = L L^T`.
+pub fn cholesky<const N: usize>(a: &Matrix<N>) -> Result<Matrix<N>, LinalgError> {
+    let mut l = [[0.0; N]; N];
+    for i in 0..N {
+        for j in 0..=i {
+            let mut s = a[i][j];
+            for k in 0..j {
+                s -= l[i][k] * l[j][k];
+            }
+            if i == j {
+                if !(s > 0.0 && s.is_finite()) {
+                    return Err(LinalgError::Singular);
+                }
+                l[i][i] = libm::sqrtf(s);
+            } else {
+                l[i][j] = s / l[j][j];
+            }
+        }
+    }
+    Ok(l)
+}
+
+/// Solves `L L^T x = b` given the Cholesky factor `L`.
+pub fn cholesky_solve<const N: usize>(l: &Matrix<N>, b: [f32; N]) -> [f32; N] {
+    let mut y = [0.0; N];
+    for i in 0..N {
+        let mut s = b[i];
+        for k in 0..i {
+            s -= l[i][k] * y[k];
+        }
+        y[i] = s / l[i][i];
+    }
+    let mut x = [0.0; N];
+    for i in (0..N).rev() {
+        let mut s = y[i];
+        for k in i + 1..N {
+            s -= l[k][i] * x[k];
+        }
+        x[i] = s / l[i][i];
+    }
+    x
+}
+
+/// Inverse of a symmetric positive definite matrix, with Jacobi (diagonal) scaling for conditioning.
+pub fn spd_inverse<const N: usize>(a: &Matrix<N>) -> Result<Matrix<N>, LinalgError> {
+    let mut d = [0.0; N];
+    for i in 0..N {
+        if !(a[i][i] > 0.0 && a[i][i].is_finite()) {
+            return Err(LinalgError::Singular);
+        }
+        d[i] = 1.0 / libm::sqrtf(a[i][i]);
+    }
+    let mut scaled = [[0.0; N]; N];
+    for i in 0..N {
+        for j in 0..N {
+            scaled[i][j] = a[i][j] * d[i] * d[j];
+        }
+    }
+    let l = cholesky(&scaled)?;
+    let mut inv = [[0.0; N]; N];
+    for j in 0..N {
+        let mut e = [0.0; N];
+        e[j] = 1.0;
+        let col = cholesky_solve(&l, e);
+        for i in 0..N {
+            inv[i][j] = col[i] * d[i] * d[j];
+        }
+    }
+    Ok(inv)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn inverse_times_matrix_is_identity() {
+        let a = [[4.0, 1.0, 0.5], [1.0, 3.0, 0.2], [0.5, 0.2, 2.0]];
+        let inv = spd_inverse(&a).unwrap();
+        for i in 0..3 {
+            for j in 0..3 {
+                let v: f32 = (0..3).map(|k| a[i][k] * inv[k][j]).sum();
+                assert!((v - if i == j { 1.0 } else { 0.0 }).abs() < 1e-5);
+            }
+        }
+    }
+
+    #[test]
+    fn singular_is_an_error() {
+        let a = [[1.0, 2.0], [2.0, 4.0]];
+        assert_eq!(solve_lu(a, [1.0, 1.0]), Err(LinalgError::Singular));
+        assert_eq!(cholesky(&a).map(|_| ()), Err(LinalgError::Singular));
+        assert_eq!(solve_lu([[f32::NAN, 0.0], [0.0, 1.0]], [1.0, 1.0]), Err(LinalgError::Singular));
+    }
+}

@@ -1,0 +1,260 @@
+//! Gradient-based solvers of the normalised objective: the paper's classical Newton baseline and a
+//! Levenberg-Marquardt polish. Both start from any deviation vector and work on [`NormPose`]s.
+//!
+//! ```
+//! use accelcal::frame::{Frame, NormPose};
+//! use accelcal::model::Params;
+//! use accelcal::solve::{levenberg_marquardt, LmConfig};
+//! let truth = Params { bias: [0.12; 3], scale: [0.97, 0.98, 0.99], nonorth: [-0.015, 0.01, 0.02] };
+//! let frame = Frame::new([0.0; 3], [1.0; 3], 9.80665).unwrap();
+//! let dirs = [[1.0f32, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0],
+//!     [0.0, 0.0, -1.0], [0.6, 0.8, 0.0], [0.0, 0.6, -0.8], [-0.8, 0.0, 0.6], [0.57735027, 0.57735027, 0.57735027],
+//!     [-0.57735027, 0.57735027, -0.57735027], [0.57735027, -0.57735027, -0.57735027]];
+//! let poses = dirs.map(|d| frame.normalize(truth.invert(d.map(|v| v * 9.80665)).unwrap()));
+//! let fit = levenberg_marquardt([0.0; 9], &poses, &LmConfig::DEFAULT).unwrap();
+//! let p = frame.to_params(&fit.x);
+//! assert!((p.nonorth[2] - 0.02).abs() < 1e-4);
+//! ```
+
+use crate::frame::{Deviation, NormPose, modulus_error_gradient, objective, residual_jacobian};
+use crate::linalg::{Matrix, cholesky, cholesky_solve, solve_lu};
+use crate::model::PARAM_COUNT;
+
+/// Why a solve could not produce parameters.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum SolveError {
+    /// Fewer poses than the 9 parameters need.
+    TooFewPoses {
+        /// Poses given.
+        got: usize,
+    },
+    /// The start vector or a pose is not finite.
+    NonFiniteInput,
+    /// The iteration produced non-finite values (diverged).
+    Diverged,
+    /// The linear system of a step is singular: the poses do not determine all parameters.
+    Singular,
+}
+
+impl core::fmt::Display for SolveError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::TooFewPoses { got } => write!(f, "{got} poses given, at least {PARAM_COUNT} are needed"),
+            Self::NonFiniteInput => f.write_str("start vector or pose is not finite"),
+            Self::Diverged => f.write_str("the iteration diverged to non-finite values"),
+            Self::Singular => f.write_str("the poses do not determine all 9 parameters (singular system)"),
+        }
+    }
+}
+
+impl core::error::Error for SolveError {}
+
+/// How an iteration ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SolveTermination {
+    /// The step fell below `step_tolerance`.
+    Converged,
+    /// No step could lower the cost any more (f32 precision reached).
+    NoFurtherDecrease,
+    /// `max_iterations` reached first.
+    MaxIterations,
+}
+
+/// Result of [`levenberg_marquardt`] or [`newton`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SolveReport {
+    /// Best deviation vector found.
+    pub x: Deviation,
+    /// Normalised objective at `x` (see [`objective`]).
+    pub cost: f32,
+    /// Iterations run.
+    pub iterations: u32,
+    /// Why it stopped.
+    pub termination: SolveTermination,
+}
+
+/// Levenberg-Marquardt settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct LmConfig {
+    /// Iteration limit. Defaults to 50.
+    pub max_iterations: u32,
+    /// Initial Marquardt damping (relative to the diagonal of `J^T J`). Defaults to 1e-3.
+    pub initial_damping: f32,
+    /// Converged when the largest step component is below this (deviation units, i.e. relative to 1).
+    /// Defaults to 1e-7.
+    pub step_tolerance: f32,
+}
+
+impl LmConfig {
+    /// The documented defaults.
+    pub const DEFAULT: Self = Self { max_iterations: 50, initial_damping: 1e-3, step_tolerance: 1e-7 };
+}
+
+impl Default for LmConfig {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// Newton settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct NewtonConfig {
+    /// Iteration limit. Defaults to 50.
+    pub max_iterations: u32,
+    /// Converged when the largest step component is below this. Defaults to 1e-7.
+    pub step_tolerance: f32,
+}
+
+impl NewtonConfig {
+    /// The documented defaults.
+    pub const DEFAULT: Self = Self { max_iterations: 50, step_tolerance: 1e-7 };
+}
+
+impl Default for NewtonConfig {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+fn check_input(x: &Deviation, poses: &[NormPose]) -> Result<(), SolveError> {
+    if poses.len() < PARAM_COUNT {
+        return Err(SolveError::TooFewPoses { got: poses.len() });
+    }
+    let poses_finite = poses.iter().all(|p| p.q.is_finite() && p.u.iter().all(|v| v.is_finite()));
+    if !poses_finite || x.iter().any(|v| !v.is_finite()) {
+        return Err(SolveError::NonFiniteInput);
+    }
+    Ok(())
+}
+
+/// Gauss-Newton normal equations of the per-pose errors: `(J^T J, J^T e)`.
+fn normal_equations(x: &Deviation, poses: &[NormPose]) -> (Matrix<PARAM_COUNT>, Deviation) {
+    let mut jtj = [[0.0; PARAM_COUNT]; PARAM_COUNT];
+    let mut jte = [0.0; PARAM_COUNT];
+    for pose in poses {
+        let (e, g) = modulus_error_gradient(x, pose);
+        for i in 0..PARAM_COUNT {
+            jte[i] += g[i] * e;
+            for j in 0..=i {
+                jtj[i][j] += g[i] * g[j];
+            }
+        }
+    }
+    symmetrize(&mut jtj);
+    (jtj, jte)
+}
+
+fn symmetrize(m: &mut Matrix<PARAM_COUNT>) {
+    for i in 0..PARAM_COUNT {
+        for j in 0..i {
+            m[j][i] = m[i][j];
+        }
+    }
+}
+
+fn max_abs(v: &Deviation) -> f32 {
+    v.iter().fold(0.0f32, |m, x| m.max(x.abs()))
+}
+
+fn add(x: &Deviation, step: &Deviation) -> Deviation {
+    let mut out = *x;
+    for (o, s) in out.iter_mut().zip(step) {
+        *o += s;
+    }
+    out
+}
+
+/// Levenberg-Marquardt on the per-pose modulus errors, from `x0`.
+///
+/// Damped Gauss-Newton with Marquardt's diagonal scaling; the 9x9 system is solved by Cholesky on the
+/// stack. Stops on a small step, on no further decrease, or at `max_iterations`.
+pub fn levenberg_marquardt(x0: Deviation, poses: &[NormPose], config: &LmConfig) -> Result<SolveReport, SolveError> {
+    check_input(&x0, poses)?;
+    let mut x = x0;
+    let mut cost = objective(&x, poses);
+    if !cost.is_finite() {
+        return Err(SolveError::Diverged);
+    }
+    let mut lambda = config.initial_damping;
+    let (mut jtj, mut jte) = normal_equations(&x, poses);
+    for iteration in 1..=config.max_iterations {
+        let mut damped = jtj;
+        for i in 0..PARAM_COUNT {
+            damped[i][i] += lambda * jtj[i][i].max(1e-12);
+        }
+        let step = match cholesky(&damped) {
+            Ok(l) => cholesky_solve(&l, jte.map(|v| -v)),
+            Err(_) if lambda < 1e10 => {
+                lambda *= 10.0;
+                continue;
+            }
+            Err(_) => return Err(SolveError::Singular),
+        };
+        let candidate = add(&x, &step);
+        let candidate_cost = objective(&candidate, poses);
+        if candidate_cost.is_finite() && candidate_cost <= cost {
+            x = candidate;
+            cost = candidate_cost;
+            lambda = (lambda * 0.3).max(1e-9);
+            if max_abs(&step) < config.step_tolerance {
+                return Ok(SolveReport { x, cost, iterations: iteration, termination: SolveTermination::Converged });
+            }
+            (jtj, jte) = normal_equations(&x, poses);
+        } else {
+            lambda *= 10.0;
+            if lambda > 1e10 {
+                return Ok(SolveReport {
+                    x,
+                    cost,
+                    iterations: iteration,
+                    termination: SolveTermination::NoFurtherDecrease,
+                });
+            }
+        }
+    }
+    Ok(SolveReport { x, cost, iterations: config.max_iterations, termination: SolveTermination::MaxIterations })
+}
+
+/// The classical Newton iteration on `fE` (the paper's baseline): full Hessian
+/// `H = (2/N) sum(grad E grad E^T + 2 E Jr^T Jr)`, undamped step `H d = -grad fE`, no line search.
+pub fn newton(x0: Deviation, poses: &[NormPose], config: &NewtonConfig) -> Result<SolveReport, SolveError> {
+    check_input(&x0, poses)?;
+    let mut x = x0;
+    for iteration in 1..=config.max_iterations {
+        let mut hessian = [[0.0; PARAM_COUNT]; PARAM_COUNT];
+        let mut gradient = [0.0; PARAM_COUNT];
+        for pose in poses {
+            let (e, g) = modulus_error_gradient(&x, pose);
+            let jr = residual_jacobian(pose.u);
+            for i in 0..PARAM_COUNT {
+                gradient[i] += e * g[i];
+                for j in 0..=i {
+                    let second: f32 = (0..3).map(|r| jr[r][i] * jr[r][j]).sum();
+                    hessian[i][j] += g[i] * g[j] + 2.0 * e * second;
+                }
+            }
+        }
+        symmetrize(&mut hessian);
+        // The common factor 2/N cancels in H d = -g.
+        let step = solve_lu(hessian, gradient.map(|v| -v)).map_err(|_| SolveError::Singular)?;
+        x = add(&x, &step);
+        if x.iter().any(|v| !v.is_finite()) {
+            return Err(SolveError::Diverged);
+        }
+        if max_abs(&step) < config.step_tolerance {
+            let cost = objective(&x, poses);
+            return Ok(SolveReport { x, cost, iterations: iteration, termination: SolveTermination::Converged });
+        }
+    }
+    let cost = objective(&x, poses);
+    if !cost.is_finite() {
+        return Err(SolveError::Diverged);
+    }
+    Ok(SolveReport { x, cost, iterations: config.max_iterations, termination: SolveTermination::MaxIterations })
+}
