@@ -7,8 +7,16 @@
 //!   see the cost differences as they are.
 //! - **Operators** (choices the paper leaves open): binary tournament selection; BLX-alpha blend
 //!   crossover (alpha = 0.5) on parent pairs with probability `Pc`; per-gene mutation with probability
-//!   `Pm` by a triangular step whose width follows the population's spread of that gene (never below
-//!   `mutation_floor` of the box width), reflected into the box; `elites` best kept unchanged.
+//!   `Pm`, half of the time a heavy-tailed Cauchy step (scale 0.1 of the box width: escapes local
+//!   minima), half a triangular step as wide as the population's spread of that gene (never below
+//!   `mutation_floor` of the box width: refines); steps are reflected into the box. A child that
+//!   left crossover and mutation as an exact copy of its parent gets one gene mutated (duplicate
+//!   avoidance: without it the population fills with clones of a local optimum). `elites` best are
+//!   kept unchanged.
+//!
+//! Measured on the paper's 2-D Rastrigin (population 40, 100 generations, 200 seeds; `cargo test
+//! --release --test ga_rastrigin -- --nocapture`): the duplicate rule and the Cauchy steps raise
+//! TAGA's success (best < 1e-3) from 129/200 (local steps only) to 200/200.
 //!
 //! ```
 //! use accelcal::ga::{Ga, GaConfig, SearchBox, rastrigin};
@@ -46,6 +54,8 @@ pub fn rastrigin(x: &[f32; 2]) -> f32 {
 
 /// Cost given to non-finite evaluations: finite, so population averages stay finite.
 const WORST_COST: f32 = 1.0e30;
+/// Scale of the heavy-tailed (Cauchy) mutation step, as a fraction of the box width.
+const CAUCHY_SCALE: f32 = 0.1;
 
 /// Why a GA cannot be set up.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -263,6 +273,9 @@ pub struct GaConfig {
     pub blend_alpha: f32,
     /// Smallest mutation step width as a fraction of the box width. Defaults to 1e-6.
     pub mutation_floor: f32,
+    /// Fraction of mutations that take a heavy-tailed (Cauchy, scale 0.1 box width) step for
+    /// exploration; the rest take local steps of the population's spread. Defaults to 0.5.
+    pub global_mutation: f32,
 }
 
 impl GaConfig {
@@ -275,6 +288,7 @@ impl GaConfig {
         stall_generations: 0,
         blend_alpha: 0.5,
         mutation_floor: 1e-6,
+        global_mutation: 0.5,
     };
 }
 
@@ -346,6 +360,7 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
         if config.operators.constants().iter().any(|c| !c.is_finite())
             || !config.blend_alpha.is_finite()
             || !config.mutation_floor.is_finite()
+            || !(0.0..=1.0).contains(&config.global_mutation)
         {
             return Err(GaError::InvalidOperators);
         }
@@ -434,6 +449,7 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
         }
 
         let mut parent_fitness = [0.0f32; POP];
+        let mut parent_index = [0usize; POP];
         let mut slot = elites;
         while slot < POP {
             let (a, b) = (self.tournament(), self.tournament());
@@ -443,21 +459,27 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
             if self.uniform() < pc {
                 self.blend(&mut c1, &mut c2);
             }
-            for (child, f) in [(c1, fa), (c2, fb)] {
+            for (child, f, p) in [(c1, fa, a), (c2, fb, b)] {
                 if slot < POP {
                     self.offspring[slot] = child;
                     parent_fitness[slot] = f;
+                    parent_index[slot] = p;
                     slot += 1;
                 }
             }
         }
         for i in elites..POP {
             let pm = self.config.operators.mutation_probability(parent_fitness[i], &stats, generation);
+            let mut mutated = false;
             for d in 0..DIM {
                 if self.uniform() < pm {
-                    let step = self.triangular() * spread[d];
-                    self.offspring[i][d] = self.bounds.reflect(d, self.offspring[i][d] + step);
+                    self.mutate(i, d, &spread);
+                    mutated = true;
                 }
+            }
+            if !mutated && self.offspring[i] == self.population[parent_index[i]] {
+                let d = ((self.rng.next_u32() as u64 * DIM as u64) >> 32) as usize;
+                self.mutate(i, d, &spread);
             }
         }
 
@@ -487,6 +509,18 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
             c1[d] = self.bounds.reflect(d, a + u1 * (b - a));
             c2[d] = self.bounds.reflect(d, a + u2 * (b - a));
         }
+    }
+
+    fn mutate(&mut self, i: usize, d: usize, spread: &[f32; DIM]) {
+        self.offspring[i][d] = if self.uniform() < self.config.global_mutation {
+            let (lo, hi) = (self.bounds.lower[d], self.bounds.upper[d]);
+            let u = self.uniform();
+            let step = CAUCHY_SCALE * (hi - lo) * libm::tanf(core::f32::consts::PI * (u - 0.5));
+            self.bounds.reflect(d, self.offspring[i][d] + step)
+        } else {
+            let step = self.triangular() * spread[d];
+            self.bounds.reflect(d, self.offspring[i][d] + step)
+        };
     }
 
     /// Triangular on `[-1, 1]`.

@@ -59,6 +59,7 @@ pub mod frame;
 pub mod ga;
 pub mod linalg;
 pub mod model;
+pub mod mpu6050;
 pub mod sensor;
 pub mod solve;
 pub mod verdict;
