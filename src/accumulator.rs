@@ -439,7 +439,7 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
                 return Ok(None);
             }
             self.pending = None;
-                return self.close_pose();
+            return self.close_pose();
         }
 
         let quiet = stats.variance <= self.config.enter_factor * noise

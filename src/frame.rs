@@ -164,11 +164,7 @@ impl Frame {
 /// `d = (A - I) u - beta` for deviation `x`.
 #[inline]
 pub fn deviation_residual(x: &Deviation, u: [f32; 3]) -> [f32; 3] {
-    [
-        x[3] * u[0] - x[0],
-        x[6] * u[0] + x[4] * u[1] - x[1],
-        x[7] * u[0] + x[8] * u[1] + x[5] * u[2] - x[2],
-    ]
+    [x[3] * u[0] - x[0], x[6] * u[0] + x[4] * u[1] - x[1], x[7] * u[0] + x[8] * u[1] + x[5] * u[2] - x[2]]
 }
 
 /// Normalised modulus error of one pose, `E / g^2 = |A u - beta|^2 - 1`, evaluated without cancellation.
@@ -176,9 +172,7 @@ pub fn deviation_residual(x: &Deviation, u: [f32; 3]) -> [f32; 3] {
 pub fn modulus_error(x: &Deviation, pose: &NormPose) -> f32 {
     let u = pose.u;
     let d = deviation_residual(x, u);
-    pose.q
-        + 2.0 * (u[0] * d[0] + u[1] * d[1] + u[2] * d[2])
-        + (d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+    pose.q + 2.0 * (u[0] * d[0] + u[1] * d[1] + u[2] * d[2]) + (d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
 }
 
 /// Normalised objective `fE / g^4 = mean(E^2)` (the function every optimiser here minimises).

@@ -57,11 +57,7 @@ impl Params {
     #[inline]
     pub fn ka_times(&self, f_s: [f32; 3]) -> [f32; 3] {
         let (s, m) = (self.scale, self.nonorth);
-        [
-            s[0] * f_s[0],
-            m[0] * f_s[0] + s[1] * f_s[1],
-            m[1] * f_s[0] + m[2] * f_s[1] + s[2] * f_s[2],
-        ]
+        [s[0] * f_s[0], m[0] * f_s[0] + s[1] * f_s[1], m[1] * f_s[0] + m[2] * f_s[1] + s[2] * f_s[2]]
     }
 
     /// Calibrates one sample: `f_b = Ka * f_s - B`.
@@ -124,10 +120,7 @@ pub fn modulus_rmse_mg(params: &Params, poses: &[[f32; 3]], gravity: f32) -> Opt
     if poses.is_empty() || !(gravity > 0.0) {
         return None;
     }
-    let sum: f32 = poses
-        .iter()
-        .map(|&p| square(libm::sqrtf(norm_squared(params.apply(p))) - gravity))
-        .sum();
+    let sum: f32 = poses.iter().map(|&p| square(libm::sqrtf(norm_squared(params.apply(p))) - gravity)).sum();
     Some(libm::sqrtf(sum / poses.len() as f32) / gravity * 1000.0)
 }
 

@@ -7,10 +7,10 @@
 //! assert!(bounds.max_rmse_mg > 0.0);
 //! ```
 
+use crate::accumulator::Pose;
 use crate::frame::{Deviation, Frame, NormPose, modulus_error_gradient};
 use crate::linalg::{Matrix, spd_inverse};
 use crate::model::{PARAM_COUNT, Params};
-use crate::accumulator::Pose;
 
 /// Limits a calibration must meet to pass. Every field can be set by the user.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -97,11 +97,7 @@ fn error_variance(x: &Deviation, frame: &Frame, pose: &Pose, norm: &NormPose) ->
     let r = crate::frame::deviation_residual(x, u);
     let r = [u[0] + r[0], u[1] + r[1], u[2] + r[2]];
     // A^T r with A = I + diag(a) + lower(m) in deviation terms.
-    let atr = [
-        (1.0 + x[3]) * r[0] + x[6] * r[1] + x[7] * r[2],
-        (1.0 + x[4]) * r[1] + x[8] * r[2],
-        (1.0 + x[5]) * r[2],
-    ];
+    let atr = [(1.0 + x[3]) * r[0] + x[6] * r[1] + x[7] * r[2], (1.0 + x[4]) * r[1] + x[8] * r[2], (1.0 + x[5]) * r[2]];
     let mut var = 0.0;
     for i in 0..3 {
         let s = frame.gain[i] * frame.gravity;

@@ -45,7 +45,8 @@ fn taga_reaches_rastrigin_target_in_95_percent_of_200_seeds() {
 
 #[test]
 fn fig3_operator_comparison_is_measured() {
-    for (name, op) in [("AGA", Operators::AGA_PAPER), ("LAGA", Operators::LAGA_PAPER), ("TAGA", Operators::TAGA_PAPER)] {
+    for (name, op) in [("AGA", Operators::AGA_PAPER), ("LAGA", Operators::LAGA_PAPER), ("TAGA", Operators::TAGA_PAPER)]
+    {
         let (successes, mean) = success_and_mean(op);
         println!(
             "{name}: success {successes}/{SEEDS}; mean best cost at gen 10 {:.3e}, 25 {:.3e}, 50 {:.3e}, 100 {:.3e}",
