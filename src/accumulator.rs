@@ -305,7 +305,7 @@ impl<R: Reading> Sums<R> {
         (mean, var)
     }
 
-    fn to_pose(&self) -> Pose {
+    fn pose(&self) -> Pose {
         let n = f64::from(self.n.max(1));
         let mut pose = Pose {
             n: self.n,
@@ -461,7 +461,7 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         let Some(sums) = self.pose.take() else {
             return Ok(None);
         };
-        let pose = sums.to_pose();
+        let pose = sums.pose();
         let rejection = if sums.saturated {
             Some(Rejection::Saturated)
         } else if sums.n < self.config.min_pose_samples {

@@ -215,11 +215,7 @@ impl<I2C: I2c> Mpu6050<I2C> {
     pub fn read_accel_raw(&mut self) -> Result<[i16; 3], Error<I2C::Error>> {
         let mut b = [0u8; 6];
         self.i2c.write_read(self.address, &[register::ACCEL_XOUT_H], &mut b).map_err(Error::I2c)?;
-        Ok([
-            i16::from_be_bytes([b[0], b[1]]),
-            i16::from_be_bytes([b[2], b[3]]),
-            i16::from_be_bytes([b[4], b[5]]),
-        ])
+        Ok([i16::from_be_bytes([b[0], b[1]]), i16::from_be_bytes([b[2], b[3]]), i16::from_be_bytes([b[4], b[5]])])
     }
 
     /// Gives the bus back.

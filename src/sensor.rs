@@ -1,8 +1,8 @@
 //! The sensor path: anything that gives one raw triaxial sample.
 //!
 //! Implement [`AccelSensor`] for a driver (or wrap an existing embedded-hal driver crate); the
-//! calibration code only ever asks for the next sample and gives the driver back with
-//! [`AccelSensor::release`]-style ownership on the caller's side.
+//! calibration code only ever asks for the next sample. Drivers give their bus back with their own
+//! `release()` (see [`crate::mpu6050`]).
 //!
 //! ```
 //! use accelcal::sensor::AccelSensor;

@@ -84,8 +84,8 @@ fn long_pose_sums_do_not_drift() {
             sums[a] += i64::from(v[a]);
         }
     }
-    for a in 0..3 {
-        assert_eq!(pose.mean[a], (sums[a] as f64 / f64::from(pose.n)) as f32);
+    for (mean, sum) in pose.mean.iter().zip(sums) {
+        assert_eq!(*mean, (sum as f64 / f64::from(pose.n)) as f32);
     }
     assert!(pose.n > 59_000);
 }

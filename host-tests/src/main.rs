@@ -1,1 +1,447 @@
-fn main() {}
+//! `accelcal`: the command-line tool of the accelcal calibration library.
+//!
+//! Exit codes: 0 success, 1 a calibration ran but failed its verdict, 2 bad input.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use accelcal::calibrate::{CalibrationConfig, Method};
+use accelcal::model::{PARAM_COUNT, PARAM_NAMES, Params};
+use accelcal_host::calib::{self, num, params_json, verdict_json};
+use accelcal_host::csvio::{self, AccumulateOptions, ColumnSpec, ReadOptions, Units};
+use accelcal_host::paper::{self, PaperOptions, format_sig};
+use accelcal_host::plots::{Series, line_chart};
+use accelcal_host::sim::{self, OutputUnits, Plan, SimConfig};
+use clap::{Parser, Subcommand};
+use serde_json::json;
+
+#[derive(Parser)]
+#[command(name = "accelcal", version, about = "Calibrate MEMS triaxial accelerometers (Zou et al. 2020 TAGA method)")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Simulate the paper's 24-position experiment and calibrate it with every method (no hardware).
+    Demo {
+        /// Machine-readable report on stdout.
+        #[arg(long)]
+        json: bool,
+        /// Seed of the simulation and the GA.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
+    /// Write a simulated raw recording as CSV.
+    Simulate {
+        /// Pose plan: paper24, cube26 or random:N.
+        #[arg(long, default_value = "paper24")]
+        plan: Plan,
+        /// Seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// White noise per sample and axis, mg.
+        #[arg(long, default_value_t = 1.0)]
+        noise_mg: f64,
+        /// Sample rate, Hz.
+        #[arg(long, default_value_t = 200.0)]
+        rate: f64,
+        /// Static seconds per pose.
+        #[arg(long, default_value_t = 5.0)]
+        seconds: f64,
+        /// Output units: counts (16384 LSB/g), g or mps2.
+        #[arg(long, default_value = "mps2")]
+        units: OutputUnits,
+        /// Random sensor errors instead of the paper's Table 1 truth.
+        #[arg(long)]
+        random_truth: bool,
+        /// Output file.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Print a JSON summary on stdout.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Calibrate a recording (raw samples or per-pose means) from a CSV file.
+    Calibrate {
+        #[command(flatten)]
+        input: InputArgs,
+        /// Optimiser: taga+lm, taga, lm or newton.
+        #[arg(long, default_value = "taga+lm")]
+        method: String,
+        /// Machine-readable report on stdout.
+        #[arg(long)]
+        json: bool,
+        /// Seed of the GA.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
+    /// Reproduce the paper's experiments (Table 2 Monte Carlo vs the Cramer-Rao bound, Fig. 3, 6, 7).
+    Paper {
+        /// Monte Carlo runs.
+        #[arg(long, default_value_t = 500)]
+        runs: usize,
+        /// White noise per sample and axis, mg.
+        #[arg(long, default_value_t = 1.0)]
+        noise_mg: f64,
+        /// Pose plan.
+        #[arg(long, default_value = "paper24")]
+        plan: Plan,
+        /// Seeds of the Rastrigin operator comparison.
+        #[arg(long, default_value_t = 200)]
+        operator_seeds: u64,
+        /// Directory for the SVG figures.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Machine-readable report on stdout.
+        #[arg(long)]
+        json: bool,
+        /// First seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
+}
+
+/// How to read a CSV file (shared by the commands that read one).
+#[derive(clap::Args)]
+struct InputArgs {
+    /// The CSV file (header row required).
+    file: PathBuf,
+    /// Columns to use: t,ax,ay,az[,temp] as header names or 0-based indices.
+    #[arg(long)]
+    columns: Option<ColumnSpec>,
+    /// Units of the acceleration columns: auto, counts, g or mps2.
+    #[arg(long, default_value = "auto")]
+    units: Units,
+    /// Rows are per-pose means (optional `n` column), not raw samples.
+    #[arg(long)]
+    means: bool,
+    /// Local gravity, m/s^2.
+    #[arg(long, default_value_t = 9.80665)]
+    gravity: f64,
+}
+
+/// A failure of a command: bad input (exit 2) or a failed verdict (exit 1).
+enum Failure {
+    Input(String),
+    Verdict,
+}
+
+impl From<String> for Failure {
+    fn from(s: String) -> Self {
+        Self::Input(s)
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let code = if e.use_stderr() { 2 } else { 0 };
+            let _ = e.print();
+            return ExitCode::from(code);
+        }
+    };
+    let result = match cli.command {
+        Command::Demo { json, seed } => demo(seed, json),
+        Command::Simulate { plan, seed, noise_mg, rate, seconds, units, random_truth, output, json } => {
+            simulate(plan, seed, noise_mg, rate, seconds, units, random_truth, &output, json)
+        }
+        Command::Calibrate { input, method, json, seed } => calibrate_file(&input, &method, seed, json),
+        Command::Paper { runs, noise_mg, plan, operator_seeds, out, json, seed } => {
+            paper_cmd(PaperOptions { runs, noise_mg, plan, seed, operator_seeds }, out, json)
+        }
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Failure::Verdict) => ExitCode::from(1),
+        Err(Failure::Input(msg)) => {
+            eprintln!("accelcal: error: {msg}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn demo(seed: u64, as_json: bool) -> Result<(), Failure> {
+    let cfg = SimConfig::paper(seed);
+    let recording = sim::simulate(&cfg);
+    let mut text = Vec::new();
+    sim::write_csv(&recording, &mut text).map_err(|e| e.to_string())?;
+    let opts = ReadOptions { units: Units::Mps2, ..ReadOptions::default() };
+    let table = csvio::read_csv_bytes("simulated paper24", &text, &opts).map_err(|e| e.to_string())?;
+    let acc = csvio::accumulate(&table, &AccumulateOptions::default()).map_err(|e| e.to_string())?;
+    let truth = cfg.truth;
+    let mut results = serde_json::Map::new();
+    let mut lines = Vec::new();
+    let mut all_pass = true;
+    for method in [Method::Newton, Method::Taga, Method::Lm, Method::TagaLm] {
+        let config = CalibrationConfig { method, before: Some(Params::IDENTITY), ..CalibrationConfig::DEFAULT };
+        let cal = calib::run(&acc.poses, &config, seed).map_err(|e| format!("{}: {e}", method.name()))?;
+        let (est, t) = (cal.params.to_array(), truth.to_array());
+        let rel: [f64; PARAM_COUNT] =
+            std::array::from_fn(|i| 100.0 * (f64::from(est[i]) - f64::from(t[i])) / f64::from(t[i]));
+        all_pass &= cal.verdict.pass();
+        results.insert(
+            method.name().into(),
+            json!({
+                "params": params_json(&cal.params),
+                "rel_err_pct": rel,
+                "rmse_mg": {"before": num(cal.verdict.rmse_before_mg), "after": num(cal.verdict.rmse_after_mg)},
+                "noise_floor_mg": cal.verdict.noise_floor_mg,
+                "generations": cal.generations,
+                "evaluations": cal.evaluations,
+                "iterations": cal.iterations,
+                "objective": cal.objective,
+                "verdict": verdict_json(&cal.verdict),
+            }),
+        );
+        lines.push((method, cal, rel));
+    }
+    if as_json {
+        let out = json!({
+            "seed": seed,
+            "plan": "paper24",
+            "noise_mg": cfg.noise_mg,
+            "poses": acc.poses.len(),
+            "truth": params_json(&truth),
+            "results": results,
+        });
+        println!("{out}");
+    } else {
+        println!(
+            "accelcal demo: the paper's 24-position experiment simulated (seed {seed}, {} mg noise, 200 Hz, 5 s per pose)",
+            cfg.noise_mg
+        );
+        println!("{} samples -> {} static poses found by the accumulator", table.samples.len(), acc.poses.len());
+        print!("{:<10}", "");
+        for n in PARAM_NAMES {
+            print!("{n:>13}");
+        }
+        println!();
+        print!("{:<10}", "truth");
+        for v in truth.to_array() {
+            print!("{v:>13.8}");
+        }
+        println!();
+        for (method, cal, rel) in &lines {
+            print!("{:<10}", method.name());
+            for v in cal.params.to_array() {
+                print!("{v:>13.8}");
+            }
+            println!();
+            print!("{:<10}", "  err %");
+            for v in rel {
+                print!("{:>13}", format_sig(*v));
+            }
+            println!();
+        }
+        for (method, cal, _) in &lines {
+            let v = &cal.verdict;
+            println!(
+                "{:<8} modulus RMSE {} -> {} mg (noise floor {} mg); {} generations, {} iterations; verdict {}",
+                method.name(),
+                format_sig(f64::from(v.rmse_before_mg)),
+                format_sig(f64::from(v.rmse_after_mg)),
+                v.noise_floor_mg.map_or("?".into(), |f| format_sig(f64::from(f))),
+                cal.generations,
+                cal.iterations,
+                if v.pass() { "PASS" } else { "FAIL" }
+            );
+        }
+    }
+    if all_pass { Ok(()) } else { Err(Failure::Verdict) }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn simulate(
+    plan: Plan,
+    seed: u64,
+    noise_mg: f64,
+    rate_hz: f64,
+    seconds: f64,
+    units: OutputUnits,
+    random_truth: bool,
+    output: &std::path::Path,
+    as_json: bool,
+) -> Result<(), Failure> {
+    let truth = if random_truth { sim::random_truth(seed) } else { SimConfig::paper(seed).truth };
+    let cfg =
+        SimConfig { noise_mg, rate_hz, seconds_per_pose: seconds, units, truth, ..SimConfig::for_plan(plan, seed) };
+    cfg.validate().map_err(|e| format!("simulate: {e}"))?;
+    let recording = sim::simulate(&cfg);
+    let file = std::fs::File::create(output).map_err(|e| format!("{}: {e}", output.display()))?;
+    let mut w = std::io::BufWriter::new(file);
+    sim::write_csv(&recording, &mut w).map_err(|e| format!("{}: {e}", output.display()))?;
+    if as_json {
+        println!(
+            "{}",
+            json!({"file": output.display().to_string(), "plan": plan.to_string(), "seed": seed,
+                   "samples": recording.samples.len(), "poses": recording.poses.len(),
+                   "units": units.to_string(), "truth": params_json(&truth)})
+        );
+    } else {
+        println!(
+            "wrote {} ({} samples, {} poses, plan {plan}, seed {seed}, units {units})",
+            output.display(),
+            recording.samples.len(),
+            recording.poses.len()
+        );
+    }
+    Ok(())
+}
+
+fn calibrate_file(input: &InputArgs, method: &str, seed: u64, as_json: bool) -> Result<(), Failure> {
+    let method = calib::parse_method(method)?;
+    if !(input.gravity.is_finite() && input.gravity > 0.0) {
+        return Err(format!("--gravity {} must be a positive number of m/s^2", input.gravity).into());
+    }
+    let opts = ReadOptions { columns: input.columns.clone(), units: input.units, means: input.means, delimiter: None };
+    let table = csvio::read_csv(&input.file, &opts).map_err(|e| e.to_string())?;
+    for w in &table.warnings {
+        eprintln!("accelcal: warning: {w}");
+    }
+    let (poses, spans) = if input.means {
+        (csvio::to_poses_from_means(&table), None)
+    } else {
+        let acc = csvio::accumulate(&table, &AccumulateOptions::default())
+            .map_err(|e| format!("{}: {e}", input.file.display()))?;
+        (acc.poses, Some(acc.spans))
+    };
+    let file = input.file.display();
+    if poses.len() < PARAM_COUNT {
+        return Err(format!(
+            "{file}: {} static poses found, at least {PARAM_COUNT} are needed (hold the sensor still in more orientations)",
+            poses.len()
+        )
+        .into());
+    }
+    let gravity = input.gravity as f32;
+    // "Before": the readings taken at face value in their unit (counts: the coarse six-position model).
+    let before = match table.units {
+        Units::G => Some(Params { scale: [gravity; 3], ..Params::IDENTITY }),
+        Units::Mps2 => Some(Params::IDENTITY),
+        _ => None,
+    };
+    let config = CalibrationConfig { gravity, method, before, ..CalibrationConfig::DEFAULT };
+    let host = calib::run_with_loo(&poses, &config, seed).map_err(|e| format!("{file}: {e}"))?;
+    let cal = host.calibration;
+    let v = &cal.verdict;
+    if as_json {
+        let pose_json: Vec<serde_json::Value> = poses
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let span = spans.as_ref().and_then(|s| s.get(i));
+                json!({
+                    "t_start": span.and_then(|s| s.start_s),
+                    "t_end": span.and_then(|s| s.end_s),
+                    "n": p.n,
+                    "mean": p.mean,
+                    "std": p.variance.map(f32::sqrt),
+                })
+            })
+            .collect();
+        let out = json!({
+            "file": file.to_string(),
+            "method": method.name(),
+            "gravity": gravity,
+            "units": table.units.to_string(),
+            "poses": pose_json,
+            "params": params_json(&cal.params),
+            "objective": cal.objective,
+            "rmse_mg": {"before": num(v.rmse_before_mg), "after": num(v.rmse_after_mg), "loo": host.rmse_loo_mg},
+            "noise_floor_mg": v.noise_floor_mg,
+            "param_std": v.param_std.map(num),
+            "generations": cal.generations,
+            "iterations": cal.iterations,
+            "verdict": verdict_json(v),
+        });
+        println!("{out}");
+    } else {
+        println!(
+            "{file}: {} rows in {}, {} poses, method {}",
+            table.samples.len(),
+            table.units_summary(),
+            poses.len(),
+            method.name()
+        );
+        println!("{:<6}{:>16}{:>16}{:>16}", "", "x", "y", "z");
+        println!("{:<6}{:>16.8}{:>16.8}{:>16.8}", "B", cal.params.bias[0], cal.params.bias[1], cal.params.bias[2]);
+        println!(
+            "{:<6}{:>16.8e}{:>16.8e}{:>16.8e}",
+            "S", cal.params.scale[0], cal.params.scale[1], cal.params.scale[2]
+        );
+        println!(
+            "{:<6}{:>16.8e}{:>16.8e}{:>16.8e}",
+            "M", cal.params.nonorth[0], cal.params.nonorth[1], cal.params.nonorth[2]
+        );
+        println!(
+            "modulus RMSE before {} mg, after {} mg, leave-one-pose-out {} mg, noise floor {} mg",
+            format_sig(f64::from(v.rmse_before_mg)),
+            format_sig(f64::from(v.rmse_after_mg)),
+            host.rmse_loo_mg.map_or("?".into(), |x| format_sig(f64::from(x))),
+            v.noise_floor_mg.map_or("?".into(), |x| format_sig(f64::from(x)))
+        );
+        println!("verdict: {}", if v.pass() { "PASS".to_string() } else { format!("FAIL {}", verdict_json(v)) });
+    }
+    if v.pass() { Ok(()) } else { Err(Failure::Verdict) }
+}
+
+fn paper_cmd(options: PaperOptions, out: Option<PathBuf>, as_json: bool) -> Result<(), Failure> {
+    if options.runs == 0 {
+        return Err("--runs must be at least 1".to_string().into());
+    }
+    if !(options.noise_mg.is_finite() && options.noise_mg > 0.0) {
+        return Err(format!("--noise-mg {} must be positive", options.noise_mg).into());
+    }
+    let bar = indicatif::ProgressBar::new(options.runs as u64);
+    if as_json || std::env::var_os("CI").is_some() {
+        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+    }
+    let report = paper::run(&options, || bar.inc(1));
+    bar.finish_and_clear();
+    if let Some(dir) = out {
+        write_figures(&report, &dir)?;
+        if !as_json {
+            println!("figures written to {}", dir.display());
+        }
+    }
+    if as_json {
+        println!("{}", paper::to_json(&report));
+    } else {
+        print!("{}", paper::to_text(&report));
+    }
+    Ok(())
+}
+
+fn write_figures(r: &paper::PaperReport, dir: &std::path::Path) -> Result<(), String> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let ops: Vec<Series> = r
+        .operators
+        .iter()
+        .map(|o| Series { name: o.name, points: o.mean_best.iter().enumerate().map(|(g, v)| (g as f64, *v)).collect() })
+        .collect();
+    line_chart(&dir.join("fig3_operators.svg"), "Fig. 3: mean best Rastrigin cost", "generation", "cost", &ops, true)?;
+    let gens = |f: &dyn Fn(&(f64, f64, Params)) -> f64| -> Vec<(f64, f64)> {
+        r.trace.iter().enumerate().map(|(g, t)| (g as f64, f(t))).collect()
+    };
+    let fitness =
+        [Series { name: "best fE", points: gens(&|t| t.0) }, Series { name: "mean fE", points: gens(&|t| t.1) }];
+    line_chart(
+        &dir.join("fig6_fitness.svg"),
+        "Fig. 6: TAGA objective per generation",
+        "generation",
+        "fE (m/s^2)^4",
+        &fitness,
+        true,
+    )?;
+    for (group, range, file) in
+        [("bias", 0..3, "fig7_bias.svg"), ("scale", 3..6, "fig7_scale.svg"), ("nonorth", 6..9, "fig7_nonorth.svg")]
+    {
+        let series: Vec<Series> =
+            range.map(|i| Series { name: PARAM_NAMES[i], points: gens(&|t| f64::from(t.2.to_array()[i])) }).collect();
+        line_chart(&dir.join(file), &format!("Fig. 7: {group} per generation"), "generation", group, &series, false)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,92 @@
+//! Calibrating a set of poses with the library, plus the host-only extras: leave-one-pose-out RMSE
+//! and a JSON-ready summary. Every number comes from `accelcal`; nothing is re-implemented here.
+
+use accelcal::accumulator::Pose;
+use accelcal::calibrate::{Calibration, CalibrationConfig, CalibrationError, Method, NormalizedPoses, calibrate};
+use accelcal::frame::{Deviation, modulus_error};
+use accelcal::model::Params;
+use accelcal::solve::levenberg_marquardt;
+use rand_core::SeedableRng;
+use rand_xoshiro::Xoshiro128PlusPlus;
+
+/// GA population used by the host (the paper's setting and the firmware's).
+pub const POPULATION: usize = 40;
+/// Largest pose count the host handles in one calibration.
+pub const MAX_POSES: usize = 512;
+
+/// A calibration and its leave-one-pose-out RMSE.
+#[derive(Debug, Clone, Copy)]
+pub struct HostCalibration {
+    /// The library's result.
+    pub calibration: Calibration,
+    /// Leave-one-pose-out modulus RMSE, mg (`None` with fewer than 11 poses).
+    pub rmse_loo_mg: Option<f32>,
+}
+
+/// Runs the library's calibration with a GA seeded by `seed`.
+pub fn run(poses: &[Pose], config: &CalibrationConfig, seed: u64) -> Result<Calibration, CalibrationError> {
+    calibrate::<_, POPULATION, MAX_POSES>(poses, config, Xoshiro128PlusPlus::seed_from_u64(seed))
+}
+
+/// [`run`] plus the leave-one-pose-out RMSE: each pose is predicted by an LM fit of the others
+/// (started at the full solution).
+pub fn run_with_loo(
+    poses: &[Pose],
+    config: &CalibrationConfig,
+    seed: u64,
+) -> Result<HostCalibration, CalibrationError> {
+    let calibration = run(poses, config, seed)?;
+    Ok(HostCalibration { calibration, rmse_loo_mg: loo_rmse_mg(poses, config, &calibration.params) })
+}
+
+fn loo_rmse_mg(poses: &[Pose], config: &CalibrationConfig, params: &Params) -> Option<f32> {
+    let norm = NormalizedPoses::<MAX_POSES>::new(poses, config.gravity).ok()?;
+    let all = norm.poses();
+    if all.len() < accelcal::model::PARAM_COUNT + 2 {
+        return None;
+    }
+    let x0: Deviation = norm.coarse().frame().to_deviation(params);
+    let mut sum = 0.0f64;
+    let mut others = Vec::with_capacity(all.len());
+    for i in 0..all.len() {
+        others.clear();
+        others.extend(all.iter().enumerate().filter(|(j, _)| *j != i).map(|(_, p)| *p));
+        let fit = levenberg_marquardt(x0, &others, &config.lm).ok()?;
+        let e = modulus_error(&fit.x, &all[i]);
+        let modulus_error_g = (1.0 + f64::from(e)).max(0.0).sqrt() - 1.0;
+        sum += modulus_error_g * modulus_error_g;
+    }
+    Some(((sum / all.len() as f64).sqrt() * 1000.0) as f32)
+}
+
+/// Parses a method name (`newton`, `lm`, `taga`, `taga+lm`).
+pub fn parse_method(s: &str) -> Result<Method, String> {
+    [Method::Newton, Method::Lm, Method::Taga, Method::TagaLm]
+        .into_iter()
+        .find(|m| m.name() == s)
+        .ok_or_else(|| format!("unknown method '{s}' (expected newton, lm, taga or taga+lm)"))
+}
+
+/// JSON of the parameters: `{"bias": [..], "scale": [..], "nonorth": [..]}`.
+pub fn params_json(p: &Params) -> serde_json::Value {
+    serde_json::json!({ "bias": p.bias, "scale": p.scale, "nonorth": p.nonorth })
+}
+
+/// A non-finite float as JSON `null`.
+pub fn num(v: f32) -> serde_json::Value {
+    if v.is_finite() { serde_json::json!(v) } else { serde_json::Value::Null }
+}
+
+/// JSON of a verdict.
+pub fn verdict_json(v: &accelcal::verdict::Verdict) -> serde_json::Value {
+    let f = &v.failures;
+    let undetermined: Vec<&str> =
+        accelcal::model::PARAM_NAMES.iter().zip(f.undetermined).filter(|(_, u)| *u).map(|(n, _)| *n).collect();
+    serde_json::json!({
+        "pass": v.pass(),
+        "rmse_over_limit": f.rmse,
+        "model_misfit": f.model_misfit,
+        "implausible": f.implausible,
+        "undetermined": undetermined,
+    })
+}

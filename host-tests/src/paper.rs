@@ -1,0 +1,442 @@
+//! The paper's experiments reproduced with the library, with the physical limit beside them:
+//! Table 2 as a Monte Carlo against the Cramer-Rao bound, Fig. 3 (operators on Rastrigin), Fig. 6/7
+//! (one TAGA run), and the bound of the paper's 24 positions against a 26-direction cube.
+
+use accelcal::accumulator::Pose;
+use accelcal::calibrate::{CalibrationConfig, NormalizedPoses, ga_solver};
+use accelcal::frame::{Deviation, objective};
+use accelcal::ga::{Ga, GaConfig, Operators, SearchBox, rastrigin};
+use accelcal::model::{PARAM_COUNT, PARAM_NAMES, Params};
+use accelcal::solve::{levenberg_marquardt, newton};
+use accelcal::verdict::{deviation_covariance, param_std};
+use rand_core::SeedableRng;
+use rand_xoshiro::Xoshiro128PlusPlus;
+
+use crate::calib::{MAX_POSES, POPULATION};
+use crate::sim::{Plan, SimConfig, simulate_pose_means};
+
+/// The paper's Table 2: relative errors (%) of classical Newton and of the paper's method.
+pub const PAPER_TABLE2: [(f64, f64); PARAM_COUNT] = [
+    (-0.52876, -0.62649),
+    (-0.59382, -0.50195),
+    (-1.13195, -1.03374),
+    (0.04330, 0.02604),
+    (-0.00766, -0.00532),
+    (-0.02904, -0.01750),
+    (-61.43882, -59.16780),
+    (1.77396, -0.62760),
+    (31.77682, 30.99998),
+];
+
+/// Methods of the Monte Carlo, in report order.
+pub const METHODS: [&str; 5] = ["newton", "taga", "lm", "taga+lm", "lm-neutral"];
+
+/// Monte Carlo settings.
+#[derive(Debug, Clone)]
+pub struct PaperOptions {
+    /// Simulated experiments.
+    pub runs: usize,
+    /// White noise per sample and axis, mg.
+    pub noise_mg: f64,
+    /// Pose plan (the paper's is `paper24`).
+    pub plan: Plan,
+    /// First seed; run `i` uses `seed + i`.
+    pub seed: u64,
+    /// Seeds for the Rastrigin operator comparison.
+    pub operator_seeds: u64,
+}
+
+/// RMS relative error (%) per parameter and the effort of one method.
+#[derive(Debug, Clone, Default)]
+pub struct MethodResult {
+    /// RMS over runs of `100 (estimate - truth) / truth`.
+    pub rel_err_pct: [f64; PARAM_COUNT],
+    /// Mean GA generations (0 for gradient methods).
+    pub mean_generations: f64,
+    /// Mean cost evaluations by the GA.
+    pub mean_evaluations: f64,
+    /// Mean Newton/LM iterations.
+    pub mean_iterations: f64,
+    /// Runs whose solve failed.
+    pub failures: usize,
+}
+
+/// Operator comparison on Rastrigin.
+#[derive(Debug, Clone)]
+pub struct OperatorResult {
+    /// Name (`aga`, `laga`, `taga`).
+    pub name: &'static str,
+    /// Seeds whose best cost went below 1e-3 within 100 generations.
+    pub successes: u64,
+    /// Seeds run.
+    pub seeds: u64,
+    /// Mean best cost per generation (index 0 = initial population).
+    pub mean_best: Vec<f64>,
+}
+
+/// Everything `accelcal paper` reports.
+#[derive(Debug, Clone)]
+pub struct PaperReport {
+    /// The settings.
+    pub options: PaperOptions,
+    /// Per method (see [`METHODS`]).
+    pub methods: Vec<(&'static str, MethodResult)>,
+    /// Cramer-Rao bound (%, relative to the truth) per parameter, RMS over the runs' geometries.
+    pub crlb_rel_pct: [f64; PARAM_COUNT],
+    /// The bound for `paper24` and for `cube26` at the same noise (%).
+    pub crlb_paper24: [f64; PARAM_COUNT],
+    /// See `crlb_paper24`.
+    pub crlb_cube26: [f64; PARAM_COUNT],
+    /// Per parameter: the noise (mg) at which our Newton RMS error equals the paper's Table 2
+    /// magnitude (errors scale linearly with the noise).
+    pub noise_to_match_paper_mg: [f64; PARAM_COUNT],
+    /// Fig. 3.
+    pub operators: Vec<OperatorResult>,
+    /// Fig. 6/7: per generation of one TAGA run: (best cost, mean cost, best params).
+    pub trace: Vec<(f64, f64, Params)>,
+}
+
+fn rel_err_pct(estimate: &Params, truth: &Params) -> [f64; PARAM_COUNT] {
+    let (e, t) = (estimate.to_array(), truth.to_array());
+    std::array::from_fn(|i| 100.0 * (f64::from(e[i]) - f64::from(t[i])) / f64::from(t[i]))
+}
+
+fn sim_config(plan: Plan, seed: u64, noise_mg: f64) -> SimConfig {
+    SimConfig { noise_mg, ..SimConfig::for_plan(plan, seed) }
+}
+
+/// Variance (relative %, squared) of each parameter's Cramer-Rao bound for one geometry.
+fn crlb_variance(plan: Plan, seed: u64, noise_mg: f64) -> Option<[f64; PARAM_COUNT]> {
+    let cfg = sim_config(plan, seed, 0.0);
+    let sigma = noise_mg * 1e-3 * cfg.gravity;
+    let poses: Vec<Pose> =
+        simulate_pose_means(&cfg).into_iter().map(|p| Pose { variance: [(sigma * sigma) as f32; 3], ..p }).collect();
+    let norm = NormalizedPoses::<MAX_POSES>::new(&poses, cfg.gravity as f32).ok()?;
+    let frame = norm.coarse().frame();
+    let x = frame.to_deviation(&cfg.truth);
+    let cov = deviation_covariance(&x, frame, &poses, norm.poses())?;
+    let std = param_std(frame, &x, &cov);
+    let t = cfg.truth.to_array();
+    Some(std::array::from_fn(|i| (100.0 * f64::from(std[i]) / f64::from(t[i])).powi(2)))
+}
+
+/// RMS Cramer-Rao bound (%) over `runs` geometries of `plan`.
+pub fn crlb_rel_pct(plan: Plan, seed: u64, runs: usize, noise_mg: f64) -> [f64; PARAM_COUNT] {
+    let mut sum = [0.0; PARAM_COUNT];
+    let mut n = 0;
+    for run in 0..runs.max(1) {
+        if let Some(v) = crlb_variance(plan, seed + run as u64, noise_mg) {
+            for i in 0..PARAM_COUNT {
+                sum[i] += v[i];
+            }
+            n += 1;
+        }
+    }
+    sum.map(|s| (s / n.max(1) as f64).sqrt())
+}
+
+/// What one Monte Carlo experiment gave.
+struct RunOutcome {
+    /// Relative errors (%) per method of [`METHODS`]; `None` where the solve failed.
+    errors: [Option<[f64; PARAM_COUNT]>; 5],
+    /// GA generations and cost evaluations.
+    generations: u32,
+    evaluations: u32,
+    /// Iterations per method of [`METHODS`] (0 for TAGA alone).
+    iterations: [u32; 5],
+}
+
+/// One Monte Carlo experiment.
+fn one_run(cfg: &SimConfig, ga_seed: u64) -> Option<RunOutcome> {
+    let poses = simulate_pose_means(cfg);
+    let config = CalibrationConfig::DEFAULT;
+    let norm = NormalizedPoses::<MAX_POSES>::new(&poses, cfg.gravity as f32).ok()?;
+    let frame = *norm.coarse().frame();
+    let p = norm.poses();
+    let truth = cfg.truth;
+    let err = |x: &Deviation| Some(rel_err_pct(&frame.to_params(x), &truth));
+    let zero = [0.0; PARAM_COUNT];
+    let nt = newton(zero, p, &config.newton).ok();
+    let lm = levenberg_marquardt(zero, p, &config.lm).ok();
+    let neutral = levenberg_marquardt(frame.to_deviation(&Params::IDENTITY), p, &config.lm).ok();
+    let mut ga =
+        ga_solver::<_, POPULATION>(p, &config.widths, config.ga, Xoshiro128PlusPlus::seed_from_u64(ga_seed)).ok()?;
+    let ga_report = ga.run(&|x: &Deviation| objective(x, p));
+    let polished = levenberg_marquardt(ga_report.best, p, &config.lm).ok();
+    let errors = [
+        nt.as_ref().and_then(|r| err(&r.x)),
+        err(&ga_report.best),
+        lm.as_ref().and_then(|r| err(&r.x)),
+        polished.as_ref().and_then(|r| err(&r.x)),
+        neutral.as_ref().and_then(|r| err(&r.x)),
+    ];
+    let it = |r: &Option<accelcal::solve::SolveReport>| r.as_ref().map_or(0, |r| r.iterations);
+    Some(RunOutcome {
+        errors,
+        generations: ga_report.generations,
+        evaluations: ga_report.evaluations,
+        iterations: [it(&nt), 0, it(&lm), it(&polished), it(&neutral)],
+    })
+}
+
+/// Runs the whole reproduction. `progress` is called once per finished Monte Carlo run.
+pub fn run(options: &PaperOptions, mut progress: impl FnMut()) -> PaperReport {
+    let mut sq = [[0.0f64; PARAM_COUNT]; 5];
+    let mut counts = [0usize; 5];
+    let mut failures = [0usize; 5];
+    let (mut generations, mut evaluations) = (0u64, 0u64);
+    let mut iterations = [0u64; 5];
+    let mut ga_runs = 0u64;
+    for run in 0..options.runs {
+        let seed = options.seed + run as u64;
+        let cfg = sim_config(options.plan, seed, options.noise_mg);
+        match one_run(&cfg, seed) {
+            Some(outcome) => {
+                for (m, r) in outcome.errors.iter().enumerate() {
+                    match r {
+                        Some(errs) => {
+                            for i in 0..PARAM_COUNT {
+                                sq[m][i] += errs[i] * errs[i];
+                            }
+                            counts[m] += 1;
+                        }
+                        None => failures[m] += 1,
+                    }
+                }
+                generations += u64::from(outcome.generations);
+                evaluations += u64::from(outcome.evaluations);
+                for (total, it) in iterations.iter_mut().zip(outcome.iterations) {
+                    *total += u64::from(it);
+                }
+                ga_runs += 1;
+            }
+            None => failures.iter_mut().for_each(|f| *f += 1),
+        }
+        progress();
+    }
+    let per_run = |v: u64| v as f64 / ga_runs.max(1) as f64;
+    let methods = METHODS
+        .iter()
+        .enumerate()
+        .map(|(m, name)| {
+            let rel_err_pct = sq[m].map(|s| (s / counts[m].max(1) as f64).sqrt());
+            let is_ga = *name == "taga" || *name == "taga+lm";
+            let result = MethodResult {
+                rel_err_pct,
+                mean_generations: if is_ga { per_run(generations) } else { 0.0 },
+                mean_evaluations: if is_ga { per_run(evaluations) } else { 0.0 },
+                mean_iterations: per_run(iterations[m]),
+                failures: failures[m],
+            };
+            (*name, result)
+        })
+        .collect::<Vec<_>>();
+    let crlb_runs = options.runs.clamp(1, 200);
+    let crlb = crlb_rel_pct(options.plan, options.seed, crlb_runs, options.noise_mg);
+    let crlb_paper24 = crlb_rel_pct(Plan::Paper24, options.seed, crlb_runs, options.noise_mg);
+    let crlb_cube26 = crlb_rel_pct(Plan::Cube26, options.seed, crlb_runs, options.noise_mg);
+    let newton_rms = methods[0].1.rel_err_pct;
+    let noise_to_match_paper_mg =
+        std::array::from_fn(|i| options.noise_mg * PAPER_TABLE2[i].0.abs() / newton_rms[i].max(f64::MIN_POSITIVE));
+    PaperReport {
+        options: options.clone(),
+        methods,
+        crlb_rel_pct: crlb,
+        crlb_paper24,
+        crlb_cube26,
+        noise_to_match_paper_mg,
+        operators: operator_comparison(options.operator_seeds),
+        trace: taga_trace(options.plan, options.seed, options.noise_mg),
+    }
+}
+
+/// Fig. 3: AGA, LAGA and TAGA (the paper's constants) on 2-D Rastrigin, population 40, 100
+/// generations, the same seeds for each.
+pub fn operator_comparison(seeds: u64) -> Vec<OperatorResult> {
+    const GENERATIONS: usize = 100;
+    let bounds = match SearchBox::new([-5.12; 2], [5.12; 2]) {
+        Ok(b) => b,
+        Err(_) => return Vec::new(),
+    };
+    [("aga", Operators::AGA_PAPER), ("laga", Operators::LAGA_PAPER), ("taga", Operators::TAGA_PAPER)]
+        .into_iter()
+        .map(|(name, operators)| {
+            let mut mean_best = vec![0.0; GENERATIONS + 1];
+            let mut successes = 0;
+            for seed in 0..seeds {
+                let config = GaConfig { operators, max_generations: GENERATIONS as u32, ..GaConfig::DEFAULT };
+                let rng = Xoshiro128PlusPlus::seed_from_u64(seed);
+                let Ok(mut ga) = Ga::<_, POPULATION, 2>::new(config, bounds, rng, &rastrigin) else { continue };
+                mean_best[0] += f64::from(ga.best_cost());
+                for g in 1..=GENERATIONS {
+                    ga.step(&rastrigin);
+                    mean_best[g] += f64::from(ga.best_cost());
+                }
+                successes += u64::from(ga.best_cost() < 1e-3);
+            }
+            mean_best.iter_mut().for_each(|v| *v /= seeds.max(1) as f64);
+            OperatorResult { name, successes, seeds, mean_best }
+        })
+        .collect()
+}
+
+/// Fig. 6/7: best and mean cost (`fE`, (m/s^2)^4) and the best parameters per generation of one TAGA
+/// run on one simulated experiment.
+pub fn taga_trace(plan: Plan, seed: u64, noise_mg: f64) -> Vec<(f64, f64, Params)> {
+    let cfg = sim_config(plan, seed, noise_mg);
+    let poses = simulate_pose_means(&cfg);
+    let config = CalibrationConfig::DEFAULT;
+    let Ok(norm) = NormalizedPoses::<MAX_POSES>::new(&poses, cfg.gravity as f32) else { return Vec::new() };
+    let frame = *norm.coarse().frame();
+    let p = norm.poses();
+    let ga_config = GaConfig { stall_generations: 0, ..config.ga };
+    let Ok(mut ga) = ga_solver::<_, POPULATION>(p, &config.widths, ga_config, Xoshiro128PlusPlus::seed_from_u64(seed))
+    else {
+        return Vec::new();
+    };
+    let g4 = cfg.gravity.powi(4);
+    let cost = |x: &Deviation| objective(x, p);
+    let mut out = vec![(f64::from(ga.best_cost()) * g4, f64::from(ga.mean_cost()) * g4, frame.to_params(ga.best()))];
+    while ga.generation() < ga_config.max_generations {
+        ga.step(&cost);
+        out.push((f64::from(ga.best_cost()) * g4, f64::from(ga.mean_cost()) * g4, frame.to_params(ga.best())));
+    }
+    out
+}
+
+/// The report as JSON (keys as documented in the README).
+pub fn to_json(r: &PaperReport) -> serde_json::Value {
+    use serde_json::json;
+    let mut rel = serde_json::Map::new();
+    let mut ratio = serde_json::Map::new();
+    let mut effort = serde_json::Map::new();
+    for (name, m) in &r.methods {
+        rel.insert((*name).into(), json!(m.rel_err_pct));
+        let rt: Vec<f64> = (0..PARAM_COUNT).map(|i| m.rel_err_pct[i] / r.crlb_rel_pct[i]).collect();
+        ratio.insert((*name).into(), json!(rt));
+        effort.insert(
+            (*name).into(),
+            json!({"generations": m.mean_generations, "evaluations": m.mean_evaluations,
+                   "iterations": m.mean_iterations, "failures": m.failures}),
+        );
+    }
+    let operators: serde_json::Map<String, serde_json::Value> = r
+        .operators
+        .iter()
+        .map(|o| (o.name.to_string(), json!({"successes": o.successes, "seeds": o.seeds, "mean_best": o.mean_best})))
+        .collect();
+    json!({
+        "runs": r.options.runs,
+        "noise_mg": r.options.noise_mg,
+        "plan": r.options.plan.to_string(),
+        "seed": r.options.seed,
+        "params": PARAM_NAMES,
+        "rel_err_pct": rel,
+        "crlb_rel_pct": r.crlb_rel_pct,
+        "ratio_to_crlb": ratio,
+        "effort": effort,
+        "paper_table2_pct": {"newton": PAPER_TABLE2.map(|p| p.0), "taga": PAPER_TABLE2.map(|p| p.1)},
+        "noise_to_match_paper_mg": r.noise_to_match_paper_mg,
+        "crlb_plans_pct": {"paper24": r.crlb_paper24, "cube26": r.crlb_cube26,
+            "ratio": (0..PARAM_COUNT).map(|i| r.crlb_paper24[i] / r.crlb_cube26[i]).collect::<Vec<_>>()},
+        "operators": operators,
+        "trace": r.trace.iter().map(|(b, m, p)| json!({"best": b, "mean": m, "params": p.to_array()})).collect::<Vec<_>>(),
+    })
+}
+
+/// The report as text tables.
+pub fn to_text(r: &PaperReport) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let o = &r.options;
+    let _ = writeln!(
+        s,
+        "Table 2 as a Monte Carlo: {} runs, plan {}, {} mg white noise per sample, seeds {}..{}",
+        o.runs,
+        o.plan,
+        o.noise_mg,
+        o.seed,
+        o.seed + o.runs as u64
+    );
+    let _ = writeln!(s, "RMS relative error (%) per parameter, and its ratio to the Cramer-Rao bound:");
+    let _ = write!(s, "{:<12}", "");
+    for n in PARAM_NAMES {
+        let _ = write!(s, "{n:>10}");
+    }
+    let _ = writeln!(s);
+    let row = |s: &mut String, label: &str, v: &[f64]| {
+        let _ = write!(s, "{label:<12}");
+        for x in v {
+            let _ = write!(s, "{:>10}", format_sig(*x));
+        }
+        let _ = writeln!(s);
+    };
+    row(&mut s, "CRLB", &r.crlb_rel_pct);
+    for (name, m) in &r.methods {
+        row(&mut s, name, &m.rel_err_pct);
+        let ratio: Vec<f64> = (0..PARAM_COUNT).map(|i| m.rel_err_pct[i] / r.crlb_rel_pct[i]).collect();
+        row(&mut s, "  /CRLB", &ratio);
+    }
+    row(&mut s, "paper newton", &PAPER_TABLE2.map(|p| p.0));
+    row(&mut s, "paper TAGA", &PAPER_TABLE2.map(|p| p.1));
+    row(&mut s, "noise->paper", &r.noise_to_match_paper_mg);
+    let _ = writeln!(
+        s,
+        "(noise->paper: the per-sample noise in mg at which our Newton RMS error equals the paper's Table 2"
+    );
+    let _ =
+        writeln!(s, " magnitude; the paper's single run is one draw, so only the order of magnitude means anything)");
+    for (name, m) in &r.methods {
+        if m.mean_generations > 0.0 {
+            let _ = writeln!(
+                s,
+                "{name}: {:.1} generations, {:.0} cost evaluations, {:.1} LM iterations on average; {} failed runs",
+                m.mean_generations, m.mean_evaluations, m.mean_iterations, m.failures
+            );
+        } else {
+            let _ = writeln!(s, "{name}: {:.1} iterations on average; {} failed runs", m.mean_iterations, m.failures);
+        }
+    }
+    let _ = writeln!(s, "\nCramer-Rao bound (%) of the paper's 24 positions vs a 26-direction cube, same noise:");
+    row(&mut s, "paper24", &r.crlb_paper24);
+    row(&mut s, "cube26", &r.crlb_cube26);
+    let ratio: Vec<f64> = (0..PARAM_COUNT).map(|i| r.crlb_paper24[i] / r.crlb_cube26[i]).collect();
+    row(&mut s, "ratio", &ratio);
+    let _ = writeln!(s, "\nFig. 3: operators on 2-D Rastrigin (population 40, 100 generations, same seeds):");
+    for op in &r.operators {
+        let at = |g: usize| op.mean_best.get(g).copied().unwrap_or(f64::NAN);
+        let _ = writeln!(
+            s,
+            "{:<5} success (best < 1e-3) {:>3}/{}; mean best cost at generation 10: {}, 25: {}, 50: {}, 100: {}",
+            op.name,
+            op.successes,
+            op.seeds,
+            format_sig(at(10)),
+            format_sig(at(25)),
+            format_sig(at(50)),
+            format_sig(at(100))
+        );
+    }
+    if let (Some(first), Some(last)) = (r.trace.first(), r.trace.last()) {
+        let converged = r.trace.iter().position(|t| t.0 <= last.0 * 1.01).unwrap_or(0);
+        let _ = writeln!(
+            s,
+            "\nFig. 6: one TAGA run: best fE {} -> {} ((m/s^2)^4); within 1 % of its final value at generation {converged}",
+            format_sig(first.0),
+            format_sig(last.0)
+        );
+    }
+    s
+}
+
+/// Four significant digits, scientific when small or large.
+pub fn format_sig(v: f64) -> String {
+    if v == 0.0 {
+        "0".into()
+    } else if (1e-3..1e5).contains(&v.abs()) {
+        let decimals = (3 - v.abs().log10().floor() as i32).max(0) as usize;
+        format!("{v:.decimals$}")
+    } else {
+        format!("{v:.3e}")
+    }
+}
