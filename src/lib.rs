@@ -64,6 +64,11 @@ pub mod sensor;
 pub mod solve;
 pub mod verdict;
 
+/// The README's usage example, compiled as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;
+
 /// `"x"`, `"y"` or `"z"` for an axis index.
 pub(crate) const fn axis_name(axis: u8) -> &'static str {
     match axis {
