@@ -22,9 +22,9 @@ use crate::accumulator::Pose;
 use crate::coarse::{CoarseCalibration, CoarseError, SearchWidths};
 use crate::frame::{Deviation, NormPose, objective};
 use crate::ga::{Ga, GaConfig, GaError};
-use crate::model::{PARAM_COUNT, Params};
-use crate::solve::{LmConfig, NewtonConfig, SolveError, levenberg_marquardt, newton};
-use crate::verdict::{Verdict, VerdictBounds, judge};
+use crate::model::{PARAM_COUNT, PARAM_NAMES, Params};
+use crate::solve::{LmConfig, NewtonConfig, SolveError, SolveTermination, levenberg_marquardt, newton};
+use crate::verdict::{Verdict, VerdictBounds, judge, undetermined_parameters};
 
 /// Which optimiser runs after the coarse calibration.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -117,6 +117,9 @@ pub enum CalibrationError {
     Ga(GaError),
     /// The gradient solver failed.
     Solve(SolveError),
+    /// The poses cannot determine these parameters (`true` per parameter, [`PARAM_NAMES`] order): too
+    /// few distinct directions. Capture orientations between the faces (edges, corners).
+    Undetermined([bool; PARAM_COUNT]),
 }
 
 impl core::fmt::Display for CalibrationError {
@@ -126,6 +129,13 @@ impl core::fmt::Display for CalibrationError {
             Self::Coarse(e) => write!(f, "coarse calibration: {e}"),
             Self::Ga(e) => write!(f, "genetic algorithm: {e}"),
             Self::Solve(e) => write!(f, "solver: {e}"),
+            Self::Undetermined(which) => {
+                f.write_str("the poses cannot determine")?;
+                for (name, _) in PARAM_NAMES.iter().zip(which).filter(|(_, u)| **u) {
+                    write!(f, " {name}")?;
+                }
+                f.write_str(": capture orientations between the faces (edges, corners)")
+            }
         }
     }
 }
@@ -231,22 +241,29 @@ pub fn calibrate<R: Rng, const POP: usize, const MAX_POSES: usize>(
     let norm = normalized.poses();
     let frame = *normalized.coarse().frame();
     let start = [0.0; PARAM_COUNT];
+    if norm.len() < PARAM_COUNT {
+        return Err(SolveError::TooFewPoses { got: norm.len() }.into());
+    }
+    let undetermined = undetermined_parameters(&start, norm);
+    if undetermined.iter().any(|&u| u) {
+        return Err(CalibrationError::Undetermined(undetermined));
+    }
     let (mut generations, mut evaluations, mut iterations) = (0, 0, 0);
+    let mut converged = true;
     let x = match config.method {
         Method::Newton => {
             let r = newton(start, norm, &config.newton)?;
             iterations = r.iterations;
+            converged = r.termination != SolveTermination::MaxIterations;
             r.x
         }
         Method::Lm => {
             let r = levenberg_marquardt(start, norm, &config.lm)?;
             iterations = r.iterations;
+            converged = r.termination != SolveTermination::MaxIterations;
             r.x
         }
         Method::Taga | Method::TagaLm => {
-            if norm.len() < PARAM_COUNT {
-                return Err(SolveError::TooFewPoses { got: norm.len() }.into());
-            }
             let mut ga = ga_solver::<R, POP>(norm, &config.widths, config.ga, rng)?;
             let report = ga.run(&|x: &Deviation| objective(x, norm));
             generations = report.generations;
@@ -254,6 +271,7 @@ pub fn calibrate<R: Rng, const POP: usize, const MAX_POSES: usize>(
             if config.method == Method::TagaLm {
                 let r = levenberg_marquardt(report.best, norm, &config.lm)?;
                 iterations = r.iterations;
+                converged = r.termination != SolveTermination::MaxIterations;
                 r.x
             } else {
                 report.best
@@ -262,13 +280,23 @@ pub fn calibrate<R: Rng, const POP: usize, const MAX_POSES: usize>(
     };
     let params = frame.to_params(&x);
     let before = config.before.unwrap_or_else(|| normalized.coarse().params());
-    let verdict = judge(&x, &frame, poses, norm, &before, &config.bounds);
-    let g2 = config.gravity * config.gravity;
+    let mut verdict = judge(&x, &frame, poses, norm, &before, &config.bounds);
+    verdict.failures.not_converged = !converged;
+    // fE in f64: the per-pose errors are accurate to f32, their sum of squares need not lose more.
+    let g2 = f64::from(config.gravity) * f64::from(config.gravity);
+    let sum_sq: f64 = norm
+        .iter()
+        .map(|p| {
+            let e = f64::from(crate::frame::modulus_error(&x, p));
+            e * e
+        })
+        .sum();
+    let objective_value = (sum_sq / norm.len() as f64 * g2 * g2) as f32;
     Ok(Calibration {
         params,
         coarse: normalized.coarse().params(),
         method: config.method,
-        objective: objective(&x, norm) * g2 * g2,
+        objective: objective_value,
         generations,
         evaluations,
         iterations,

@@ -93,14 +93,17 @@ impl Frame {
         Ok(Self { offset, gain, gravity })
     }
 
-    /// Normalises one pose mean (input unit).
-    #[inline]
+    /// Normalises one pose mean (input unit). `u` and `q` are formed in `f64` (once per pose, not per
+    /// cost evaluation): `q = |u|^2 - 1` is the small number every modulus error starts from, and
+    /// rounding `u` to `f32` first would cost it about 1e-7 absolute.
     pub fn normalize(&self, mean: [f32; 3]) -> NormPose {
-        let mut u = [0.0; 3];
+        let mut u64 = [0.0f64; 3];
         for i in 0..3 {
-            u[i] = (mean[i] - self.offset[i]) / (self.gain[i] * self.gravity);
+            let scale = f64::from(self.gain[i]) * f64::from(self.gravity);
+            u64[i] = (f64::from(mean[i]) - f64::from(self.offset[i])) / scale;
         }
-        NormPose { u, q: u[0] * u[0] + u[1] * u[1] + u[2] * u[2] - 1.0 }
+        let q = u64[0] * u64[0] + u64[1] * u64[1] + u64[2] * u64[2] - 1.0;
+        NormPose { u: u64.map(|v| v as f32), q: q as f32 }
     }
 
     /// Paper-convention parameters for a deviation vector.

@@ -57,8 +57,12 @@ pub struct Failures {
     pub model_misfit: bool,
     /// Per parameter: standard deviation above its bound, or not determined at all.
     pub undetermined: [bool; PARAM_COUNT],
-    /// The parameters are not finite or a scale factor is not positive.
+    /// The parameters are not finite, a scale factor is not positive, or the fit left the plausible
+    /// range around the coarse estimate (bias beyond 0.5 g, scale beyond 50 %, non-orthogonality beyond
+    /// 0.5 rad).
     pub implausible: bool,
+    /// The iterative solver stopped at its iteration limit without converging.
+    pub not_converged: bool,
 }
 
 /// The verdict on a calibration.
@@ -82,9 +86,13 @@ impl Verdict {
     /// `true` when no bound failed.
     pub fn pass(&self) -> bool {
         let f = &self.failures;
-        !(f.rmse || f.model_misfit || f.implausible || f.undetermined.iter().any(|&u| u))
+        !(f.rmse || f.model_misfit || f.implausible || f.not_converged || f.undetermined.iter().any(|&u| u))
     }
 }
+
+/// Largest plausible deviation from the coarse estimate per deviation coordinate: bias 0.5 g, scale
+/// 50 %, non-orthogonality 0.5 rad.
+const PLAUSIBLE_DEVIATION: Deviation = [0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5];
 
 /// Variance of one pose's normalised modulus error `E / g^2` due to its averaging noise; `None` if the
 /// pose carries no variance.
@@ -140,6 +148,58 @@ pub fn deviation_covariance(
         }
     }
     spd_inverse(&info).ok()
+}
+
+/// Smallest share of a parameter's information not explained by the parameters before it (the pivot
+/// of the Jacobi-scaled Cholesky factorisation) for it to count as determined.
+const DETERMINED_PIVOT: f32 = 1e-5;
+
+/// Which parameters the poses cannot determine at `x`: a Cholesky factorisation, in parameter order, of
+/// the Jacobi-scaled information matrix `sum g g^T`; a parameter whose remaining pivot is below 1e-5
+/// is (to f32 precision) a combination of the ones before it and is flagged, then left out. With
+/// only axis-aligned poses, for example, the non-orthogonality terms are flagged.
+pub fn undetermined_parameters(x: &Deviation, norm: &[NormPose]) -> [bool; PARAM_COUNT] {
+    let mut info = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
+    for n in norm {
+        let (_, g) = modulus_error_gradient(x, n);
+        for i in 0..PARAM_COUNT {
+            for j in 0..=i {
+                info[i][j] += g[i] * g[j];
+            }
+        }
+    }
+    let mut out = [false; PARAM_COUNT];
+    let mut l = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
+    for j in 0..PARAM_COUNT {
+        let diag = info[j][j];
+        if !(diag > 0.0 && diag.is_finite()) {
+            out[j] = true;
+            continue;
+        }
+        // Scaled entries: info[i][j] / sqrt(info[i][i] info[j][j]).
+        let scaled = |i: usize| info[j.max(i)][j.min(i)] / libm::sqrtf(info[i][i] * diag);
+        let mut pivot = 1.0;
+        for k in 0..j {
+            pivot -= l[j][k] * l[j][k];
+        }
+        if !(pivot > DETERMINED_PIVOT) {
+            out[j] = true;
+            continue;
+        }
+        let root = libm::sqrtf(pivot);
+        l[j][j] = root;
+        for i in j + 1..PARAM_COUNT {
+            if !(info[i][i] > 0.0) {
+                continue;
+            }
+            let mut s = scaled(i);
+            for k in 0..j {
+                s -= l[i][k] * l[j][k];
+            }
+            l[i][j] = s / root;
+        }
+    }
+    out
 }
 
 /// Standard deviations of the paper-convention parameters from a deviation covariance.
@@ -210,16 +270,19 @@ pub fn judge(
     let mut failures = Failures {
         rmse: !(rmse_after_mg <= bounds.max_rmse_mg),
         model_misfit: noise_floor.is_some_and(|f| f > 0.0 && rmse_after_mg > bounds.max_rmse_over_noise * f),
-        implausible: !params.is_finite() || params.scale.iter().any(|&s| !(s > 0.0)),
+        implausible: !params.is_finite()
+            || params.scale.iter().any(|&s| !(s > 0.0))
+            || x.iter().enumerate().any(|(i, v)| !(v.abs() <= PLAUSIBLE_DEVIATION[i])),
         ..Failures::default()
     };
+    let structurally_undetermined = undetermined_parameters(x, norm);
     for i in 0..PARAM_COUNT {
         let limit = match i {
             0..=2 => bounds.max_bias_std_mg * g / 1000.0,
             3..=5 => bounds.max_scale_std_rel * params.scale[i - 3].abs(),
             _ => bounds.max_nonorth_std * params.scale[if i == 8 { 1 } else { 0 }].abs(),
         };
-        failures.undetermined[i] = !(std[i] <= limit);
+        failures.undetermined[i] = structurally_undetermined[i] || !(std[i] <= limit);
     }
     Verdict { rmse_before_mg, rmse_after_mg, noise_floor_mg: noise_floor, param_std: std, failures }
 }

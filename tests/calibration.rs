@@ -179,3 +179,38 @@ fn verdict_reports_the_noise_floor_and_determined_parameters() {
     assert!(!v.pass());
     assert_eq!(v.failures.undetermined, [true, true, true, false, false, false, false, false, false]);
 }
+
+#[test]
+fn axis_aligned_poses_name_the_parameters_they_cannot_determine() {
+    use accelcal::calibrate::CalibrationError;
+    // 24 poses but only the 6 exact face directions: the non-orthogonality terms are invisible.
+    let faces = cube_directions(6);
+    let dirs: Vec<[f64; 3]> = faces.iter().cycle().take(24).copied().collect();
+    let poses = poses(&PAPER_TRUTH, &dirs, 1.0, 0.0);
+    let r = calibrate::<_, 40, 32>(&poses, &config(Method::TagaLm), Xoshiro128PlusPlus::seed_from_u64(1));
+    let expected = [false, false, false, false, false, false, true, true, true];
+    assert_eq!(r.err(), Some(CalibrationError::Undetermined(expected)));
+    let message = CalibrationError::Undetermined(expected).to_string();
+    assert!(message.contains("Mxx Myy Mzz"), "{message}");
+    // One corner adds one combination of the three terms: two stay undetermined.
+    let corners = &cube_directions(9)[6..9];
+    let mut dirs = dirs;
+    dirs.push(corners[0]);
+    let r = calibrate::<_, 40, 32>(&poses_with(&dirs), &config(Method::Lm), Xoshiro128PlusPlus::seed_from_u64(1));
+    match r.err() {
+        Some(CalibrationError::Undetermined(which)) => {
+            assert_eq!(which[..6], [false; 6]);
+            assert_eq!(which[6..].iter().filter(|u| **u).count(), 2, "{which:?}");
+        }
+        other => panic!("expected Undetermined, got {other:?}"),
+    }
+    // Three corners with independent sign patterns: everything is determined and recovered.
+    dirs.extend_from_slice(&corners[1..]);
+    let cal = calibrate::<_, 40, 32>(&poses_with(&dirs), &config(Method::Lm), Xoshiro128PlusPlus::seed_from_u64(1));
+    let (err, which) = max_rel_err(&cal.unwrap().params, &PAPER_TRUTH);
+    assert!(err < 1e-5, "param {which}: {err:e}");
+}
+
+fn poses_with(dirs: &[[f64; 3]]) -> Vec<Pose> {
+    poses(&PAPER_TRUTH, dirs, 1.0, 0.0)
+}
