@@ -1,8 +1,8 @@
 //! Position averaging: feed samples one at a time; static intervals are found and averaged into [`Pose`]s.
 //!
 //! Samples are grouped in blocks of `BLOCK`. Each block's per-axis variance and its mean's change from
-//! the previous block are compared with the *measured* noise (the quietest block seen so far, never
-//! below the quantisation floor), with hysteresis: a pose opens after two quiet blocks and closes at the
+//! the previous block are compared with the *measured* noise (a leaky minimum of the block variances:
+//! a low percentile of them, never below the quantisation floor), with hysteresis: a pose opens after two quiet blocks and closes at the
 //! first block that moves. The block in which motion starts and the one before it are never averaged
 //! in (a one-block delay line). A closed pose is kept if it is long enough, never touched the rails and
 //! its own variance is noise-like; otherwise it is counted as rejected with the reason.
@@ -218,8 +218,13 @@ pub struct AccumulatorConfig {
     /// (`i16` readings at the type's rails always count).
     pub full_scale: f32,
     /// Smallest noise variance assumed, input unit squared. Defaults to 0 (the quantisation floor of the
-    /// reading type and the quietest block decide).
+    /// reading type and the quiet blocks decide).
     pub min_noise_variance: f32,
+    /// The noise level follows a quieter block down at once and otherwise rises by this fraction per
+    /// block, so it tracks a low percentile of the block variances rather than an ever-falling minimum
+    /// (which would shut out holds that are a little noisier than the quietest one, e.g. hand-held).
+    /// Defaults to 0.02.
+    pub noise_rise_per_block: f32,
 }
 
 impl AccumulatorConfig {
@@ -232,10 +237,11 @@ impl AccumulatorConfig {
         drift_exit_factor: 25.0,
         full_scale: f32::INFINITY,
         min_noise_variance: 0.0,
+        noise_rise_per_block: 0.02,
     };
 
     /// Checks that every factor is finite and positive, exits are not below entries, and the noise
-    /// floor is finite and not negative.
+    /// floor and rise are finite and not negative.
     pub fn validate(&self) -> Result<(), AccumulatorError> {
         let positive = |v: f32| v.is_finite() && v > 0.0;
         let ok = positive(self.enter_factor)
@@ -246,7 +252,9 @@ impl AccumulatorConfig {
             && self.drift_exit_factor.is_finite()
             && self.full_scale > 0.0
             && self.min_noise_variance.is_finite()
-            && self.min_noise_variance >= 0.0;
+            && self.min_noise_variance >= 0.0
+            && self.noise_rise_per_block.is_finite()
+            && self.noise_rise_per_block >= 0.0;
         if ok { Ok(()) } else { Err(AccumulatorError::InvalidConfig) }
     }
 }
@@ -415,8 +423,12 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         }
         let stats = BlockStats { sums, mean, variance: var[0] + var[1] + var[2] };
         let magnitude_sq = mean.iter().map(|m| m * m).sum::<f32>();
-        self.noise_variance = self
-            .noise_variance
+        let risen = if self.noise_variance.is_finite() {
+            self.noise_variance * (1.0 + self.config.noise_rise_per_block)
+        } else {
+            f32::INFINITY
+        };
+        self.noise_variance = risen
             .min(stats.variance)
             .max(self.config.min_noise_variance)
             .max(R::QUANTUM_VARIANCE)
