@@ -396,6 +396,16 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         Ok(None)
     }
 
+    /// [`Accumulator::push`] for micromath's vector types (`I16x3`, `F32x3`), which the embedded
+    /// sensor-driver ecosystem returns.
+    #[inline]
+    pub fn push_vector(&mut self, v: micromath::vector::Vector3d<R>) -> Result<Option<Event>, AccumulatorError>
+    where
+        R: micromath::vector::Component,
+    {
+        self.push([v.x, v.y, v.z])
+    }
+
     /// Marks a gap in the stream (e.g. a sensor read error): the open block is dropped and an open pose
     /// is closed as if motion had started. Poses already stored are kept.
     pub fn interrupt(&mut self) -> Result<Option<Event>, AccumulatorError> {
@@ -415,6 +425,9 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         self.close_pose()
     }
 
+    // Once per BLOCK samples: kept out of line so that `push`, inlined into the caller's sample loop, stays
+    // small (inlined, its register pressure made every push save and restore all FPU registers).
+    #[inline(never)]
     fn close_block(&mut self, sums: Sums<R>) -> Result<Option<Event>, AccumulatorError> {
         let (offset, var) = sums.mean_offset_and_variance();
         let mut mean = [0.0; 3];

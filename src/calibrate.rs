@@ -26,6 +26,9 @@ use crate::model::{PARAM_COUNT, PARAM_NAMES, Params};
 use crate::solve::{LmConfig, NewtonConfig, SolveError, SolveTermination, levenberg_marquardt, newton};
 use crate::verdict::{Verdict, VerdictBounds, judge, undetermined_parameters};
 
+/// The recommended seeded generator for the GA: 32-bit state arithmetic, fast on a Cortex-M4.
+pub type DefaultRng = rand_xoshiro::Xoshiro128PlusPlus;
+
 /// Which optimiser runs after the coarse calibration.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

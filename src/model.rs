@@ -67,6 +67,13 @@ impl Params {
         [k[0] - self.bias[0], k[1] - self.bias[1], k[2] - self.bias[2]]
     }
 
+    /// [`Params::apply`] on micromath's `F32x3`.
+    #[inline]
+    pub fn apply_vector(&self, f_s: micromath::vector::F32x3) -> micromath::vector::F32x3 {
+        let [x, y, z] = self.apply([f_s.x, f_s.y, f_s.z]);
+        micromath::vector::F32x3 { x, y, z }
+    }
+
     /// Modulus error of one pose, eq. (4): `E = |f_b|^2 - g^2` (output unit squared).
     #[inline]
     pub fn modulus_error(&self, f_s: [f32; 3], gravity: f32) -> f32 {

@@ -20,6 +20,11 @@ pub trait AccelSensor {
     type Error;
     /// Reads one sample.
     fn read_raw(&mut self) -> Result<[i16; 3], Self::Error>;
+
+    /// Reads one sample as micromath's `I16x3`.
+    fn read_vector(&mut self) -> Result<micromath::vector::I16x3, Self::Error> {
+        self.read_raw().map(|[x, y, z]| micromath::vector::I16x3 { x, y, z })
+    }
 }
 
 impl<T: AccelSensor + ?Sized> AccelSensor for &mut T {

@@ -197,3 +197,19 @@ fn non_finite_samples_are_skipped_with_an_error() {
     let bad = AccumulatorConfig { exit_factor: 1.0, ..AccumulatorConfig::DEFAULT };
     assert!(matches!(Accumulator::<f32, 4, 16>::new(bad), Err(AccumulatorError::InvalidConfig)));
 }
+
+#[test]
+fn micromath_vectors_feed_the_same_poses() {
+    use micromath::vector::{F32x3, I16x3};
+    let (samples, _) = stream(&LEVELS, 1500, 200, 4, 21);
+    let mut by_array: Accumulator<i16, 16, 32> = Accumulator::new(AccumulatorConfig::DEFAULT).unwrap();
+    let mut by_vector: Accumulator<i16, 16, 32> = Accumulator::new(AccumulatorConfig::DEFAULT).unwrap();
+    for s in &samples {
+        by_array.push(*s).unwrap();
+        by_vector.push_vector(I16x3 { x: s[0], y: s[1], z: s[2] }).unwrap();
+    }
+    assert_eq!(by_array.poses(), by_vector.poses());
+    let p = accelcal::model::Params { bias: [0.1, 0.2, 0.3], scale: [1.0, 2.0, 3.0], nonorth: [0.0; 3] };
+    let v = p.apply_vector(F32x3 { x: 1.0, y: 1.0, z: 1.0 });
+    assert_eq!([v.x, v.y, v.z], p.apply([1.0, 1.0, 1.0]));
+}
