@@ -37,6 +37,14 @@ pub enum CoarseError {
     InvalidGravity,
     /// A pose mean is not finite.
     NonFinitePose,
+    /// The readings of this axis span much less than those of the widest axis: it was never pointed
+    /// both up and down (which side is missing cannot be told before calibration).
+    NotReversed {
+        /// Axis index 0..3 (x, y, z).
+        axis: u8,
+        /// Its span as a percentage of the widest axis' span.
+        span_pct: u8,
+    },
     /// The up and down readings of an axis coincide or are reversed.
     DegenerateAxis {
         /// Axis index.
@@ -49,9 +57,18 @@ impl core::fmt::Display for CoarseError {
         match self {
             Self::MissingAxisPair { axis, up } => write!(
                 f,
-                "no pose with the {} axis pointing {}: capture one to calibrate that axis",
+                "no pose with the {} axis pointing {} was recognised: each axis must be pointed straight up \
+                 and straight down (within 25 deg) once",
                 crate::axis_name(*axis),
                 if *up { "up" } else { "down" }
+            ),
+            Self::NotReversed { axis, span_pct } => write!(
+                f,
+                "the {} axis was never pointed both up and down (its readings span {span_pct} % of the widest axis'): \
+                 capture {} up and {} down",
+                crate::axis_name(*axis),
+                crate::axis_name(*axis),
+                crate::axis_name(*axis)
             ),
             Self::InvalidGravity => f.write_str("gravity must be finite and positive"),
             Self::NonFinitePose => f.write_str("a pose mean is not finite"),
@@ -129,6 +146,10 @@ pub struct CoarseCalibration {
     pub poses_used: [[u16; 2]; 3],
 }
 
+/// Smallest span of an axis' readings, as a fraction of the widest axis' span, for it to count as
+/// pointed both up and down (an axis seen only from one side spans at most about half).
+const MIN_SPAN_FRACTION: f32 = 0.75;
+
 /// Fraction of a pose's normalised reading on its dominant axis for it to count as up or down
 /// (cos 25 deg).
 const DOMINANCE: f32 = 0.906;
@@ -149,6 +170,16 @@ impl CoarseCalibration {
             for a in 0..3 {
                 lo[a] = lo[a].min(m[a]);
                 hi[a] = hi[a].max(m[a]);
+            }
+        }
+        // An axis pointed up and down spans about twice gravity, like the widest one; one that spans
+        // much less was never reversed, and its centre (hence its dominant poses) is unknown.
+        let widest = (0..3).map(|a| hi[a] - lo[a]).fold(0.0f32, f32::max);
+        for a in 0..3 {
+            let span = hi[a] - lo[a];
+            if widest > 0.0 && span < MIN_SPAN_FRACTION * widest {
+                let span_pct = (100.0 * span / widest).clamp(0.0, 99.0) as u8;
+                return Err(CoarseError::NotReversed { axis: a as u8, span_pct });
             }
         }
         let mut sums = [[0.0f32; 2]; 3];

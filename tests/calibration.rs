@@ -151,6 +151,10 @@ fn too_few_poses_and_missing_axes_are_typed_errors() {
     let no_z_down: Vec<Pose> = all.iter().copied().filter(|p| p.mean[2] > -9.0).collect();
     let r = calibrate::<_, 40, 32>(&no_z_down, &config(Method::Lm), rng());
     assert_eq!(r.err(), Some(CalibrationError::Coarse(CoarseError::MissingAxisPair { axis: 2, up: false })));
+    // x never points down (a hemisphere only): named as such, not as a missing "up".
+    let half: Vec<Pose> = all.iter().copied().filter(|p| p.mean[0] > -0.5).collect();
+    let r = calibrate::<_, 40, 32>(&half, &config(Method::Lm), rng());
+    assert!(matches!(r.err(), Some(CalibrationError::Coarse(CoarseError::NotReversed { axis: 0, .. }))), "{r:?}");
     // More poses than the buffer.
     let r = calibrate::<_, 40, 8>(&all, &config(Method::Lm), rng());
     assert_eq!(r.err(), Some(CalibrationError::TooManyPoses { got: 26, capacity: 8 }));
