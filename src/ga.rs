@@ -128,7 +128,8 @@ impl<const DIM: usize> SearchBox<DIM> {
         } else {
             v
         };
-        r.clamp(lo, hi)
+        // Not `clamp`: that asserts `lo <= hi` (guaranteed by `new`) and drags in a panic path.
+        r.max(lo).min(hi)
     }
 }
 
@@ -424,7 +425,7 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
     /// Fitness statistics of the current population (`f = -cost`).
     pub fn fitness_stats(&self) -> FitnessStats {
         let sum: f32 = self.costs.iter().sum();
-        FitnessStats { max: -self.costs[self.best_index], avg: -(sum / POP as f32) }
+        FitnessStats { max: -self.best_cost(), avg: -(sum / POP as f32) }
     }
 
     /// Runs one generation: elitism, selection, crossover, mutation, evaluation.
@@ -432,7 +433,7 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
         let stats = self.fitness_stats();
         let generation = self.generation + 1;
         let spread = self.gene_spread();
-        let previous_best = self.costs[self.best_index];
+        let previous_best = self.best_cost();
 
         // Elites: repeatedly take the best not yet taken (POP is small; no sort, no allocation).
         let mut taken = [false; POP];
@@ -445,10 +446,12 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
                     best = i;
                 }
             }
-            if let Some(flag) = taken.get_mut(best) {
+            if let (Some(flag), Some(slot), Some(cost), Some(genes)) =
+                (taken.get_mut(best), self.offspring.get_mut(e), elite_costs.get_mut(e), self.population.get(best))
+            {
                 *flag = true;
-                self.offspring[e] = self.population[best];
-                elite_costs[e] = self.costs[best];
+                *slot = *genes;
+                *cost = self.costs[best];
             }
         }
 
@@ -481,7 +484,7 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
                     mutated = true;
                 }
             }
-            if !mutated && self.offspring[i] == self.population[parent_index[i]] {
+            if !mutated && self.population.get(parent_index[i]) == Some(&self.offspring[i]) {
                 let d = ((self.rng.next_u32() as u64 * DIM as u64) >> 32) as usize;
                 self.mutate(i, d, &spread);
             }
@@ -494,7 +497,7 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
         }
         self.best_index = argmin(&self.costs);
         self.generation = generation;
-        let best = self.costs[self.best_index];
+        let best = self.best_cost();
         if best < previous_best - 1e-6 * previous_best.abs() {
             self.stall = 0;
         } else {
@@ -518,13 +521,24 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
     fn mutate(&mut self, i: usize, d: usize, spread: &[f32; DIM]) {
         self.offspring[i][d] = if self.uniform() < self.config.global_mutation {
             let (lo, hi) = (self.bounds.lower[d], self.bounds.upper[d]);
-            let u = self.uniform();
-            let step = CAUCHY_SCALE * (hi - lo) * libm::tanf(core::f32::consts::PI * (u - 0.5));
+            let step = CAUCHY_SCALE * (hi - lo) * self.cauchy();
             self.bounds.reflect(d, self.offspring[i][d] + step)
         } else {
             let step = self.triangular() * spread[d];
             self.bounds.reflect(d, self.offspring[i][d] + step)
         };
+    }
+
+    /// Standard Cauchy: the ratio of the coordinates of a point uniform in the unit disc (no
+    /// trigonometry; a few tries at most, 0 if all eight fall outside the disc).
+    fn cauchy(&mut self) -> f32 {
+        for _ in 0..8 {
+            let (a, b) = (2.0 * self.uniform() - 1.0, 2.0 * self.uniform() - 1.0);
+            if a * a + b * b <= 1.0 && b != 0.0 {
+                return a / b;
+            }
+        }
+        0.0
     }
 
     /// Triangular on `[-1, 1]`.
@@ -580,12 +594,13 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
 
     /// The best individual so far.
     pub fn best(&self) -> &[f32; DIM] {
-        &self.population[self.best_index]
+        // `best_index` always comes from `argmin` over the population.
+        self.population.get(self.best_index).unwrap_or(&self.population[0])
     }
 
     /// Cost of [`Ga::best`].
     pub fn best_cost(&self) -> f32 {
-        self.costs[self.best_index]
+        self.costs.get(self.best_index).copied().unwrap_or(WORST_COST)
     }
 
     /// Mean cost of the population.

@@ -1,0 +1,46 @@
+//! Link-time proof that the calibration path has no reachable panic.
+//!
+//! `panic-never` makes any panic that the optimiser cannot remove a link error, so this example
+//! links only if accumulating samples, coarse + TAGA + LM calibration, the verdict, blob encoding and
+//! decoding and applying the result contain no panicking branch, whatever the input (every input here
+//! is opaque to the optimiser through `black_box`). Build: `cargo build --release --target
+//! thumbv7em-none-eabihf --example panic_free` (CI does). It is not meant to run.
+#![cfg_attr(target_os = "none", no_std, no_main)]
+
+#[cfg(not(target_os = "none"))]
+fn main() {}
+
+#[cfg(target_os = "none")]
+mod firmware {
+    use accelcal::accumulator::{Accumulator, AccumulatorConfig};
+    use accelcal::blob;
+    use accelcal::calibrate::{CalibrationConfig, DefaultRng, calibrate};
+    use core::hint::black_box;
+    use cortex_m_rt::entry;
+    use panic_never as _;
+    use rand_core::SeedableRng;
+    // The chip crate's interrupt table: cortex-m-rt's `device` feature is on for every example.
+    use stm32f4xx_hal as _;
+
+    #[entry]
+    fn main() -> ! {
+        let Ok(mut acc) = Accumulator::<i16, 24, 32>::new(black_box(AccumulatorConfig::DEFAULT)) else { loop {} };
+        while black_box(true) {
+            let _ = acc.push(black_box([0i16; 3]));
+            if black_box(false) {
+                let _ = acc.interrupt();
+            }
+        }
+        let _ = acc.finish();
+        let config = black_box(CalibrationConfig::DEFAULT);
+        let rng = DefaultRng::seed_from_u64(black_box(1));
+        if let Ok(cal) = calibrate::<_, 40, 24>(acc.poses(), &config, rng) {
+            let bytes = blob::encode(&cal.params, config.gravity);
+            if let Ok((params, _)) = blob::decode(black_box(&bytes[..])) {
+                black_box(params.apply(black_box([1.0, 2.0, 3.0])));
+            }
+            black_box(cal.verdict.pass());
+        }
+        loop {}
+    }
+}
