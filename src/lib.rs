@@ -61,6 +61,7 @@ pub mod linalg;
 pub mod model;
 pub mod mpu6050;
 pub mod sensor;
+pub mod session;
 pub mod solve;
 pub mod verdict;
 

@@ -38,9 +38,10 @@ def f(v):
     return "?" if v is None else f"{v:.3g}"
 r = out["rmse_mg"]
 v = out["verdict"]
-verdict = "pass" if v["pass"] else "fail: " + ", ".join(
-    k for k in ["rmse_over_limit", "model_misfit", "implausible", "not_converged"] if v.get(k)
-) + ("; undetermined " + " ".join(v["undetermined"]) if v["undetermined"] else "")
+reasons = [k.replace("_", " ") for k in ["rmse_over_limit", "model_misfit", "implausible", "not_converged"] if v.get(k)]
+if v["undetermined"]:
+    reasons.append("poorly determined " + " ".join(v["undetermined"]))
+verdict = "pass" if v["pass"] else "fail: " + "; ".join(reasons)
 print(f"| `{file}` | `{opts}` | {out['units']} | {len(out['poses'])} | {f(r['before'])} | {f(r['after'])} | {f(r['loo'])} | {f(out['noise_floor_mg'])} | {verdict} |")
 PY
 done

@@ -2,6 +2,10 @@
 
 pub mod calib;
 pub mod csvio;
+pub mod diagnose;
+pub mod effects;
+pub mod i2c_sim;
 pub mod paper;
 pub mod plots;
+pub mod report;
 pub mod sim;

@@ -9,6 +9,7 @@ use accelcal::calibrate::{CalibrationConfig, Method};
 use accelcal::model::{PARAM_COUNT, PARAM_NAMES, Params};
 use accelcal_host::calib::{self, num, params_json, verdict_json};
 use accelcal_host::csvio::{self, AccumulateOptions, ColumnSpec, ReadOptions, Units};
+use accelcal_host::diagnose;
 use accelcal_host::paper::{self, PaperOptions, format_sig};
 use accelcal_host::plots::{Series, line_chart};
 use accelcal_host::sim::{self, OutputUnits, Plan, SimConfig};
@@ -76,6 +77,32 @@ enum Command {
         /// Seed of the GA.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Also time N runs of the whole pipeline (read, poses, calibration, leave-one-out).
+        #[arg(long, value_name = "N")]
+        bench: Option<usize>,
+    },
+    /// Explain a calibration's residual gap: where it lies and which unmodelled effect causes it.
+    Diagnose {
+        #[command(flatten)]
+        input: InputArgs,
+        /// Machine-readable report on stdout.
+        #[arg(long)]
+        json: bool,
+        /// Directory for the SVG plots.
+        #[arg(long)]
+        plots: Option<PathBuf>,
+        /// Seed of the GA and of the simulations.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
+    /// Size and cycle report of the firmware on an emulated Cortex-M4, against the budgets.
+    Report {
+        /// Machine-readable report on stdout.
+        #[arg(long)]
+        json: bool,
+        /// Exit with 1 when a budget marked enforced is exceeded.
+        #[arg(long)]
+        check: bool,
     },
     /// Reproduce the paper's experiments (Table 2 Monte Carlo vs the Cramer-Rao bound, Fig. 3, 6, 7).
     Paper {
@@ -148,7 +175,13 @@ fn main() -> ExitCode {
         Command::Simulate { plan, seed, noise_mg, rate, seconds, units, random_truth, output, json } => {
             simulate(plan, seed, noise_mg, rate, seconds, units, random_truth, &output, json)
         }
-        Command::Calibrate { input, method, json, seed } => calibrate_file(&input, &method, seed, json),
+        Command::Calibrate { input, method, json, seed, bench } => calibrate_file(&input, &method, seed, json, bench),
+        Command::Diagnose { input, json, plots, seed } => diagnose_file(&input, json, plots.as_deref(), seed),
+        Command::Report { json, check } => match accelcal_host::report::run(json, check) {
+            Ok(true) => Ok(()),
+            Ok(false) => Err(Failure::Verdict),
+            Err(e) => Err(Failure::Input(e)),
+        },
         Command::Paper { runs, noise_mg, plan, operator_seeds, out, json, seed } => {
             paper_cmd(PaperOptions { runs, noise_mg, plan, seed, operator_seeds }, out, json)
         }
@@ -291,15 +324,25 @@ fn simulate(
     Ok(())
 }
 
-fn calibrate_file(input: &InputArgs, method: &str, seed: u64, as_json: bool) -> Result<(), Failure> {
-    let method = calib::parse_method(method)?;
+/// A file read, its poses found and calibrated.
+struct Loaded {
+    table: csvio::Table,
+    poses: Vec<accelcal::accumulator::Pose>,
+    spans: Option<Vec<csvio::PoseSpan>>,
+    host: calib::HostCalibration,
+}
+
+/// The whole `calibrate` pipeline: read, find poses (or take the means), calibrate, leave-one-out.
+fn load_and_calibrate(input: &InputArgs, method: Method, seed: u64, warn: bool) -> Result<Loaded, Failure> {
     if !(input.gravity.is_finite() && input.gravity > 0.0) {
         return Err(format!("--gravity {} must be a positive number of m/s^2", input.gravity).into());
     }
     let opts = ReadOptions { columns: input.columns.clone(), units: input.units, means: input.means, delimiter: None };
     let table = csvio::read_csv(&input.file, &opts).map_err(|e| e.to_string())?;
-    for w in &table.warnings {
-        eprintln!("accelcal: warning: {w}");
+    if warn {
+        for w in &table.warnings {
+            eprintln!("accelcal: warning: {w}");
+        }
     }
     let (poses, spans) = if input.means {
         (csvio::to_poses_from_means(&table), None)
@@ -325,6 +368,37 @@ fn calibrate_file(input: &InputArgs, method: &str, seed: u64, as_json: bool) -> 
     };
     let config = CalibrationConfig { gravity, method, before, ..CalibrationConfig::DEFAULT };
     let host = calib::run_with_loo(&poses, &config, seed).map_err(|e| format!("{file}: {e}"))?;
+    Ok(Loaded { table, poses, spans, host })
+}
+
+/// Wall time of `runs` repetitions of the whole pipeline: (min, median, max) in ms.
+fn bench(input: &InputArgs, method: Method, seed: u64, runs: usize) -> Result<(f64, f64, f64), Failure> {
+    let mut ms = Vec::with_capacity(runs);
+    for _ in 0..runs.max(1) {
+        let start = std::time::Instant::now();
+        let loaded = load_and_calibrate(input, method, seed, false)?;
+        ms.push(start.elapsed().as_secs_f64() * 1e3);
+        std::hint::black_box(loaded.host.calibration.params);
+    }
+    ms.sort_by(f64::total_cmp);
+    Ok((ms[0], ms[ms.len() / 2], ms[ms.len() - 1]))
+}
+
+fn calibrate_file(
+    input: &InputArgs,
+    method: &str,
+    seed: u64,
+    as_json: bool,
+    bench_runs: Option<usize>,
+) -> Result<(), Failure> {
+    let method = calib::parse_method(method)?;
+    let Loaded { table, poses, spans, host } = load_and_calibrate(input, method, seed, true)?;
+    let timing = match bench_runs {
+        Some(runs) => Some(bench(input, method, seed, runs)?),
+        None => None,
+    };
+    let file = input.file.display();
+    let gravity = input.gravity as f32;
     let cal = host.calibration;
     let v = &cal.verdict;
     if as_json {
@@ -356,9 +430,15 @@ fn calibrate_file(input: &InputArgs, method: &str, seed: u64, as_json: bool) -> 
             "generations": cal.generations,
             "iterations": cal.iterations,
             "verdict": verdict_json(v),
+            "bench_ms": timing.map(|(min, median, max)| json!({"runs": bench_runs, "min": min, "median": median, "max": max})),
         });
         println!("{out}");
     } else {
+        if let (Some((min, median, max)), Some(runs)) = (timing, bench_runs) {
+            println!(
+                "bench: read + find poses + calibrate + leave-one-out, {runs} runs: min {min:.1} ms, median {median:.1} ms, max {max:.1} ms"
+            );
+        }
         println!(
             "{file}: {} rows in {}, {} poses, method {}",
             table.samples.len(),
@@ -386,6 +466,29 @@ fn calibrate_file(input: &InputArgs, method: &str, seed: u64, as_json: bool) -> 
         println!("verdict: {}", if v.pass() { "PASS".to_string() } else { format!("FAIL {}", verdict_json(v)) });
     }
     if v.pass() { Ok(()) } else { Err(Failure::Verdict) }
+}
+
+fn diagnose_file(input: &InputArgs, as_json: bool, plots: Option<&std::path::Path>, seed: u64) -> Result<(), Failure> {
+    if input.means {
+        let msg = "diagnose needs raw samples (within-pose noise, time, settling), not per-pose means";
+        return Err(msg.to_string().into());
+    }
+    let opts = ReadOptions { columns: input.columns.clone(), units: input.units, means: false, delimiter: None };
+    let table = csvio::read_csv(&input.file, &opts).map_err(|e| e.to_string())?;
+    for w in &table.warnings {
+        eprintln!("accelcal: warning: {w}");
+    }
+    let options = diagnose::DiagnoseOptions { gravity: input.gravity, seed, ..diagnose::DiagnoseOptions::DEFAULT };
+    let report = diagnose::diagnose(&table, &options).map_err(|e| e.to_string())?;
+    if let Some(dir) = plots {
+        report.write_plots(dir)?;
+    }
+    if as_json {
+        println!("{}", report.to_json());
+    } else {
+        print!("{}", report.to_text());
+    }
+    Ok(())
 }
 
 fn paper_cmd(options: PaperOptions, out: Option<PathBuf>, as_json: bool) -> Result<(), Failure> {

@@ -20,7 +20,7 @@ fn run(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_accelcal")).args(args).env("RUST_BACKTRACE", "1").output().unwrap()
 }
 
-fn calibrate(path: &PathBuf, extra: &[&str]) -> Output {
+fn calibrate(path: &std::path::Path, extra: &[&str]) -> Output {
     let mut args = vec!["calibrate", path.to_str().unwrap()];
     args.extend_from_slice(extra);
     run(&args)

@@ -1,0 +1,178 @@
+//! Size and cycle benchmark image: the library's hot paths, each in its own never-inlined function
+//! with a stable symbol name, fed the paper's 24-position simulation (`common/sim_sensor.rs`).
+//!
+//! `tools/cyclecount.py` runs this image in an instruction-set emulator, counts the instructions and
+//! estimated Cortex-M4 cycles of every call to the functions below and measures the stack of
+//! `full_calibration`; `accelcal report` (host-tests/src/report.rs) turns
+//! that into the size and cycle report with its budgets. The image also runs in QEMU
+//! (`cargo run --release --target thumbv7em-none-eabihf --example bench`): it prints what it measured
+//! over semihosting and exits with 0 when the calibration succeeded.
+//!
+//! | symbol | what one call does |
+//! |---|---|
+//! | `accumulate_sample` | `Accumulator<i16, 24, 32>::push` of one raw sample (called for every sample of the stream) |
+//! | `apply_sample` | `Params::apply` of one sample (called for every captured pose mean) |
+//! | `taga_generation` | one `Ga::step` on the normalised 24-pose problem, population 40 (called `GENERATIONS` = 10 times) |
+//! | `lm` | `levenberg_marquardt` from the coarse start (deviation 0) |
+//! | `full_calibration` | `calibrate::<_, 40, 24>` with `CalibrationConfig::DEFAULT`: coarse, TAGA, LM, verdict |
+//!
+//! On the host this example is an empty stub, so that `cargo test` can build it.
+#![cfg_attr(target_os = "none", no_std, no_main)]
+
+#[cfg(not(target_os = "none"))]
+fn main() {}
+
+#[cfg(target_os = "none")]
+#[path = "common/sim_sensor.rs"]
+mod sim_sensor;
+
+#[cfg(target_os = "none")]
+mod firmware {
+    use accelcal::accumulator::{Accumulator, AccumulatorConfig, AccumulatorError, Event, Pose};
+    use accelcal::calibrate::{
+        Calibration, CalibrationConfig, CalibrationError, NormalizedPoses, calibrate, ga_solver,
+    };
+    use accelcal::frame::{Deviation, NormPose, objective};
+    use accelcal::ga::Ga;
+    use accelcal::model::{PARAM_COUNT, Params};
+    use accelcal::sensor::AccelSensor;
+    use accelcal::solve::{LmConfig, SolveError, SolveReport, levenberg_marquardt};
+    use core::hint::black_box;
+    use cortex_m_semihosting::{debug, hprintln};
+    use panic_semihosting as _;
+    use rand_core::SeedableRng;
+    use rand_xoshiro::Xoshiro128PlusPlus;
+    // Links the device interrupt table that cortex-m-rt's `device` feature asks for (see
+    // examples/qemu_calibrate.rs); no interrupt is enabled.
+    use stm32f4xx_hal as _;
+
+    use crate::sim_sensor::{self, SimSensor};
+
+    /// Seed of the simulated sensor's noise (as in examples/common/pipeline.rs).
+    const SIM_SEED: u64 = 0x5EED_2020;
+    /// Seed of the genetic algorithm.
+    const GA_SEED: u64 = 24;
+    /// Poses the accumulator holds: the paper's 24.
+    const POSES: usize = 24;
+    /// Samples per static-detection block.
+    const BLOCK: usize = 32;
+    /// GA population.
+    const POP: usize = 40;
+    /// Calls of `taga_generation` (one generation each); the report gives the mean.
+    pub const GENERATIONS: u32 = 10;
+
+    type Acc = Accumulator<i16, POSES, BLOCK>;
+    type Taga = Ga<Xoshiro128PlusPlus, POP, PARAM_COUNT>;
+
+    /// One raw sample into the accumulator.
+    #[unsafe(no_mangle)]
+    #[inline(never)]
+    pub fn accumulate_sample(acc: &mut Acc, sample: [i16; 3]) -> Result<Option<Event>, AccumulatorError> {
+        acc.push(sample)
+    }
+
+    /// One sample through the calibration model.
+    #[unsafe(no_mangle)]
+    #[inline(never)]
+    pub fn apply_sample(params: &Params, sample: [f32; 3]) -> [f32; 3] {
+        params.apply(sample)
+    }
+
+    /// One TAGA generation on the normalised problem.
+    #[unsafe(no_mangle)]
+    #[inline(never)]
+    pub fn taga_generation(ga: &mut Taga, norm: &[NormPose]) {
+        ga.step(&|x: &Deviation| objective(x, norm));
+    }
+
+    /// Levenberg-Marquardt alone, from the coarse estimate.
+    #[unsafe(no_mangle)]
+    #[inline(never)]
+    pub fn lm(norm: &[NormPose]) -> Result<SolveReport, SolveError> {
+        levenberg_marquardt([0.0; PARAM_COUNT], norm, &LmConfig::DEFAULT)
+    }
+
+    /// The whole calibration as firmware runs it.
+    #[unsafe(no_mangle)]
+    #[inline(never)]
+    pub fn full_calibration(poses: &[Pose], rng: Xoshiro128PlusPlus) -> Result<Calibration, CalibrationError> {
+        calibrate::<_, POP, POSES>(poses, &CalibrationConfig::DEFAULT, rng)
+    }
+
+    fn fail(what: &str) -> ! {
+        hprintln!("bench: error: {}", what);
+        debug::exit(debug::EXIT_FAILURE);
+        #[allow(clippy::empty_loop)]
+        loop {}
+    }
+
+    #[cortex_m_rt::entry]
+    fn main() -> ! {
+        let mut sensor = SimSensor::new(SIM_SEED);
+        let mut acc = match Acc::new(AccumulatorConfig::DEFAULT) {
+            Ok(acc) => acc,
+            Err(_) => fail("accumulator config"),
+        };
+        let mut samples = 0u32;
+        while let Ok(sample) = sensor.read_raw() {
+            if black_box(accumulate_sample(&mut acc, sample)).is_err() {
+                fail("accumulate");
+            }
+            samples += 1;
+        }
+        if acc.finish().is_err() {
+            fail("finish");
+        }
+        let poses = acc.poses();
+        hprintln!("bench: samples {} at {} Hz, poses {}", samples, sim_sensor::SAMPLE_RATE_HZ as u32, poses.len());
+
+        let gain = sim_sensor::LSB_PER_G / accelcal::model::STANDARD_GRAVITY_MPS2;
+        let params = Params { scale: [1.0 / gain; 3], ..Params::IDENTITY };
+        for p in poses {
+            black_box(apply_sample(black_box(&params), black_box(p.mean)));
+        }
+
+        let gravity = CalibrationConfig::DEFAULT.gravity;
+        let normalized = match NormalizedPoses::<POSES>::new(poses, gravity) {
+            Ok(n) => n,
+            Err(_) => fail("normalise"),
+        };
+        let norm = normalized.poses();
+        let config = CalibrationConfig::DEFAULT;
+        let rng = Xoshiro128PlusPlus::seed_from_u64(GA_SEED);
+        let mut ga: Taga = match ga_solver(norm, &config.widths, config.ga, rng) {
+            Ok(ga) => ga,
+            Err(_) => fail("ga"),
+        };
+        for _ in 0..GENERATIONS {
+            taga_generation(&mut ga, norm);
+        }
+        hprintln!("bench: taga_generation {} evaluations {}", ga.generation(), ga.evaluations());
+
+        match lm(norm) {
+            Ok(r) => hprintln!("bench: lm iterations {}", r.iterations),
+            Err(_) => fail("lm"),
+        }
+
+        let rng = Xoshiro128PlusPlus::seed_from_u64(GA_SEED);
+        match full_calibration(poses, rng) {
+            Ok(cal) => hprintln!(
+                "bench: full_calibration generations {} evaluations {} iterations {} pass {}",
+                cal.generations,
+                cal.evaluations,
+                cal.iterations,
+                cal.verdict.pass() as u8
+            ),
+            Err(_) => fail("calibrate"),
+        }
+        hprintln!(
+            "bench: sizes accumulator {} ga {} normalized_poses {}",
+            core::mem::size_of::<Acc>(),
+            core::mem::size_of::<Taga>(),
+            core::mem::size_of::<NormalizedPoses<POSES>>()
+        );
+        debug::exit(debug::EXIT_SUCCESS);
+        #[allow(clippy::empty_loop)]
+        loop {}
+    }
+}

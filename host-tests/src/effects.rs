@@ -1,0 +1,570 @@
+//! Unmodelled physical effects for the simulator ([`sim::Effect`] implementations) and random
+//! scenarios that inject one of them into a log with a temperature column, for `accelcal diagnose`
+//! and its blind test.
+//!
+//! Every scenario has a temperature profile that is *not* monotonic in time (two slow sinusoids),
+//! written to the `temp` column whether or not the temperature acts on the sensor. Magnitudes are
+//! realistic: each effect moves the pose means by one to a few mg.
+//!
+//! ```
+//! use accelcal_host::effects::{EffectClass, random_scenario, generate};
+//! let scenario = random_scenario(EffectClass::Drift, 3);
+//! let log = generate(&scenario);
+//! assert_eq!(log.temps_c.len(), log.recording.samples.len());
+//! assert_eq!(log.recording.poses.len(), scenario.sim.plan.pose_count());
+//! ```
+
+use std::fmt::Write as _;
+
+use rand_core::{Rng, SeedableRng};
+use rand_xoshiro::Xoshiro256PlusPlus;
+
+use crate::csvio::{self, CsvError, ReadOptions, Table, Units};
+use crate::sim::{self, Effect, OutputUnits, Plan, Recording, SimConfig};
+
+/// The effect a scenario injects (the diagnosis classes).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum EffectClass {
+    /// Nothing beyond the 9-parameter model and white noise.
+    None,
+    /// Bias warming up with time: `A (1 - exp(-t / tau))` per axis.
+    Drift,
+    /// Bias and/or scale linear in the temperature.
+    Temperature,
+    /// `k2 a^2` per axis.
+    ScaleNonlinearity,
+    /// A transient toward the previous pose's reading at the start of each pose.
+    Settling,
+    /// Some poses disturbed by a slow movement that the static detector accepts.
+    Motion,
+    /// A bias random walk on top of the white noise.
+    ColoredNoise,
+}
+
+impl EffectClass {
+    /// Every class, `None` first.
+    pub const ALL: [Self; 7] = [
+        Self::None,
+        Self::Drift,
+        Self::Temperature,
+        Self::ScaleNonlinearity,
+        Self::Settling,
+        Self::Motion,
+        Self::ColoredNoise,
+    ];
+
+    /// The name `accelcal diagnose` reports (`none`, `drift`, `temperature`, `scale-nonlinearity`,
+    /// `settling`, `motion`, `colored-noise`).
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::None => "none",
+            Self::Drift => "drift",
+            Self::Temperature => "temperature",
+            Self::ScaleNonlinearity => "scale-nonlinearity",
+            Self::Settling => "settling",
+            Self::Motion => "motion",
+            Self::ColoredNoise => "colored-noise",
+        }
+    }
+}
+
+/// Temperature in deg C: `base + sum of amplitude * sin(2 pi t / period + phase)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TemperatureProfile {
+    /// Mean temperature, deg C.
+    pub base_c: f64,
+    /// `(amplitude deg C, period s, phase rad)` of the two components.
+    pub waves: [(f64, f64, f64); 2],
+}
+
+impl TemperatureProfile {
+    /// Temperature at `t_s`.
+    pub fn at(&self, t_s: f64) -> f64 {
+        self.base_c + self.waves.iter().map(|&(a, p, ph)| a * (std::f64::consts::TAU * t_s / p + ph).sin()).sum::<f64>()
+    }
+}
+
+/// The injected effect with its true magnitudes (m/s^2 convention).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Injected {
+    /// Nothing.
+    None,
+    /// Warm-up drift: final bias change per axis (m/s^2) and time constant (s).
+    Drift {
+        /// Final bias change per axis, m/s^2.
+        amplitude: [f64; 3],
+        /// Time constant, s.
+        tau_s: f64,
+    },
+    /// Temperature: bias (m/s^2 per deg C) and relative scale (per deg C) coefficients around
+    /// `reference_c`.
+    Temperature {
+        /// Bias coefficient per axis, m/s^2 / deg C.
+        bias_per_c: [f64; 3],
+        /// Relative scale coefficient per axis, 1 / deg C.
+        scale_per_c: [f64; 3],
+        /// Reference temperature, deg C.
+        reference_c: f64,
+    },
+    /// Second-order term per axis, 1 / (m/s^2).
+    ScaleNonlinearity {
+        /// `k2` per axis.
+        k2: [f64; 3],
+    },
+    /// Settling: fraction of the previous pose's reading change left at the start of a pose,
+    /// per axis, and its decay time, s.
+    Settling {
+        /// Lag fraction per axis.
+        lag: [f64; 3],
+        /// Decay time, s.
+        tau_s: f64,
+    },
+    /// Slow motion: `(pose index, unit direction in sensor axes, peak m/s^2)` per disturbed pose.
+    Motion {
+        /// The disturbed poses.
+        poses: Vec<(usize, [f64; 3], f64)>,
+    },
+    /// Bias random walk (m/s^2 per sqrt(s) per axis) and/or bias instability (a first-order
+    /// Gauss-Markov bias of standard deviation m/s^2 per axis and correlation time s).
+    ColoredNoise {
+        /// Random-walk coefficient per axis.
+        walk: [f64; 3],
+        /// Bias-instability standard deviation per axis.
+        instability: [f64; 3],
+        /// Bias-instability correlation time, s.
+        correlation_s: f64,
+    },
+}
+
+/// One random log to diagnose.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scenario {
+    /// The class injected.
+    pub class: EffectClass,
+    /// The simulator settings (plan, noise, truth, units, seed).
+    pub sim: SimConfig,
+    /// The temperature profile (always written, acts only for [`EffectClass::Temperature`]).
+    pub temperature: TemperatureProfile,
+    /// The effect and its magnitudes.
+    pub injected: Injected,
+}
+
+/// A simulated log with its temperature column.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SimLog {
+    /// The recording.
+    pub recording: Recording,
+    /// Temperature per sample, deg C.
+    pub temps_c: Vec<f64>,
+}
+
+pub(crate) fn uniform(rng: &mut impl Rng, low: f64, high: f64) -> f64 {
+    low + (high - low) * ((rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64)
+}
+
+fn sign(rng: &mut impl Rng) -> f64 {
+    if rng.next_u64() & 1 == 0 { 1.0 } else { -1.0 }
+}
+
+pub(crate) fn gaussian(rng: &mut impl Rng) -> f64 {
+    let u1 = 1.0 - uniform(rng, 0.0, 1.0);
+    let u2 = uniform(rng, 0.0, 1.0);
+    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+}
+
+fn unit_vector(rng: &mut impl Rng) -> [f64; 3] {
+    loop {
+        let v = [gaussian(rng), gaussian(rng), gaussian(rng)];
+        let norm = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        if norm > 1e-6 {
+            return v.map(|c| c / norm);
+        }
+    }
+}
+
+/// `true` when every axis points within 20 deg of up and of down in some direction.
+fn covers_every_axis(directions: &[[f64; 3]]) -> bool {
+    (0..3).all(|a| [1.0, -1.0].iter().all(|s| directions.iter().any(|d| s * d[a] > 0.94)))
+}
+
+/// A random scenario of `class`, deterministic by `seed`: hand-placed random orientations (24 to 44
+/// poses of 4 to 8 s, a 40 to 90 s first rest), 100 or 200 Hz, 0.5 to 2 mg white noise, random
+/// sensor errors and output units, a non-monotonic temperature profile, and the effect with a
+/// random magnitude of one to a few mg.
+pub fn random_scenario(class: EffectClass, seed: u64) -> Scenario {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x5EED_D1A6_0000_0000);
+    let g = sim::STANDARD_GRAVITY_MPS2;
+    let mg = g * 1e-3;
+    let poses = 24 + (rng.next_u64() % 21) as usize;
+    // Hand-placed orientations that point every axis up and down once (the coarse calibration needs
+    // it): the geometry seed is advanced until they do.
+    let mut sim_seed = seed;
+    while !covers_every_axis(&sim::plan_directions(&Plan::Random(poses), sim_seed)) {
+        sim_seed = sim_seed.wrapping_add(0x1_0000_0000);
+    }
+    let units = match rng.next_u64() % 3 {
+        0 => OutputUnits::Mps2,
+        1 => OutputUnits::G,
+        _ => OutputUnits::MPU6050_2G,
+    };
+    let cfg = SimConfig {
+        plan: Plan::Random(poses),
+        seed: sim_seed,
+        rate_hz: if rng.next_u64() & 1 == 0 { 100.0 } else { 200.0 },
+        seconds_per_pose: uniform(&mut rng, 4.0, 8.0),
+        move_seconds: uniform(&mut rng, 1.5, 3.0),
+        initial_rest_s: uniform(&mut rng, 40.0, 90.0),
+        noise_mg: uniform(&mut rng, 0.5, 2.0),
+        truth: sim::random_truth(seed),
+        units,
+        ..SimConfig::paper(sim_seed)
+    };
+    let duration = cfg.initial_rest_s + poses as f64 * (cfg.seconds_per_pose + cfg.move_seconds) - cfg.move_seconds;
+    // Two slow waves: at least one full period of the faster one fits in the log (not monotonic).
+    let temperature = TemperatureProfile {
+        base_c: uniform(&mut rng, 20.0, 35.0),
+        waves: [
+            (uniform(&mut rng, 1.5, 4.0), duration * uniform(&mut rng, 0.3, 0.7), uniform(&mut rng, 0.0, 6.3)),
+            (uniform(&mut rng, 0.5, 1.5), duration * uniform(&mut rng, 0.1, 0.25), uniform(&mut rng, 0.0, 6.3)),
+        ],
+    };
+    let injected = match class {
+        EffectClass::None => Injected::None,
+        EffectClass::Drift => Injected::Drift {
+            amplitude: std::array::from_fn(|_| sign(&mut rng) * uniform(&mut rng, 1.5, 5.0) * mg),
+            tau_s: duration * uniform(&mut rng, 0.15, 0.6),
+        },
+        EffectClass::Temperature => {
+            let which = rng.next_u64() % 3; // bias, scale or both
+            let bias = which != 1;
+            let scale = which != 0;
+            Injected::Temperature {
+                bias_per_c: std::array::from_fn(|_| {
+                    if bias { sign(&mut rng) * uniform(&mut rng, 0.4, 1.2) * mg } else { 0.0 }
+                }),
+                scale_per_c: std::array::from_fn(|_| {
+                    if scale { sign(&mut rng) * uniform(&mut rng, 300e-6, 1000e-6) } else { 0.0 }
+                }),
+                reference_c: 25.0,
+            }
+        }
+        EffectClass::ScaleNonlinearity => Injected::ScaleNonlinearity {
+            k2: std::array::from_fn(|_| sign(&mut rng) * uniform(&mut rng, 1.5, 5.0) * 1e-3 / g),
+        },
+        EffectClass::Settling => Injected::Settling {
+            lag: std::array::from_fn(|_| uniform(&mut rng, 0.002, 0.006)),
+            tau_s: uniform(&mut rng, 0.5, 2.0),
+        },
+        EffectClass::Motion => {
+            let count = ((poses as f64 * uniform(&mut rng, 0.12, 0.3)).round() as usize).max(2);
+            let mut chosen: Vec<usize> = Vec::new();
+            while chosen.len() < count {
+                let i = 1 + (rng.next_u64() % (poses as u64 - 1)) as usize;
+                if !chosen.contains(&i) {
+                    chosen.push(i);
+                }
+            }
+            chosen.sort_unstable();
+            Injected::Motion {
+                poses: chosen
+                    .into_iter()
+                    .map(|i| (i, unit_vector(&mut rng), uniform(&mut rng, 3.0, 10.0) * mg))
+                    .collect(),
+            }
+        }
+        EffectClass::ColoredNoise => {
+            let kind = rng.next_u64() % 3; // random walk, bias instability or both
+            Injected::ColoredNoise {
+                walk: std::array::from_fn(|_| if kind != 1 { uniform(&mut rng, 0.05, 0.2) * mg } else { 0.0 }),
+                instability: std::array::from_fn(|_| if kind != 0 { uniform(&mut rng, 0.5, 2.0) * mg } else { 0.0 }),
+                correlation_s: uniform(&mut rng, 20.0, 200.0),
+            }
+        }
+    };
+    Scenario { class, sim: cfg, temperature, injected }
+}
+
+/// Warm-up drift (see [`Injected::Drift`]).
+pub struct WarmUpDrift {
+    /// Final bias change per axis, m/s^2.
+    pub amplitude: [f64; 3],
+    /// Time constant, s.
+    pub tau_s: f64,
+}
+
+impl Effect for WarmUpDrift {
+    fn apply(&mut self, t_s: f64, _pose: Option<usize>, reading: &mut [f64; 3]) {
+        let k = 1.0 - (-t_s / self.tau_s).exp();
+        for a in 0..3 {
+            reading[a] += self.amplitude[a] * k;
+        }
+    }
+}
+
+/// Temperature sensitivity (see [`Injected::Temperature`]).
+pub struct TemperatureEffect {
+    /// The temperature over time.
+    pub profile: TemperatureProfile,
+    /// Bias coefficient per axis, m/s^2 / deg C.
+    pub bias_per_c: [f64; 3],
+    /// Relative scale coefficient per axis, 1 / deg C.
+    pub scale_per_c: [f64; 3],
+    /// Reference temperature, deg C.
+    pub reference_c: f64,
+}
+
+impl Effect for TemperatureEffect {
+    fn apply(&mut self, t_s: f64, _pose: Option<usize>, reading: &mut [f64; 3]) {
+        let dt = self.profile.at(t_s) - self.reference_c;
+        for a in 0..3 {
+            reading[a] += self.bias_per_c[a] * dt + self.scale_per_c[a] * dt * reading[a];
+        }
+    }
+}
+
+/// Second-order scale term (see [`Injected::ScaleNonlinearity`]).
+pub struct ScaleNonlinearity {
+    /// `k2` per axis, 1 / (m/s^2).
+    pub k2: [f64; 3],
+}
+
+impl Effect for ScaleNonlinearity {
+    fn apply(&mut self, _t_s: f64, _pose: Option<usize>, reading: &mut [f64; 3]) {
+        for a in 0..3 {
+            reading[a] += self.k2[a] * reading[a] * reading[a];
+        }
+    }
+}
+
+/// Settling: the output lags the orientation change and relaxes over `tau_s` (see
+/// [`Injected::Settling`]).
+pub struct Settling {
+    /// Lag fraction per axis.
+    pub lag: [f64; 3],
+    /// Decay time, s.
+    pub tau_s: f64,
+    current: Option<(usize, f64, [f64; 3])>,
+    previous_reading: Option<[f64; 3]>,
+}
+
+impl Settling {
+    /// A settling effect.
+    pub fn new(lag: [f64; 3], tau_s: f64) -> Self {
+        Self { lag, tau_s, current: None, previous_reading: None }
+    }
+}
+
+impl Effect for Settling {
+    fn apply(&mut self, t_s: f64, pose: Option<usize>, reading: &mut [f64; 3]) {
+        let Some(index) = pose else {
+            return;
+        };
+        if self.current.is_none_or(|(i, _, _)| i != index) {
+            if let Some((_, _, last)) = self.current {
+                self.previous_reading = Some(last);
+            }
+            self.current = Some((index, t_s, *reading));
+        }
+        let Some((_, start, clean)) = self.current else {
+            return;
+        };
+        if let Some(previous) = self.previous_reading {
+            let k = (-(t_s - start) / self.tau_s).exp();
+            for a in 0..3 {
+                reading[a] += self.lag[a] * (previous[a] - clean[a]) * k;
+            }
+        }
+    }
+}
+
+/// Slow motion on some poses: a half-sine hump of linear acceleration over the pose.
+pub struct SlowMotion {
+    /// `(pose index, unit direction, peak m/s^2)`.
+    pub poses: Vec<(usize, [f64; 3], f64)>,
+    /// Static time per pose, s.
+    pub pose_seconds: f64,
+    start: Option<(usize, f64)>,
+}
+
+impl SlowMotion {
+    /// A slow-motion effect.
+    pub fn new(poses: Vec<(usize, [f64; 3], f64)>, pose_seconds: f64) -> Self {
+        Self { poses, pose_seconds, start: None }
+    }
+}
+
+impl Effect for SlowMotion {
+    fn apply(&mut self, t_s: f64, pose: Option<usize>, reading: &mut [f64; 3]) {
+        let Some(index) = pose else {
+            return;
+        };
+        if self.start.is_none_or(|(i, _)| i != index) {
+            self.start = Some((index, t_s));
+        }
+        let Some((_, start)) = self.start else {
+            return;
+        };
+        if let Some(&(_, dir, peak)) = self.poses.iter().find(|(i, _, _)| *i == index) {
+            let phase = ((t_s - start) / self.pose_seconds).clamp(0.0, 1.0);
+            let k = peak * (std::f64::consts::PI * phase).sin();
+            for a in 0..3 {
+                reading[a] += dir[a] * k;
+            }
+        }
+    }
+}
+
+/// Colored bias noise per axis: a random walk plus a first-order Gauss-Markov bias instability
+/// (see [`Injected::ColoredNoise`]).
+pub struct ColoredBias {
+    /// Random-walk coefficient per axis, m/s^2 per sqrt(s).
+    pub walk: [f64; 3],
+    /// Bias-instability standard deviation per axis, m/s^2.
+    pub instability: [f64; 3],
+    /// Bias-instability correlation time, s.
+    pub correlation_s: f64,
+    walk_bias: [f64; 3],
+    markov_bias: Option<[f64; 3]>,
+    last_t: Option<f64>,
+    rng: Xoshiro256PlusPlus,
+}
+
+impl ColoredBias {
+    /// Colored bias noise seeded by `seed`.
+    pub fn new(walk: [f64; 3], instability: [f64; 3], correlation_s: f64, seed: u64) -> Self {
+        Self {
+            walk,
+            instability,
+            correlation_s,
+            walk_bias: [0.0; 3],
+            markov_bias: None,
+            last_t: None,
+            rng: Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x0C01_07ED),
+        }
+    }
+}
+
+impl Effect for ColoredBias {
+    fn apply(&mut self, t_s: f64, _pose: Option<usize>, reading: &mut [f64; 3]) {
+        let dt = self.last_t.map_or(0.0, |last| (t_s - last).max(0.0));
+        self.last_t = Some(t_s);
+        let rng = &mut self.rng;
+        let instability = self.instability;
+        // Stationary from the start.
+        let markov = self.markov_bias.get_or_insert_with(|| std::array::from_fn(|a| instability[a] * gaussian(rng)));
+        let keep = (-dt / self.correlation_s).exp();
+        for a in 0..3 {
+            self.walk_bias[a] += self.walk[a] * dt.sqrt() * gaussian(rng);
+            markov[a] = keep * markov[a] + instability[a] * (1.0 - keep * keep).sqrt() * gaussian(rng);
+            reading[a] += self.walk_bias[a] + markov[a];
+        }
+    }
+}
+
+/// Simulates the scenario's log: the recording with its effect and the temperature per sample.
+pub fn generate(scenario: &Scenario) -> SimLog {
+    let cfg = &scenario.sim;
+    let recording = match &scenario.injected {
+        Injected::None => sim::simulate(cfg),
+        Injected::Drift { amplitude, tau_s } => {
+            sim::simulate_with(cfg, &mut [&mut WarmUpDrift { amplitude: *amplitude, tau_s: *tau_s }])
+        }
+        Injected::Temperature { bias_per_c, scale_per_c, reference_c } => sim::simulate_with(
+            cfg,
+            &mut [&mut TemperatureEffect {
+                profile: scenario.temperature,
+                bias_per_c: *bias_per_c,
+                scale_per_c: *scale_per_c,
+                reference_c: *reference_c,
+            }],
+        ),
+        Injected::ScaleNonlinearity { k2 } => sim::simulate_with(cfg, &mut [&mut ScaleNonlinearity { k2: *k2 }]),
+        Injected::Settling { lag, tau_s } => sim::simulate_with(cfg, &mut [&mut Settling::new(*lag, *tau_s)]),
+        Injected::Motion { poses } => {
+            sim::simulate_with(cfg, &mut [&mut SlowMotion::new(poses.clone(), cfg.seconds_per_pose)])
+        }
+        Injected::ColoredNoise { walk, instability, correlation_s } => {
+            sim::simulate_with(cfg, &mut [&mut ColoredBias::new(*walk, *instability, *correlation_s, cfg.seed)])
+        }
+    };
+    let temps_c = recording.times_s.iter().map(|&t| (scenario.temperature.at(t) * 100.0).round() / 100.0).collect();
+    SimLog { recording, temps_c }
+}
+
+/// The log as `t,ax,ay,az,temp` CSV text (counts as integers, other units with 10 significant
+/// digits, temperatures with 2 decimals).
+pub fn to_csv_string(log: &SimLog) -> String {
+    let rec = &log.recording;
+    let mut out = String::with_capacity(rec.samples.len() * 48);
+    out.push_str("t,ax,ay,az,temp\n");
+    for ((t, s), temp) in rec.times_s.iter().zip(&rec.samples).zip(&log.temps_c) {
+        if rec.units.is_counts() {
+            let _ = writeln!(out, "{t:.6},{},{},{},{temp:.2}", s[0] as i64, s[1] as i64, s[2] as i64);
+        } else {
+            let _ = writeln!(out, "{t:.6},{:.9e},{:.9e},{:.9e},{temp:.2}", s[0], s[1], s[2]);
+        }
+    }
+    out
+}
+
+/// The log read back through the CSV reader (units declared), as `accelcal diagnose` would see the
+/// file.
+pub fn to_table(log: &SimLog, name: &str) -> Result<Table, CsvError> {
+    let units = match log.recording.units {
+        OutputUnits::Counts { .. } => Units::Counts,
+        OutputUnits::G => Units::G,
+        OutputUnits::Mps2 => Units::Mps2,
+    };
+    csvio::read_csv_str(name, &to_csv_string(log), &ReadOptions { units, ..ReadOptions::default() })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn temperature_profiles_are_not_monotonic() {
+        for seed in 0..50 {
+            let s = random_scenario(EffectClass::None, seed);
+            let log = generate(&s);
+            let t = &log.temps_c;
+            let (first, last) = (t[0], t[t.len() - 1]);
+            let (lo, hi) = t.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(*v), h.max(*v)));
+            // An interior extreme at least 0.1 deg C beyond both ends.
+            assert!(hi > first.max(last) + 0.1 || lo < first.min(last) - 0.1, "seed {seed}");
+        }
+    }
+
+    #[test]
+    fn effects_change_the_pose_readings_by_a_few_mg() {
+        for class in EffectClass::ALL {
+            let s = random_scenario(class, 11);
+            let clean = sim::simulate(&SimConfig { noise_mg: 0.0, ..s.sim.clone() });
+            let log = generate(&Scenario { sim: SimConfig { noise_mg: 0.0, ..s.sim.clone() }, ..s.clone() });
+            let g_unit =
+                s.sim.units.from_mps2(s.sim.gravity, s.sim.gravity) - s.sim.units.from_mps2(0.0, s.sim.gravity);
+            let mut largest = 0.0f64;
+            for p in &clean.poses {
+                for i in p.start..p.end {
+                    for a in 0..3 {
+                        let d = (log.recording.samples[i][a] - clean.samples[i][a]).abs() / g_unit * 1000.0;
+                        largest = largest.max(d);
+                    }
+                }
+            }
+            if class == EffectClass::None {
+                assert!(largest < 0.1, "{largest}");
+            } else {
+                assert!((0.5..40.0).contains(&largest), "{}: {largest} mg", class.name());
+            }
+        }
+    }
+
+    #[test]
+    fn csv_round_trip_keeps_the_temperature() {
+        let log = generate(&random_scenario(EffectClass::Temperature, 2));
+        let table = to_table(&log, "sim").unwrap();
+        assert_eq!(table.samples.len(), log.recording.samples.len());
+        assert_eq!(table.temps_c.as_ref().map(Vec::len), Some(log.temps_c.len()));
+    }
+}
