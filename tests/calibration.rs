@@ -218,3 +218,37 @@ fn axis_aligned_poses_name_the_parameters_they_cannot_determine() {
 fn poses_with(dirs: &[[f64; 3]]) -> Vec<Pose> {
     poses(&PAPER_TRUTH, dirs, 1.0, 0.0)
 }
+
+#[test]
+fn zero_negative_or_nan_gravity_is_a_typed_error() {
+    use accelcal::calibrate::CalibrationError;
+    use accelcal::coarse::CoarseError;
+    let poses = poses(&PAPER_TRUTH, &cube_directions(14), 1.0, 0.0);
+    for gravity in [0.0, -9.80665, f32::NAN, f32::INFINITY] {
+        let config = CalibrationConfig { gravity, ..config(Method::TagaLm) };
+        let r = calibrate::<_, 40, 32>(&poses, &config, Xoshiro128PlusPlus::seed_from_u64(1));
+        assert_eq!(r.err(), Some(CalibrationError::Coarse(CoarseError::InvalidGravity)), "gravity {gravity}");
+    }
+}
+
+#[test]
+fn a_solve_that_does_not_converge_or_lands_far_away_fails_its_verdict() {
+    let mut poses = poses(&PAPER_TRUTH, &cube_directions(26), 1.0, 0.0);
+    for p in &mut poses {
+        p.variance = [1e-4; 3];
+    }
+    // One LM iteration from the coarse start cannot converge: said, not hidden.
+    let mut short = config(Method::Lm);
+    short.lm.max_iterations = 1;
+    let cal = calibrate::<_, 40, 32>(&poses, &short, Xoshiro128PlusPlus::seed_from_u64(1)).unwrap();
+    assert!(cal.verdict.failures.not_converged && !cal.verdict.pass(), "{:?}", cal.verdict);
+    // A deviation far outside the plausible range is judged implausible, whatever its fit.
+    let norm = NormalizedPoses::<32>::new(&poses, G as f32).unwrap();
+    let frame = norm.coarse().frame();
+    let far = [0.9; PARAM_COUNT];
+    let v = accelcal::verdict::judge(&far, frame, &poses, norm.poses(), &Params::IDENTITY, &Default::default());
+    assert!(v.failures.implausible && !v.pass());
+    // The converged solve passes.
+    let cal = calibrate::<_, 40, 32>(&poses, &config(Method::Lm), Xoshiro128PlusPlus::seed_from_u64(1)).unwrap();
+    assert!(cal.verdict.pass(), "{:?}", cal.verdict);
+}
