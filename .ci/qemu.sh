@@ -30,7 +30,7 @@ if command -v rustup >/dev/null && ! rustup target list --installed | grep -qx "
 fi
 
 echo "== build examples/qemu_calibrate ($TARGET, release)"
-cargo build --release --target "$TARGET" --example qemu_calibrate
+cargo build -p accelcal --release --target "$TARGET" --example qemu_calibrate
 ELF="$CARGO_TARGET_DIR/$TARGET/release/examples/qemu_calibrate"
 if command -v llvm-size >/dev/null; then
     llvm-size "$ELF"
@@ -58,7 +58,7 @@ if [ "$status" -ne 0 ]; then
 fi
 
 echo "== the same run on the host (tests/qemu_parity.rs)"
-QEMU_PARITY_OUT="$OUT/host.txt" cargo test --test qemu_parity
+QEMU_PARITY_OUT="$OUT/host.txt" cargo test -p accelcal --test qemu_parity
 
 # The report lines (QEMU adds nothing to stdout today; filter anyway so a notice cannot break the check).
 report='^(run|poses|pose|method|param|verdict|blob|result|error)\b'

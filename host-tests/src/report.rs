@@ -139,6 +139,8 @@ pub fn measure() -> Result<Report, String> {
     let mut build = Command::new(&cargo);
     build.current_dir(&root).args([
         "build",
+        "-p",
+        "accelcal",
         "--quiet",
         "--message-format=json",
         "--release",
