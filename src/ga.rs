@@ -128,8 +128,15 @@ impl<const DIM: usize> SearchBox<DIM> {
         } else {
             v
         };
-        // Not `clamp`: that asserts `lo <= hi` (guaranteed by `new`) and drags in a panic path.
-        r.max(lo).min(hi)
+        // Comparisons, not `clamp` (which asserts `lo <= hi` and drags in a panic path) nor `min`/`max`
+        // (library calls on a Cortex-M4).
+        if r < lo {
+            lo
+        } else if r > hi {
+            hi
+        } else {
+            r
+        }
     }
 }
 
@@ -196,29 +203,29 @@ impl Operators {
     }
 
     /// Crossover probability for a pair whose better parent has fitness `f_better`.
-    pub fn crossover_probability(&self, f_better: f32, stats: &FitnessStats, generation: u32) -> f32 {
+    pub fn crossover_probability(&self, f_better: f32, stats: &FitnessStats) -> f32 {
         let p = match *self {
             Self::Aga { k1, k3, .. } => stats.above_average(f_better).map_or(k3, |t| k1 * (1.0 - t)),
             Self::Laga { pc1, pc2, .. } => stats.above_average(f_better).map_or(pc1, |t| pc1 - (pc1 - pc2) * t),
             Self::Taga { phi, pc2, .. } => {
-                let pc1 = 1.0 / (2.0 + lg(generation)) + phi;
+                let pc1 = 1.0 / (2.0 + stats.lg_generation) + phi;
                 stats.above_average(f_better).map_or(pc1, |t| sine_blend(pc1, pc2, t))
             }
         };
-        p.clamp(0.0, 1.0)
+        unit_interval(p)
     }
 
     /// Per-gene mutation probability for an individual of fitness `f`.
-    pub fn mutation_probability(&self, f: f32, stats: &FitnessStats, generation: u32) -> f32 {
+    pub fn mutation_probability(&self, f: f32, stats: &FitnessStats) -> f32 {
         let p = match *self {
             Self::Aga { k2, k4, .. } => stats.above_average(f).map_or(k4, |t| k2 * (1.0 - t)),
             Self::Laga { pm1, pm2, .. } => stats.above_average(f).map_or(pm1, |t| pm1 - (pm1 - pm2) * t),
             Self::Taga { varphi, pm2, .. } => {
-                let pm1 = -0.1 / (2.0 + 0.8 * lg(generation)) + varphi;
+                let pm1 = -0.1 / (2.0 + 0.8 * stats.lg_generation) + varphi;
                 stats.above_average(f).map_or(pm1, |t| sine_blend(pm1, pm2, t))
             }
         };
-        p.clamp(0.0, 1.0)
+        unit_interval(p)
     }
 }
 
@@ -228,13 +235,28 @@ impl Default for Operators {
     }
 }
 
-fn lg(generation: u32) -> f32 {
-    libm::log10f(generation.max(1) as f32)
+/// `p` clamped to `[0, 1]`; NaN gives 0.
+fn unit_interval(p: f32) -> f32 {
+    if !(p > 0.0) {
+        0.0
+    } else if p > 1.0 {
+        1.0
+    } else {
+        p
+    }
 }
 
 /// `(p1 + p2)/2 - (p1 - p2)/2 sin(pi/2 t)`.
 fn sine_blend(p1: f32, p2: f32, t: f32) -> f32 {
-    0.5 * (p1 + p2) - 0.5 * (p1 - p2) * libm::sinf(core::f32::consts::FRAC_PI_2 * t)
+    0.5 * (p1 + p2) - 0.5 * (p1 - p2) * sin_half_pi(t)
+}
+
+/// `sin(pi/2 t)` for `t` in `[0, 1]`: its Taylor series to `t^9`, in `f32` (error below 7e-6;
+/// `libm::sinf` works in `f64`, which a Cortex-M4F computes in software).
+fn sin_half_pi(t: f32) -> f32 {
+    const C: [f32; 5] = [core::f32::consts::FRAC_PI_2, -0.645_964_1, 0.079_692_63, -0.004_681_754, 0.000_160_441_2];
+    let t2 = t * t;
+    t * (C[0] + t2 * (C[1] + t2 * (C[2] + t2 * (C[3] + t2 * C[4]))))
 }
 
 /// Population fitness statistics the adaptive policies need (`f = -cost`).
@@ -245,6 +267,8 @@ pub struct FitnessStats {
     pub max: f32,
     /// Mean fitness.
     pub avg: f32,
+    /// `lg N` (base 10) of the generation `N` (from 1) being produced: TAGA's `Pc1` and `Pm1` use it.
+    pub lg_generation: f32,
 }
 
 impl FitnessStats {
@@ -255,7 +279,7 @@ impl FitnessStats {
             return None;
         }
         let spread = self.max - self.avg;
-        if spread > 0.0 { Some(((f - self.avg) / spread).clamp(0.0, 1.0)) } else { Some(1.0) }
+        if spread > 0.0 { Some(unit_interval((f - self.avg) / spread)) } else { Some(1.0) }
     }
 }
 
@@ -405,7 +429,7 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
     fn evaluate(&mut self, cost: &impl CostFunction<DIM>, i: usize) -> f32 {
         self.evaluations = self.evaluations.saturating_add(1);
         let c = cost.cost(&self.population[i]);
-        if c.is_finite() { c.min(WORST_COST) } else { WORST_COST }
+        if c.is_finite() && c < WORST_COST { c } else { WORST_COST }
     }
 
     /// Uniform in `[0, 1)`.
@@ -422,10 +446,11 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
         if self.costs[a] <= self.costs[b] { a } else { b }
     }
 
-    /// Fitness statistics of the current population (`f = -cost`).
+    /// Fitness statistics of the current population (`f = -cost`), for producing the next generation.
     pub fn fitness_stats(&self) -> FitnessStats {
         let sum: f32 = self.costs.iter().sum();
-        FitnessStats { max: -self.best_cost(), avg: -(sum / POP as f32) }
+        let next = self.generation.saturating_add(1);
+        FitnessStats { max: -self.best_cost(), avg: -(sum / POP as f32), lg_generation: libm::log10f(next as f32) }
     }
 
     /// Runs one generation: elitism, selection, crossover, mutation, evaluation.
@@ -461,7 +486,7 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
         while slot < POP {
             let (a, b) = (self.tournament(), self.tournament());
             let (fa, fb) = (-self.costs[a], -self.costs[b]);
-            let pc = self.config.operators.crossover_probability(fa.max(fb), &stats, generation);
+            let pc = self.config.operators.crossover_probability(if fa >= fb { fa } else { fb }, &stats);
             let (mut c1, mut c2) = (self.population[a], self.population[b]);
             if self.uniform() < pc {
                 self.blend(&mut c1, &mut c2);
@@ -476,7 +501,7 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
             }
         }
         for i in elites..POP {
-            let pm = self.config.operators.mutation_probability(parent_fitness[i], &stats, generation);
+            let pm = self.config.operators.mutation_probability(parent_fitness[i], &stats);
             let mut mutated = false;
             for d in 0..DIM {
                 if self.uniform() < pm {
@@ -647,4 +672,33 @@ fn argmax(v: &[f32]) -> usize {
         }
     }
     worst
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sine_polynomial_matches_libm_on_the_unit_interval() {
+        for i in 0..=1000 {
+            let t = i as f32 / 1000.0;
+            let exact = libm::sinf(core::f32::consts::FRAC_PI_2 * t);
+            assert!((sin_half_pi(t) - exact).abs() < 7e-6, "t = {t}");
+        }
+    }
+
+    #[test]
+    fn taga_probabilities_are_clamped_and_follow_the_paper() {
+        let stats = FitnessStats { max: -1.0, avg: -3.0, lg_generation: 0.0 };
+        let taga = Operators::TAGA_PAPER;
+        // Below average: Pc1 = 1/(2 + lg 1) + 0.8 = 1.3, clamped to 1; Pm1 = -0.1/2 + 0.13 = 0.08.
+        assert_eq!(taga.crossover_probability(-5.0, &stats), 1.0);
+        assert!((taga.mutation_probability(-5.0, &stats) - 0.08).abs() < 1e-6);
+        // The best: Pc2 and Pm2.
+        assert!((taga.crossover_probability(-1.0, &stats) - 0.8).abs() < 1e-6);
+        assert!((taga.mutation_probability(-1.0, &stats) - 0.01).abs() < 1e-6);
+        // AGA as printed: the best gets nothing.
+        assert_eq!(Operators::AGA_PAPER.crossover_probability(-1.0, &stats), 0.0);
+        assert_eq!(Operators::AGA_PAPER.mutation_probability(-1.0, &stats), 0.0);
+    }
 }

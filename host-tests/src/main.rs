@@ -209,7 +209,8 @@ fn demo(seed: u64, as_json: bool) -> Result<(), Failure> {
     let mut lines = Vec::new();
     let mut all_pass = true;
     for method in [Method::Newton, Method::Taga, Method::Lm, Method::TagaLm] {
-        let config = CalibrationConfig { method, before: Some(Params::IDENTITY), ..CalibrationConfig::DEFAULT };
+        let base = if method == Method::Taga { CalibrationConfig::TAGA_ALONE } else { CalibrationConfig::DEFAULT };
+        let config = CalibrationConfig { method, before: Some(Params::IDENTITY), ..base };
         let cal = calib::run(&acc.poses, &config, seed).map_err(|e| format!("{}: {e}", method.name()))?;
         let (est, t) = (cal.params.to_array(), truth.to_array());
         let rel: [f64; PARAM_COUNT] =

@@ -159,8 +159,10 @@ fn one_run(cfg: &SimConfig, ga_seed: u64) -> Option<RunOutcome> {
     let nt = newton(zero, p, &config.newton).ok();
     let lm = levenberg_marquardt(zero, p, &config.lm).ok();
     let neutral = levenberg_marquardt(frame.to_deviation(&Params::IDENTITY), p, &config.lm).ok();
+    // TAGA as the paper runs it (alone, to convergence); TAGA+LM polishes the same run.
+    let ga_config = CalibrationConfig::TAGA_ALONE.ga;
     let mut ga =
-        ga_solver::<_, POPULATION>(p, &config.widths, config.ga, Xoshiro128PlusPlus::seed_from_u64(ga_seed)).ok()?;
+        ga_solver::<_, POPULATION>(p, &config.widths, ga_config, Xoshiro128PlusPlus::seed_from_u64(ga_seed)).ok()?;
     let ga_report = ga.run(&|x: &Deviation| objective(x, p));
     let polished = levenberg_marquardt(ga_report.best, p, &config.lm).ok();
     let errors = [
@@ -289,7 +291,7 @@ pub fn taga_trace(plan: Plan, seed: u64, noise_mg: f64) -> Vec<(f64, f64, Params
     let Ok(norm) = NormalizedPoses::<MAX_POSES>::new(&poses, cfg.gravity as f32) else { return Vec::new() };
     let frame = *norm.coarse().frame();
     let p = norm.poses();
-    let ga_config = GaConfig { stall_generations: 0, ..config.ga };
+    let ga_config = GaConfig { stall_generations: 0, ..CalibrationConfig::TAGA_ALONE.ga };
     let Ok(mut ga) = ga_solver::<_, POPULATION>(p, &config.widths, ga_config, Xoshiro128PlusPlus::seed_from_u64(seed))
     else {
         return Vec::new();

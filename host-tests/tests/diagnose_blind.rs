@@ -90,10 +90,12 @@ fn diagnose_names_the_withheld_effect() {
             }
         }
         all_shrinks.extend(shrinks.iter().copied());
+        let fmt = |v: f64| if v.is_finite() { format!("{v:.2}") } else { "-".to_string() };
         println!(
-            "{:<19} right {class_right}/{logs}  median shrink {}  smallest winning gain {min_gain:.2}",
+            "{:<19} right {class_right}/{logs}  median shrink {}  smallest winning gain {}",
             class.name(),
-            if shrinks.is_empty() { "-".to_string() } else { format!("{:.2}", median(&mut shrinks)) }
+            fmt(median(&mut shrinks)),
+            fmt(min_gain)
         );
         for w in wrong {
             println!("    {w}");
