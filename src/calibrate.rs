@@ -66,7 +66,7 @@ pub struct CalibrationConfig {
     pub method: Method,
     /// GA search half-widths around the coarse estimate. Defaults to [`SearchWidths::DEFAULT`].
     pub widths: SearchWidths,
-    /// GA settings. Defaults to [`GaConfig::DEFAULT`] with 60 generations at most and a 20-generation
+    /// GA settings. Defaults to [`GaConfig::DEFAULT`] with 30 generations at most and a 10-generation
     /// stall stop: enough to seed the LM polish (TAGA+LM reaches the least-squares optimum from it).
     /// TAGA alone needs 150-200 generations to come within 2x of the Cramer-Rao bound on the paper's
     /// 24 positions (`accelcal paper`): see [`CalibrationConfig::TAGA_ALONE`].
@@ -89,7 +89,7 @@ impl CalibrationConfig {
         gravity: crate::model::STANDARD_GRAVITY_MPS2,
         method: Method::TagaLm,
         widths: SearchWidths::DEFAULT,
-        ga: GaConfig { max_generations: 60, stall_generations: 20, ..GaConfig::DEFAULT },
+        ga: GaConfig { max_generations: 30, stall_generations: 10, ..GaConfig::DEFAULT },
         lm: LmConfig::DEFAULT,
         newton: NewtonConfig::DEFAULT,
         bounds: VerdictBounds::DEFAULT,

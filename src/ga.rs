@@ -437,13 +437,23 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
         (self.rng.next_u32() >> 8) as f32 * (1.0 / 16_777_216.0)
     }
 
-    fn index(&mut self) -> usize {
-        ((self.rng.next_u32() as u64 * POP as u64) >> 32) as usize
+    /// Two uniform draws in `[0, 1)` of 16-bit resolution from one 32-bit output (the hot loops need
+    /// many; 1/65536 of a crossover interval or of the population is resolution enough).
+    fn two_uniforms(&mut self) -> (f32, f32) {
+        let r = self.rng.next_u32();
+        let scale = 1.0 / 65_536.0;
+        ((r & 0xFFFF) as f32 * scale, (r >> 16) as f32 * scale)
     }
 
+    /// Binary tournament: the better of two individuals drawn at random.
     fn tournament(&mut self) -> usize {
-        let (a, b) = (self.index(), self.index());
-        if self.costs[a] <= self.costs[b] { a } else { b }
+        let r = self.rng.next_u32();
+        let a = (((r & 0xFFFF) as usize) * POP) >> 16;
+        let b = (((r >> 16) as usize) * POP) >> 16;
+        match (self.costs.get(a), self.costs.get(b)) {
+            (Some(ca), Some(cb)) if cb < ca => b,
+            _ => a,
+        }
     }
 
     /// Fitness statistics of the current population (`f = -cost`), for producing the next generation.
@@ -537,7 +547,7 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
             let (lo, hi) = if c1[d] <= c2[d] { (c1[d], c2[d]) } else { (c2[d], c1[d]) };
             let ext = alpha * (hi - lo);
             let (a, b) = (lo - ext, hi + ext);
-            let (u1, u2) = (self.uniform(), self.uniform());
+            let (u1, u2) = self.two_uniforms();
             c1[d] = self.bounds.reflect(d, a + u1 * (b - a));
             c2[d] = self.bounds.reflect(d, a + u2 * (b - a));
         }
