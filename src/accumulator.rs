@@ -25,7 +25,7 @@
 use core::ops::{Add, AddAssign, Mul, Sub};
 
 /// A per-axis sample type the accumulator can sum exactly.
-pub trait Reading: Copy {
+pub trait Reading: Copy + Default {
     /// Exact running-sum type.
     type Sum: Copy + Default + AddAssign + Add<Output = Self::Sum> + Sub<Output = Self::Sum> + Mul<Output = Self::Sum>;
     /// Variance (sum over axes) below which no noise can be resolved: the quantisation floor.
@@ -42,8 +42,12 @@ pub trait Reading: Copy {
     fn to_f64(self) -> f64;
     /// `false` for NaN or infinity.
     fn is_finite(self) -> bool;
-    /// At a rail of the type or at or beyond `full_scale` (input unit).
-    fn saturated(self, full_scale: f32) -> bool;
+    /// A full-scale limit in the form the per-sample check compares against.
+    type Limit: Copy;
+    /// The limit for `full_scale` (input unit), computed once.
+    fn saturation_limit(full_scale: f32) -> Self::Limit;
+    /// At a rail of the type or at or beyond the limit.
+    fn saturated(self, limit: Self::Limit) -> bool;
 }
 
 impl Reading for i16 {
@@ -69,9 +73,14 @@ impl Reading for i16 {
     fn is_finite(self) -> bool {
         true
     }
+    type Limit = i32;
+    fn saturation_limit(full_scale: f32) -> i32 {
+        // |x| >= full_scale  <=>  |x| >= ceil(full_scale) for integer x; beyond the type: never.
+        if full_scale > 32_768.0 { 32_769 } else { libm::ceilf(full_scale.max(0.0)) as i32 }
+    }
     #[inline]
-    fn saturated(self, full_scale: f32) -> bool {
-        self == i16::MIN || self == i16::MAX || f32::from(self).abs() >= full_scale
+    fn saturated(self, limit: i32) -> bool {
+        self == i16::MIN || self == i16::MAX || i32::from(self).abs() >= limit
     }
 }
 
@@ -98,9 +107,13 @@ impl Reading for f32 {
     fn is_finite(self) -> bool {
         f32::is_finite(self)
     }
+    type Limit = f32;
+    fn saturation_limit(full_scale: f32) -> f32 {
+        full_scale
+    }
     #[inline]
-    fn saturated(self, full_scale: f32) -> bool {
-        self.abs() >= full_scale
+    fn saturated(self, limit: f32) -> bool {
+        self.abs() >= limit
     }
 }
 
@@ -343,7 +356,9 @@ pub struct Accumulator<R: Reading, const POSES: usize, const BLOCK: usize> {
     config: AccumulatorConfig,
     poses: heapless::Vec<Pose, POSES>,
     rejections: Rejections,
-    block: Option<Sums<R>>,
+    /// The open block (`n == 0`: none yet).
+    block: Sums<R>,
+    saturation_limit: R::Limit,
     previous: Option<BlockStats<R>>,
     pending: Option<Sums<R>>,
     pose: Option<Sums<R>>,
@@ -362,7 +377,8 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
             config,
             poses: heapless::Vec::new(),
             rejections: Rejections::default(),
-            block: None,
+            block: Sums::new([R::default(); 3], 0),
+            saturation_limit: R::saturation_limit(config.full_scale),
             previous: None,
             pending: None,
             pose: None,
@@ -380,18 +396,20 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         }
         let index = self.samples_seen;
         self.samples_seen = self.samples_seen.saturating_add(1);
-        let block = self.block.get_or_insert_with(|| Sums::new(sample, index));
+        if self.block.n == 0 {
+            self.open_block(sample, index);
+        }
+        let block = &mut self.block;
         for a in 0..3 {
             let d = sample[a].delta(block.reference[a]);
             block.sum[a] += d;
             block.sum_sq[a] += d * d;
         }
-        block.saturated |= sample.iter().any(|v| v.saturated(self.config.full_scale));
+        let limit = self.saturation_limit;
+        block.saturated |= sample[0].saturated(limit) | sample[1].saturated(limit) | sample[2].saturated(limit);
         block.n += 1;
         if block.n as usize >= BLOCK {
-            let finished = *block;
-            self.block = None;
-            return self.close_block(finished);
+            return self.close_block();
         }
         Ok(None)
     }
@@ -409,7 +427,7 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
     /// Marks a gap in the stream (e.g. a sensor read error): the open block is dropped and an open pose
     /// is closed as if motion had started. Poses already stored are kept.
     pub fn interrupt(&mut self) -> Result<Option<Event>, AccumulatorError> {
-        self.block = None;
+        self.block.n = 0;
         self.previous = None;
         self.pending = None;
         self.close_pose()
@@ -417,7 +435,7 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
 
     /// Ends the stream: a pose still open is closed with every quiet block it has (no motion followed).
     pub fn finish(&mut self) -> Result<Option<Event>, AccumulatorError> {
-        self.block = None;
+        self.block.n = 0;
         self.previous = None;
         if let (Some(pose), Some(pending)) = (self.pose.as_mut(), self.pending.take()) {
             pose.merge(&pending);
@@ -425,10 +443,19 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         self.close_pose()
     }
 
+    /// Starts a block at `sample` (once per `BLOCK` samples; out of line so that `push` updates the
+    /// open block in place).
+    #[inline(never)]
+    fn open_block(&mut self, sample: [R; 3], index: u32) {
+        self.block = Sums::new(sample, index);
+    }
+
     // Once per BLOCK samples: kept out of line so that `push`, inlined into the caller's sample loop, stays
     // small (inlined, its register pressure made every push save and restore all FPU registers).
     #[inline(never)]
-    fn close_block(&mut self, sums: Sums<R>) -> Result<Option<Event>, AccumulatorError> {
+    fn close_block(&mut self) -> Result<Option<Event>, AccumulatorError> {
+        let sums = self.block;
+        self.block.n = 0;
         let (offset, var) = sums.mean_offset_and_variance();
         let mut mean = [0.0; 3];
         for a in 0..3 {
