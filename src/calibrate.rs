@@ -243,6 +243,23 @@ pub fn ga_solver<R: Rng, const POP: usize>(
     Ok(ga)
 }
 
+/// Runs the GA to termination and returns only its report. Out of line: the GA state (population
+/// and offspring, `2 POP 9` floats) then lives in this frame alone, not in one merged with the LM
+/// and verdict frames, and is never moved.
+#[inline(never)]
+fn run_ga<R: Rng, const POP: usize>(
+    norm: &[NormPose],
+    widths: &SearchWidths,
+    config: GaConfig,
+    rng: R,
+) -> Result<crate::ga::GaReport<PARAM_COUNT>, GaError> {
+    let cost = |x: &Deviation| objective(x, norm);
+    let mut ga = Ga::<R, POP, PARAM_COUNT>::empty(config, widths.search_box(&[0.0; PARAM_COUNT])?, rng);
+    ga.initialize(&cost)?;
+    ga.inject(&[0.0; PARAM_COUNT], &cost);
+    Ok(ga.run(&cost))
+}
+
 /// Calibrates from captured poses with a GA population of `POP` and room for `MAX_POSES` poses.
 pub fn calibrate<R: Rng, const POP: usize, const MAX_POSES: usize>(
     poses: &[Pose],
@@ -276,8 +293,7 @@ pub fn calibrate<R: Rng, const POP: usize, const MAX_POSES: usize>(
             r.x
         }
         Method::Taga | Method::TagaLm => {
-            let mut ga = ga_solver::<R, POP>(norm, &config.widths, config.ga, rng)?;
-            let report = ga.run(&|x: &Deviation| objective(x, norm));
+            let report = run_ga::<R, POP>(norm, &config.widths, config.ga, rng)?;
             generations = report.generations;
             evaluations = report.evaluations;
             if config.method == Method::TagaLm {

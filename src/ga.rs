@@ -382,18 +382,16 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
         rng: R,
         cost: &impl CostFunction<DIM>,
     ) -> Result<Self, GaError> {
+        let mut ga = Self::empty(config, bounds, rng);
+        ga.initialize(cost)?;
+        Ok(ga)
+    }
+
+    /// A GA whose population is not drawn yet: call [`Ga::initialize`] before [`Ga::step`]. Built in
+    /// place by its caller (or in a `static`), so the `2 POP DIM` floats of state are never moved.
+    pub const fn empty(config: GaConfig, bounds: SearchBox<DIM>, rng: R) -> Self {
         let () = Self::VALID;
-        if config.elites + 2 > POP {
-            return Err(GaError::TooManyElites);
-        }
-        if config.operators.constants().iter().any(|c| !c.is_finite())
-            || !config.blend_alpha.is_finite()
-            || !config.mutation_floor.is_finite()
-            || !(0.0..=1.0).contains(&config.global_mutation)
-        {
-            return Err(GaError::InvalidOperators);
-        }
-        let mut ga = Self {
+        Self {
             config,
             bounds,
             rng,
@@ -404,16 +402,35 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
             evaluations: 0,
             best_index: 0,
             stall: 0,
-        };
+        }
+    }
+
+    /// Checks the configuration, draws the population uniformly from the box and evaluates it
+    /// (generation 0). On an error nothing is drawn.
+    pub fn initialize(&mut self, cost: &impl CostFunction<DIM>) -> Result<(), GaError> {
+        let config = &self.config;
+        if config.elites + 2 > POP {
+            return Err(GaError::TooManyElites);
+        }
+        if config.operators.constants().iter().any(|c| !c.is_finite())
+            || !config.blend_alpha.is_finite()
+            || !config.mutation_floor.is_finite()
+            || !(0.0..=1.0).contains(&config.global_mutation)
+        {
+            return Err(GaError::InvalidOperators);
+        }
+        self.generation = 0;
+        self.evaluations = 0;
+        self.stall = 0;
         for i in 0..POP {
             for d in 0..DIM {
-                let u = ga.uniform();
-                ga.population[i][d] = bounds.lower[d] + u * (bounds.upper[d] - bounds.lower[d]);
+                let u = self.uniform();
+                self.population[i][d] = self.bounds.lower[d] + u * (self.bounds.upper[d] - self.bounds.lower[d]);
             }
-            ga.costs[i] = ga.evaluate(cost, i);
+            self.costs[i] = self.evaluate(cost, i);
         }
-        ga.best_index = argmin(&ga.costs);
-        Ok(ga)
+        self.best_index = argmin(&self.costs);
+        Ok(())
     }
 
     /// Replaces the worst individual by `x` (clamped into the box), e.g. a prior estimate.

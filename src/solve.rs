@@ -174,6 +174,7 @@ fn add(x: &Deviation, step: &Deviation) -> Deviation {
 ///
 /// Damped Gauss-Newton with Marquardt's diagonal scaling; the 9x9 system is solved by Cholesky on the
 /// stack. Stops on a small step, on no further decrease, or at `max_iterations`.
+#[inline(never)] // its frame need not merge with the caller's (peak stack on the device)
 pub fn levenberg_marquardt(x0: Deviation, poses: &[NormPose], config: &LmConfig) -> Result<SolveReport, SolveError> {
     check_input(&x0, poses)?;
     let mut x = x0;

@@ -234,6 +234,7 @@ pub fn noise_floor_mg(x: &Deviation, frame: &Frame, poses: &[Pose], norm: &[Norm
 
 /// Judges `x` (deviation in `frame`) on `poses` against `bounds`; `before` is the model the RMSE
 /// before calibration is computed with.
+#[inline(never)] // its matrices need not share a stack frame with the solvers'
 pub fn judge(
     x: &Deviation,
     frame: &Frame,
