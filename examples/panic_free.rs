@@ -2,7 +2,7 @@
 //!
 //! `panic-never` makes any panic that the optimiser cannot remove a link error, so this example
 //! links only if accumulating samples, coarse + TAGA + LM calibration, the verdict, blob encoding and
-//! decoding and applying the result contain no panicking branch, whatever the input (every input here
+//! decoding, applying the result and the guided calibration session contain no panicking branch, whatever the input (every input here
 //! is opaque to the optimiser through `black_box`). Build: `cargo build --release --target
 //! thumbv7em-none-eabihf --example panic_free` (CI does). It is not meant to run.
 #![cfg_attr(target_os = "none", no_std, no_main)]
@@ -15,6 +15,7 @@ mod firmware {
     use accelcal::accumulator::{Accumulator, AccumulatorConfig};
     use accelcal::blob;
     use accelcal::calibrate::{CalibrationConfig, DefaultRng, calibrate};
+    use accelcal::session::{Session, SessionConfig};
     use core::hint::black_box;
     use cortex_m_rt::entry;
     use panic_never as _;
@@ -40,6 +41,18 @@ mod firmware {
                 black_box(params.apply(black_box([1.0, 2.0, 3.0])));
             }
             black_box(cal.verdict.pass());
+        }
+        // The guided session: samples, a sensor error, guidance at each capture, the solve.
+        if let Ok(mut session) = Session::<i16, 24, 32, 40>::new(black_box(SessionConfig::DEFAULT)) {
+            while black_box(true) {
+                let _ = session.push(black_box([0i16; 3]));
+                if black_box(false) {
+                    let _ = session.sensor_error();
+                }
+            }
+            if let Ok(result) = session.finish(DefaultRng::seed_from_u64(black_box(2))) {
+                black_box(result.blob);
+            }
         }
         park()
     }

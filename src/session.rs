@@ -853,12 +853,13 @@ impl SparseRow {
     }
 
     fn dot(&self, v: &Vector64) -> f64 {
-        self.terms().map(|(i, r)| r * v[i]).sum()
+        self.terms().map(|(i, r)| r * v.get(i).copied().unwrap_or(0.0)).sum()
     }
 
     /// `r^T m r`.
     fn quadratic(&self, m: &Matrix64) -> f64 {
-        self.terms().map(|(i, r)| r * self.terms().map(|(j, q)| m[i][j] * q).sum::<f64>()).sum()
+        let at = |i: usize, j: usize| m.get(i).and_then(|row| row.get(j)).copied().unwrap_or(0.0);
+        self.terms().map(|(i, r)| r * self.terms().map(|(j, q)| at(i, j) * q).sum::<f64>()).sum()
     }
 }
 
@@ -881,9 +882,11 @@ fn normalised_rows(frame: &Frame, bounds: &VerdictBounds) -> [SparseRow; PARAM_C
                 continue;
             }
             let v = f64::from(t[i][j]) / f64::from(limit);
-            if v.is_finite() && v != 0.0 {
-                row.index[row.len] = j as u8;
-                row.value[row.len] = v;
+            if let (true, Some(index), Some(value)) =
+                (v.is_finite() && v != 0.0, row.index.get_mut(row.len), row.value.get_mut(row.len))
+            {
+                *index = j as u8;
+                *value = v;
                 row.len += 1;
             }
         }
