@@ -44,6 +44,9 @@ pub struct Budget {
     /// `--check` fails when this budget is exceeded. Only budgets met today are enforced, so that CI
     /// guards them; a missed goal is reported with its overshoot and enforced once it is met.
     pub enforced: bool,
+    /// Regression ceiling, same unit: the figure measured when it was last lowered plus about 10 %.
+    /// `--check` always fails above it, so CI catches a regression while the goal is still missed.
+    pub ceiling: u64,
 }
 
 /// The budgets, goals of the firmware issue (24 poses, GA population 40).
@@ -54,22 +57,32 @@ pub const BUDGETS: [Budget; 6] = [
         limit: 3_000_000,
         unit: "cycles",
         enforced: false,
+        ceiling: 3_450_000,
     },
-    Budget { key: "lm_cycles", what: "LM alone", limit: 100_000, unit: "cycles", enforced: false },
+    Budget { key: "lm_cycles", what: "LM alone", limit: 100_000, unit: "cycles", enforced: false, ceiling: 145_000 },
     Budget {
         key: "accumulate_cycles_per_sample",
         what: "accumulate one sample",
         limit: 30,
         unit: "cycles",
         enforced: false,
+        ceiling: 240,
     },
-    Budget { key: "apply_cycles_per_sample", what: "apply one sample", limit: 25, unit: "cycles", enforced: false },
+    Budget {
+        key: "apply_cycles_per_sample",
+        what: "apply one sample",
+        limit: 25,
+        unit: "cycles",
+        enforced: false,
+        ceiling: 60,
+    },
     Budget {
         key: "library_flash_bytes",
         what: "library calibration path, flash",
         limit: 16 * 1024,
         unit: "bytes",
         enforced: false,
+        ceiling: 51_000,
     },
     Budget {
         key: "solve_ram_bytes",
@@ -77,6 +90,7 @@ pub const BUDGETS: [Budget; 6] = [
         limit: 4 * 1024,
         unit: "bytes",
         enforced: false,
+        ceiling: 6_100,
     },
 ];
 
@@ -89,7 +103,7 @@ pub fn run(json: bool, check: bool) -> Result<bool, String> {
     } else {
         print!("{}", report.markdown);
     }
-    let failed = exceeded(&BUDGETS, &report.within);
+    let failed = exceeded(&BUDGETS, &report.within, &report.measured);
     if check && !failed.is_empty() {
         eprintln!("accelcal report: enforced budget exceeded: {}", failed.join(", "));
         return Ok(false);
@@ -97,10 +111,23 @@ pub fn run(json: bool, check: bool) -> Result<bool, String> {
     Ok(true)
 }
 
-/// The enforced budgets of `budgets` that `within` (budget key to "within budget") marks exceeded or
-/// does not mention.
-fn exceeded(budgets: &[Budget], within: &std::collections::BTreeMap<&'static str, bool>) -> Vec<&'static str> {
-    budgets.iter().filter(|b| b.enforced && !within.get(b.key).copied().unwrap_or(false)).map(|b| b.key).collect()
+/// The budgets `--check` fails on: enforced ones that `within` (budget key to "within budget") marks
+/// exceeded or does not mention, and any whose `measured` figure is above its regression ceiling (or
+/// missing).
+fn exceeded(
+    budgets: &[Budget],
+    within: &std::collections::BTreeMap<&'static str, bool>,
+    measured: &std::collections::BTreeMap<&'static str, u64>,
+) -> Vec<&'static str> {
+    budgets
+        .iter()
+        .filter(|b| {
+            let goal_missed = b.enforced && !within.get(b.key).copied().unwrap_or(false);
+            let regressed = measured.get(b.key).is_none_or(|m| *m > b.ceiling);
+            goal_missed || regressed
+        })
+        .map(|b| b.key)
+        .collect()
 }
 
 /// A measured report.
@@ -111,6 +138,8 @@ pub struct Report {
     pub markdown: String,
     /// Budget key to "within budget".
     pub within: std::collections::BTreeMap<&'static str, bool>,
+    /// Budget key to the measured figure.
+    pub measured: std::collections::BTreeMap<&'static str, u64>,
 }
 
 fn workspace_root() -> PathBuf {
@@ -232,7 +261,9 @@ fn assemble(emu: &Value, bench: &Elf, qemu: &Elf, toolchain: &str) -> Report {
         .iter()
         .zip(measured)
         .map(|(b, m)| {
-            (b.key.to_string(), json!({"limit": b.limit, "unit": b.unit, "measured": m, "enforced": b.enforced}))
+            let entry = json!({"limit": b.limit, "unit": b.unit, "measured": m, "enforced": b.enforced,
+                               "regression_ceiling": b.ceiling});
+            (b.key.to_string(), entry)
         })
         .collect();
     let enforced: Vec<&str> = BUDGETS.iter().filter(|b| b.enforced).map(|b| b.key).collect();
@@ -269,7 +300,8 @@ fn assemble(emu: &Value, bench: &Elf, qemu: &Elf, toolchain: &str) -> Report {
         "method": METHOD,
     });
     let markdown = markdown(&json, &measured, &within);
-    Report { json, markdown, within }
+    let measured = BUDGETS.iter().zip(measured).map(|(b, m)| (b.key, m)).collect();
+    Report { json, markdown, within, measured }
 }
 
 fn status(measured: u64, b: &Budget, ok: bool) -> String {
@@ -359,8 +391,9 @@ fn markdown(j: &Value, measured: &[u64; 6], within: &std::collections::BTreeMap<
     let enforced: Vec<&str> = BUDGETS.iter().filter(|b| b.enforced).map(|b| b.key).collect();
     let _ = writeln!(
         s,
-        "\nenforced by --check: {}",
-        if enforced.is_empty() { "none (every budget is still a goal)".to_string() } else { enforced.join(", ") }
+        "\nenforced by --check: goals {}; regression ceilings (today's figure + ~10 %) on all: {}",
+        if enforced.is_empty() { "none (every budget is still a goal)".to_string() } else { enforced.join(", ") },
+        BUDGETS.iter().map(|b| format!("{} <= {} {}", b.key, b.ceiling, b.unit)).collect::<Vec<_>>().join(", ")
     );
     s
 }
@@ -494,12 +527,16 @@ mod tests {
 
     #[test]
     fn check_fails_only_on_enforced_budgets() {
-        let budget = |key, enforced| Budget { key, what: "", limit: 1, unit: "", enforced };
+        let budget = |key, enforced| Budget { key, what: "", limit: 1, unit: "", enforced, ceiling: 10 };
         let budgets = [budget("a", true), budget("b", false), budget("c", true)];
         let within = [("a", true), ("b", false), ("c", false)].into_iter().collect();
-        assert_eq!(exceeded(&budgets, &within), ["c"]);
-        // A budget without a measurement is exceeded when enforced.
-        assert_eq!(exceeded(&budgets, &Default::default()), ["a", "c"]);
+        let measured = [("a", 1), ("b", 5), ("c", 5)].into_iter().collect();
+        assert_eq!(exceeded(&budgets, &within, &measured), ["c"]);
+        // A budget without a measurement is exceeded when enforced, and above every ceiling.
+        assert_eq!(exceeded(&budgets, &Default::default(), &measured), ["a", "c"]);
+        // A goal that is not enforced still fails above its regression ceiling.
+        let regressed = [("a", 1), ("b", 11), ("c", 5)].into_iter().collect();
+        assert_eq!(exceeded(&budgets, &within, &regressed), ["b", "c"]);
     }
 
     #[test]
