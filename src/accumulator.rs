@@ -40,6 +40,8 @@ pub trait Reading: Copy + Default {
     fn sum_to_f32(s: Self::Sum) -> f32;
     /// The value as `f64`.
     fn to_f64(self) -> f64;
+    /// The value as `f32` (exact for `i16`; no software `f64` on a Cortex-M4F).
+    fn to_f32(self) -> f32;
     /// `false` for NaN or infinity.
     fn is_finite(self) -> bool;
     /// A full-scale limit in the form the per-sample check compares against.
@@ -68,6 +70,9 @@ impl Reading for i16 {
     }
     fn to_f64(self) -> f64 {
         f64::from(self)
+    }
+    fn to_f32(self) -> f32 {
+        f32::from(self)
     }
     #[inline]
     fn is_finite(self) -> bool {
@@ -102,6 +107,9 @@ impl Reading for f32 {
     }
     fn to_f64(self) -> f64 {
         f64::from(self)
+    }
+    fn to_f32(self) -> f32 {
+        self
     }
     #[inline]
     fn is_finite(self) -> bool {
@@ -459,7 +467,7 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         let (offset, var) = sums.mean_offset_and_variance();
         let mut mean = [0.0; 3];
         for a in 0..3 {
-            mean[a] = sums.reference[a].to_f64() as f32 + offset[a];
+            mean[a] = sums.reference[a].to_f32() + offset[a];
         }
         let stats = BlockStats { sums, mean, variance: var[0] + var[1] + var[2] };
         let magnitude_sq = mean.iter().map(|m| m * m).sum::<f32>();

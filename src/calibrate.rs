@@ -236,11 +236,20 @@ pub fn ga_solver<R: Rng, const POP: usize>(
     config: GaConfig,
     rng: R,
 ) -> Result<Ga<R, POP, PARAM_COUNT>, GaError> {
-    let cost = |x: &Deviation| objective(x, norm);
-    let bounds = widths.search_box(&[0.0; PARAM_COUNT])?;
-    let mut ga = Ga::new(config, bounds, rng, &cost)?;
-    ga.inject(&[0.0; PARAM_COUNT], &cost);
+    let mut ga = Ga::empty(config, widths.search_box(&[0.0; PARAM_COUNT])?, rng);
+    seed_population(&mut ga, norm)?;
     Ok(ga)
+}
+
+/// Draws the initial population of a calibration GA and injects the coarse estimate (`x = 0`).
+fn seed_population<R: Rng, const POP: usize>(
+    ga: &mut Ga<R, POP, PARAM_COUNT>,
+    norm: &[NormPose],
+) -> Result<(), GaError> {
+    let cost = |x: &Deviation| objective(x, norm);
+    ga.initialize(&cost)?;
+    ga.inject(&[0.0; PARAM_COUNT], &cost);
+    Ok(())
 }
 
 /// Runs the GA to termination and returns only its report. Out of line: the GA state (population
@@ -253,11 +262,9 @@ fn run_ga<R: Rng, const POP: usize>(
     config: GaConfig,
     rng: R,
 ) -> Result<crate::ga::GaReport<PARAM_COUNT>, GaError> {
-    let cost = |x: &Deviation| objective(x, norm);
     let mut ga = Ga::<R, POP, PARAM_COUNT>::empty(config, widths.search_box(&[0.0; PARAM_COUNT])?, rng);
-    ga.initialize(&cost)?;
-    ga.inject(&[0.0; PARAM_COUNT], &cost);
-    Ok(ga.run(&cost))
+    seed_population(&mut ga, norm)?;
+    Ok(ga.run(&|x: &Deviation| objective(x, norm)))
 }
 
 /// Calibrates from captured poses with a GA population of `POP` and room for `MAX_POSES` poses.

@@ -137,7 +137,7 @@ impl Frame {
 
     /// Jacobian of the paper-convention parameters with respect to the deviation vector:
     /// `J[i][j] = d params[i] / d x[j]` (both in [`Params::to_array`] order). The mapping is affine.
-    pub fn params_jacobian(&self, x: &Deviation) -> [[f32; PARAM_COUNT]; PARAM_COUNT] {
+    pub fn params_jacobian(&self) -> [[f32; PARAM_COUNT]; PARAM_COUNT] {
         let k = self.gain;
         let c = self.offset;
         let g = self.gravity;
@@ -159,7 +159,6 @@ impl Frame {
         j[2][7] = c[0] / k[0];
         j[2][8] = c[1] / k[1];
         j[2][5] = c[2] / k[2];
-        let _ = x; // the map is affine: the Jacobian does not depend on x
         j
     }
 }

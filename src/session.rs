@@ -867,7 +867,7 @@ impl SparseRow {
 /// coarse estimate.
 fn normalised_rows(frame: &Frame, bounds: &VerdictBounds) -> [SparseRow; PARAM_COUNT] {
     let x0 = [0.0; PARAM_COUNT];
-    let t = frame.params_jacobian(&x0);
+    let t = frame.params_jacobian();
     let params = frame.to_params(&x0);
     let g = frame.gravity;
     let mut rows = [SparseRow { index: [0; PARAM_COUNT], value: [0.0; PARAM_COUNT], len: 0 }; PARAM_COUNT];

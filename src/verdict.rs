@@ -203,8 +203,8 @@ pub fn undetermined_parameters(x: &Deviation, norm: &[NormPose]) -> [bool; PARAM
 }
 
 /// Standard deviations of the paper-convention parameters from a deviation covariance.
-pub fn param_std(frame: &Frame, x: &Deviation, covariance: &Matrix<PARAM_COUNT>) -> [f32; PARAM_COUNT] {
-    let t = frame.params_jacobian(x);
+pub fn param_std(frame: &Frame, covariance: &Matrix<PARAM_COUNT>) -> [f32; PARAM_COUNT] {
+    let t = frame.params_jacobian();
     let mut out = [0.0; PARAM_COUNT];
     for (i, o) in out.iter_mut().enumerate() {
         let mut v = 0.0;
@@ -265,7 +265,7 @@ pub fn judge(
     };
     let noise_floor = noise_floor_mg(x, frame, poses, norm);
     let std = match deviation_covariance(x, frame, poses, norm) {
-        Some(cov) => param_std(frame, x, &cov),
+        Some(cov) => param_std(frame, &cov),
         None => [f32::INFINITY; PARAM_COUNT],
     };
     let mut failures = Failures {

@@ -115,7 +115,7 @@ fn crlb_variance(plan: Plan, seed: u64, noise_mg: f64) -> Option<[f64; PARAM_COU
     let frame = norm.coarse().frame();
     let x = frame.to_deviation(&cfg.truth);
     let cov = deviation_covariance(&x, frame, &poses, norm.poses())?;
-    let std = param_std(frame, &x, &cov);
+    let std = param_std(frame, &cov);
     let t = cfg.truth.to_array();
     Some(std::array::from_fn(|i| (100.0 * f64::from(std[i]) / f64::from(t[i])).powi(2)))
 }
