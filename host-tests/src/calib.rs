@@ -40,12 +40,12 @@ pub fn run_with_loo(
 }
 
 fn loo_rmse_mg(poses: &[Pose], config: &CalibrationConfig, params: &Params) -> Option<f32> {
-    let norm = NormalizedPoses::<MAX_POSES>::new(poses, config.gravity).ok()?;
+    let norm = NormalizedPoses::<MAX_POSES>::prepare(poses, config.init, config.gravity, &config.outliers).ok()?;
     let all = norm.poses();
     if all.len() < accelcal::model::PARAM_COUNT + 2 {
         return None;
     }
-    let x0: Deviation = norm.coarse().frame().to_deviation(params);
+    let x0: Deviation = norm.frame().to_deviation(params);
     let mut sum = 0.0f64;
     let mut others = Vec::with_capacity(all.len());
     for i in 0..all.len() {

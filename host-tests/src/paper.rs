@@ -4,6 +4,7 @@
 
 use accelcal::accumulator::Pose;
 use accelcal::calibrate::{CalibrationConfig, NormalizedPoses, ga_solver};
+use accelcal::coarse::SearchWidths;
 use accelcal::frame::{Deviation, objective};
 use accelcal::ga::{Ga, GaConfig, Operators, SearchBox, rastrigin};
 use accelcal::model::{PARAM_COUNT, PARAM_NAMES, Params};
@@ -112,9 +113,9 @@ fn crlb_variance(plan: Plan, seed: u64, noise_mg: f64) -> Option<[f64; PARAM_COU
     let poses: Vec<Pose> =
         simulate_pose_means(&cfg).into_iter().map(|p| Pose { variance: [(sigma * sigma) as f32; 3], ..p }).collect();
     let norm = NormalizedPoses::<MAX_POSES>::new(&poses, cfg.gravity as f32).ok()?;
-    let frame = norm.coarse().frame();
+    let frame = norm.frame();
     let x = frame.to_deviation(&cfg.truth);
-    let cov = deviation_covariance(&x, frame, &poses, norm.poses())?;
+    let cov = deviation_covariance(&x, frame, &norm.pose_set(&poses), &[false; PARAM_COUNT])?;
     let std = param_std(frame, &cov);
     let t = cfg.truth.to_array();
     Some(std::array::from_fn(|i| (100.0 * f64::from(std[i]) / f64::from(t[i])).powi(2)))
@@ -151,7 +152,7 @@ fn one_run(cfg: &SimConfig, ga_seed: u64) -> Option<RunOutcome> {
     let poses = simulate_pose_means(cfg);
     let config = CalibrationConfig::DEFAULT;
     let norm = NormalizedPoses::<MAX_POSES>::new(&poses, cfg.gravity as f32).ok()?;
-    let frame = *norm.coarse().frame();
+    let frame = *norm.frame();
     let p = norm.poses();
     let truth = cfg.truth;
     let err = |x: &Deviation| Some(rel_err_pct(&frame.to_params(x), &truth));
@@ -161,8 +162,14 @@ fn one_run(cfg: &SimConfig, ga_seed: u64) -> Option<RunOutcome> {
     let neutral = levenberg_marquardt(frame.to_deviation(&Params::IDENTITY), p, &config.lm).ok();
     // TAGA as the paper runs it (alone, to convergence); TAGA+LM polishes the same run.
     let ga_config = CalibrationConfig::TAGA_ALONE.ga;
-    let mut ga =
-        ga_solver::<_, POPULATION>(p, &config.widths, ga_config, Xoshiro128PlusPlus::seed_from_u64(ga_seed)).ok()?;
+    let mut ga = ga_solver::<_, POPULATION>(
+        p,
+        &[0.0; PARAM_COUNT],
+        &SearchWidths::DEFAULT,
+        ga_config,
+        Xoshiro128PlusPlus::seed_from_u64(ga_seed),
+    )
+    .ok()?;
     let ga_report = ga.run(&|x: &Deviation| objective(x, p));
     let polished = levenberg_marquardt(ga_report.best, p, &config.lm).ok();
     let errors = [
@@ -289,11 +296,16 @@ pub fn taga_trace(plan: Plan, seed: u64, noise_mg: f64) -> Vec<(f64, f64, Params
     let poses = simulate_pose_means(&cfg);
     let config = CalibrationConfig::DEFAULT;
     let Ok(norm) = NormalizedPoses::<MAX_POSES>::new(&poses, cfg.gravity as f32) else { return Vec::new() };
-    let frame = *norm.coarse().frame();
+    let frame = *norm.frame();
     let p = norm.poses();
     let ga_config = GaConfig { stall_generations: 0, ..CalibrationConfig::TAGA_ALONE.ga };
-    let Ok(mut ga) = ga_solver::<_, POPULATION>(p, &config.widths, ga_config, Xoshiro128PlusPlus::seed_from_u64(seed))
-    else {
+    let Ok(mut ga) = ga_solver::<_, POPULATION>(
+        p,
+        &[0.0; PARAM_COUNT],
+        &SearchWidths::DEFAULT,
+        ga_config,
+        Xoshiro128PlusPlus::seed_from_u64(seed),
+    ) else {
         return Vec::new();
     };
     let g4 = cfg.gravity.powi(4);
