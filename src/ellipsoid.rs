@@ -239,9 +239,9 @@ fn best_left_out(means: &[[f32; 3]], keep: &mut [bool], gravity: f32) -> Option<
 }
 
 /// Smallest share of the total variance of the pose means that their thinnest direction must carry:
-/// poses in one plane, or in one cap narrower than about 40 deg, carry less and do not determine an
+/// poses in one plane, or in one cap narrower than about 30 deg, carry less and do not determine an
 /// ellipsoid (the fit would be an extrapolation).
-const MIN_THIN_VARIANCE: f32 = 0.02;
+const MIN_THIN_VARIANCE: f32 = 0.01;
 
 /// Refuses poses in one plane or one narrow cap (the smallest eigenvalue of the covariance of the
 /// means below [`MIN_THIN_VARIANCE`] of its trace), naming the half-axes not visited.

@@ -294,7 +294,6 @@ pub fn operator_comparison(seeds: u64) -> Vec<OperatorResult> {
 pub fn taga_trace(plan: Plan, seed: u64, noise_mg: f64) -> Vec<(f64, f64, Params)> {
     let cfg = sim_config(plan, seed, noise_mg);
     let poses = simulate_pose_means(&cfg);
-    let config = CalibrationConfig::DEFAULT;
     let Ok(norm) = NormalizedPoses::<MAX_POSES>::new(&poses, cfg.gravity as f32) else { return Vec::new() };
     let frame = *norm.frame();
     let p = norm.poses();
