@@ -196,18 +196,21 @@ pub fn fit_ellipsoid(
     loop {
         let kept = keep.iter().take(means.len()).filter(|&&k| k).count();
         let room = usize::from(excluded.len) < MAX_EXCLUDED && kept > COEFFS + 1;
-        let (params, held) = match fit_once(means, keep, gravity) {
-            Ok(fit) => fit,
-            // A gross outlier can bend the quadric into a non-ellipsoid: look for the pose without
-            // which the rest fit.
-            Err(e @ EllipsoidError::Degenerate { .. }) if room && rule.floor_g.is_finite() => {
-                let Some(i) = best_left_out(means, keep, gravity) else { return Err(e) };
+        let fitted = fit_once(means, keep, gravity);
+        // A gross outlier can bend the quadric into a non-ellipsoid, or into an ellipsoid no
+        // accelerometer has: then look for the pose without which the rest fit.
+        let bent = match &fitted {
+            Ok(fit) => !plausible(&fit.0),
+            Err(e) => matches!(e, EllipsoidError::Degenerate { .. }),
+        };
+        if bent && room && rule.floor_g.is_finite() {
+            if let Some(i) = best_left_out(means, keep, gravity) {
                 keep[i] = false;
                 excluded.push(i);
                 continue;
             }
-            Err(e) => return Err(e),
-        };
+        }
+        let (params, held) = fitted?;
         let errors = ModulusErrors { means, keep, params: &params, gravity };
         let (worst, worst_abs) = errors.worst();
         let limit = rule.floor_g.max(rule.robust_sigmas * 1.4826 * errors.median_abs());
@@ -227,7 +230,7 @@ fn best_left_out(means: &[[f32; 3]], keep: &mut [bool], gravity: f32) -> Option<
             continue;
         }
         keep[i] = false;
-        if let Ok((params, _)) = fit_once(means, keep, gravity) {
+        if let Some((params, _)) = fit_once(means, keep, gravity).ok().filter(|f| plausible(&f.0)) {
             let rms = ModulusErrors { means, keep, params: &params, gravity }.rms();
             if best.is_none_or(|(_, b)| rms < b) {
                 best = Some((i, rms));
@@ -273,6 +276,22 @@ fn visited(f: [f32; 3], norm: f32, a: usize) -> u8 {
     let up = u8::from(f[a] >= 0.5 * norm) << (2 * a);
     let down = u8::from(-f[a] >= 0.5 * norm) << (2 * a + 1);
     up | down
+}
+
+/// Largest ratio between two axes' scale factors, and largest non-orthogonality relative to its
+/// scale, of any accelerometer: a fit beyond them has been bent by a bad pose.
+const PLAUSIBLE_SCALE_RATIO: f32 = 1.3;
+const PLAUSIBLE_NONORTH: f32 = 0.1;
+
+/// `true` for an ellipsoid an accelerometer can have.
+fn plausible(p: &Params) -> bool {
+    let s = p.scale;
+    let (lo, hi) = (s[0].min(s[1]).min(s[2]), s[0].max(s[1]).max(s[2]));
+    let m = p.nonorth;
+    hi <= PLAUSIBLE_SCALE_RATIO * lo
+        && m[0].abs() <= PLAUSIBLE_NONORTH * s[0]
+        && m[1].abs() <= PLAUSIBLE_NONORTH * s[0]
+        && m[2].abs() <= PLAUSIBLE_NONORTH * s[1]
 }
 
 /// The modulus errors `|f_b| / g - 1` of the kept poses under `params`.
