@@ -203,12 +203,14 @@ pub fn fit_ellipsoid(
             Ok(fit) => !plausible(&fit.0),
             Err(e) => matches!(e, EllipsoidError::Degenerate { .. }),
         };
-        if bent && room && rule.floor_g.is_finite() {
-            if let Some(i) = best_left_out(means, keep, gravity) {
-                keep[i] = false;
-                excluded.push(i);
-                continue;
-            }
+        if bent
+            && room
+            && rule.floor_g.is_finite()
+            && let Some(i) = best_left_out(means, keep, gravity)
+        {
+            keep[i] = false;
+            excluded.push(i);
+            continue;
         }
         let (params, held) = fitted?;
         let errors = ModulusErrors { means, keep, params: &params, gravity };
