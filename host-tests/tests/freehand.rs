@@ -63,7 +63,8 @@ fn free_hand_sessions_reach_the_cramer_rao_bound() {
 /// stuck at the full-scale code. It is left out and named; the fit is as good as without it.
 #[test]
 fn one_glitch_pose_is_left_out_and_named() {
-    let glitches: [(&str, fn([f32; 3]) -> [f32; 3]); 4] = [
+    type Glitch = fn([f32; 3]) -> [f32; 3];
+    let glitches: [(&str, Glitch); 4] = [
         ("2 g shock on x", |m| [m[0] + 2.0 * G, m[1], m[2]]),
         ("stuck at 0", |_| [0.0; 3]),
         ("one axis stuck at 0", |m| [m[0], 0.0, m[2]]),
