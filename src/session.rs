@@ -24,7 +24,8 @@
 //!   parameter standard deviations the information matrix predicts if that orientation were added
 //!   next (with the noise measured so far). The standard deviations are normalised by the [`VerdictBounds`] of the
 //!   calibration (1 = at the bound); the best candidate minimises the worst one, ties broken by the
-//!   sum of squares (A-optimal). A weak prior (standard deviation 0.5 in every deviation coordinate
+//!   sum of squares (A-optimal); while some parameter is still above its bound, the candidate that adds
+//!   the most information wins instead (D-optimal), which asks for new directions first. A weak prior (standard deviation 0.5 in every deviation coordinate
 //!   of [`crate::frame`]) keeps the matrix invertible while some terms are not determined at all:
 //!   such a term shows the prior's standard deviation (e.g. 50 for a non-orthogonality term under
 //!   the default bounds), which no sensible bound accepts.
@@ -967,12 +968,19 @@ fn information_guidance(frame: &Frame, poses: &[Pose], bounds: &VerdictBounds) -
     };
     let rows = normalised_rows(frame, bounds);
     let current = rows.map(|r| r.quadratic(&cov));
-    let mut best = (CubeDirection::face(2, true), f64::INFINITY, f64::INFINITY);
+    let worst_now = current.iter().fold(0.0f64, |m, &v| if v > m { v } else { m });
+    // While some parameter is above its bound the candidate adding the most information wins
+    // (D-optimal: the largest determinant growth, `1 + g^T C g / var`), which always prefers a new
+    // direction; near the bound, the one that minimises the worst normalised variance.
+    let d_optimal = worst_now > 1.0;
+    // (direction, ranking key, worst after, sum after)
+    let mut best = (CubeDirection::face(2, true), f64::INFINITY, f64::INFINITY, f64::INFINITY);
     for d in CubeDirection::ALL {
         let u = d.unit();
         let g = gradient(u);
         let w = mat_vec(&cov, &g);
-        let denominator = error_variance(u, candidate_noise) + dot(&g, &w);
+        let noise = error_variance(u, candidate_noise);
+        let denominator = noise + dot(&g, &w);
         let (mut worst, mut sum) = (0.0f64, 0.0f64);
         for (row, now) in rows.iter().zip(current) {
             let tw = row.dot(&w);
@@ -982,18 +990,19 @@ fn information_guidance(frame: &Frame, poses: &[Pose], bounds: &VerdictBounds) -
             }
             sum += v;
         }
-        let (_, best_worst, best_sum) = best;
-        if worst < best_worst * (1.0 - TIE) || (worst <= best_worst * (1.0 + TIE) && sum < best_sum) {
-            best = (d, worst, sum);
+        let key = if d_optimal { -denominator / noise } else { worst };
+        let (_, best_key, _, best_sum) = best;
+        let tie = (key - best_key).abs() <= TIE * best_key.abs();
+        if (key < best_key && !tie) || (tie && sum < best_sum) {
+            best = (d, key, worst, sum);
         }
     }
-    let worst_now = current.iter().fold(0.0f64, |m, &v| if v > m { v } else { m });
     Guidance {
         next: best.0,
         basis: GuidanceBasis::Information,
         poorly_determined: current.map(|v| !(v <= 1.0)),
         worst_std: libm::sqrt(worst_now) as f32,
-        worst_std_after_next: libm::sqrt(best.1) as f32,
+        worst_std_after_next: libm::sqrt(best.2) as f32,
     }
 }
 
