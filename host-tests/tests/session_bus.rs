@@ -9,7 +9,6 @@
 use std::ops::ControlFlow;
 use std::time::{Duration, Instant};
 
-use accelcal::accumulator::Pose;
 use accelcal::blob;
 use accelcal::model::{PARAM_COUNT, PARAM_NAMES, Params, STANDARD_GRAVITY_MPS2};
 use accelcal::mpu6050::{AccelRange, Address, Mpu6050};
