@@ -916,15 +916,14 @@ fn normalised_rows(frame: &Frame, bounds: &VerdictBounds) -> [SparseRow; PARAM_C
     rows
 }
 
-/// Scores the 26 cube directions by the predicted normalised parameter variances after adding each
-/// (rank-one update of the covariance) and returns the best with the current state.
-fn information_guidance(frame: &Frame, poses: &[Pose], bounds: &VerdictBounds) -> Guidance {
-    let mut scale_sq = [0.0f64; 3];
-    for a in 0..3 {
+/// The information matrix of the poses (with the prior; lower triangle, which is all
+/// `spd_inverse_f64` reads) and the noise to expect of one more pose (per axis, relative to
+/// `(k g)^2`, for the mean number of samples).
+fn pose_information(frame: &Frame, poses: &[Pose]) -> (Matrix64, [f64; 3]) {
+    let scale_sq: [f64; 3] = core::array::from_fn(|a| {
         let s = f64::from(frame.gain[a]) * f64::from(frame.gravity);
-        scale_sq[a] = s * s;
-    }
-    // Lower triangle only (all `spd_inverse_f64` reads).
+        s * s
+    });
     let mut info = [[0.0f64; PARAM_COUNT]; PARAM_COUNT];
     for (i, row) in info.iter_mut().enumerate() {
         row[i] = 1.0 / (PRIOR_STD * PRIOR_STD);
@@ -952,15 +951,60 @@ fn information_guidance(frame: &Frame, poses: &[Pose], bounds: &VerdictBounds) -
     }
     let count = poses.len().max(1) as f64;
     let n_mean = (n_sum / count).max(1.0);
-    let candidate_noise = noise_sum.map(|v| (v / count).max(NOISE_FLOOR) / n_mean);
+    (info, noise_sum.map(|v| (v / count).max(NOISE_FLOOR) / n_mean))
+}
 
+/// A candidate orientation and what adding it would give.
+#[derive(Clone, Copy)]
+struct Candidate {
+    direction: CubeDirection,
+    /// What the choice minimises (see [`best_candidate`]).
+    key: f64,
+    /// Largest normalised variance after adding it.
+    worst: f64,
+    /// Sum of the normalised variances after adding it.
+    sum: f64,
+}
+
+/// The best of the 26 cube directions, by a rank-one update of the covariance. While some parameter
+/// is above its bound (`d_optimal`) the candidate adding the most information wins (D-optimal: the
+/// largest determinant growth, `1 + g^T C g / var`), which always prefers a new direction; near the
+/// bound, the one that minimises the worst normalised variance; ties by the sum.
+fn best_candidate(cov: &Matrix64, rows: &[SparseRow; PARAM_COUNT], noise: [f64; 3], d_optimal: bool) -> Candidate {
+    let current = rows.map(|r| r.quadratic(cov));
+    let infinite = f64::INFINITY;
+    let mut best = Candidate { direction: CubeDirection::face(2, true), key: infinite, worst: infinite, sum: infinite };
+    for direction in CubeDirection::ALL {
+        let u = direction.unit();
+        let g = gradient(u);
+        let w = mat_vec(cov, &g);
+        let pose_noise = error_variance(u, noise);
+        let denominator = pose_noise + dot(&g, &w);
+        let (mut worst, mut sum) = (0.0f64, 0.0f64);
+        for (row, now) in rows.iter().zip(current) {
+            let tw = row.dot(&w);
+            let v = now - tw * tw / denominator;
+            worst = if v > worst { v } else { worst };
+            sum += v;
+        }
+        let key = if d_optimal { -denominator / pose_noise } else { worst };
+        let tie = (key - best.key).abs() <= TIE * best.key.abs();
+        if (key < best.key && !tie) || (tie && sum < best.sum) {
+            best = Candidate { direction, key, worst, sum };
+        }
+    }
+    best
+}
+
+/// Scores the 26 cube directions by the predicted normalised parameter variances after adding each
+/// and returns the best with the current state.
+fn information_guidance(frame: &Frame, poses: &[Pose], bounds: &VerdictBounds) -> Guidance {
+    let (info, candidate_noise) = pose_information(frame, poses);
     let Some(cov) = spd_inverse_f64(&info) else {
-        let next = CubeDirection::face(2, true);
         let unknown = f32::INFINITY;
-        let basis = GuidanceBasis::Provisional;
         return Guidance {
-            next,
-            basis,
+            next: CubeDirection::face(2, true),
+            basis: GuidanceBasis::Provisional,
             poorly_determined: [true; PARAM_COUNT],
             worst_std: unknown,
             worst_std_after_next: unknown,
@@ -969,40 +1013,13 @@ fn information_guidance(frame: &Frame, poses: &[Pose], bounds: &VerdictBounds) -
     let rows = normalised_rows(frame, bounds);
     let current = rows.map(|r| r.quadratic(&cov));
     let worst_now = current.iter().fold(0.0f64, |m, &v| if v > m { v } else { m });
-    // While some parameter is above its bound the candidate adding the most information wins
-    // (D-optimal: the largest determinant growth, `1 + g^T C g / var`), which always prefers a new
-    // direction; near the bound, the one that minimises the worst normalised variance.
-    let d_optimal = worst_now > 1.0;
-    // (direction, ranking key, worst after, sum after)
-    let mut best = (CubeDirection::face(2, true), f64::INFINITY, f64::INFINITY, f64::INFINITY);
-    for d in CubeDirection::ALL {
-        let u = d.unit();
-        let g = gradient(u);
-        let w = mat_vec(&cov, &g);
-        let noise = error_variance(u, candidate_noise);
-        let denominator = noise + dot(&g, &w);
-        let (mut worst, mut sum) = (0.0f64, 0.0f64);
-        for (row, now) in rows.iter().zip(current) {
-            let tw = row.dot(&w);
-            let v = now - tw * tw / denominator;
-            if v > worst {
-                worst = v;
-            }
-            sum += v;
-        }
-        let key = if d_optimal { -denominator / noise } else { worst };
-        let (_, best_key, _, best_sum) = best;
-        let tie = (key - best_key).abs() <= TIE * best_key.abs();
-        if (key < best_key && !tie) || (tie && sum < best_sum) {
-            best = (d, key, worst, sum);
-        }
-    }
+    let best = best_candidate(&cov, &rows, candidate_noise, worst_now > 1.0);
     Guidance {
-        next: best.0,
+        next: best.direction,
         basis: GuidanceBasis::Information,
         poorly_determined: current.map(|v| !(v <= 1.0)),
         worst_std: libm::sqrt(worst_now) as f32,
-        worst_std_after_next: libm::sqrt(best.2) as f32,
+        worst_std_after_next: libm::sqrt(best.worst) as f32,
     }
 }
 
