@@ -156,8 +156,8 @@ impl PoseList {
     }
 
     fn push(&mut self, i: usize) {
-        if usize::from(self.len) < MAX_EXCLUDED {
-            self.index[usize::from(self.len)] = u16::try_from(i).unwrap_or(u16::MAX);
+        if let Some(slot) = self.index.get_mut(usize::from(self.len)) {
+            *slot = u16::try_from(i).unwrap_or(u16::MAX);
             self.len += 1;
         }
     }
@@ -208,7 +208,9 @@ pub fn fit_ellipsoid(
             && rule.floor_g.is_finite()
             && let Some(i) = best_left_out(means, keep, gravity)
         {
-            keep[i] = false;
+            if let Some(k) = keep.get_mut(i) {
+                *k = false;
+            }
             excluded.push(i);
             continue;
         }
@@ -219,7 +221,9 @@ pub fn fit_ellipsoid(
         if !(worst_abs > limit) || !room {
             return Ok(EllipsoidFit { params, excluded, held, rmse_g: errors.rms() });
         }
-        keep[worst] = false;
+        if let Some(k) = keep.get_mut(worst) {
+            *k = false;
+        }
         excluded.push(worst);
     }
 }

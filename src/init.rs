@@ -107,8 +107,13 @@ impl<const MAX_POSES: usize> NormalizedPoses<MAX_POSES> {
         if poses.len() > MAX_POSES {
             return Err(InitError::TooManyPoses { got: poses.len(), capacity: MAX_POSES });
         }
-        let mut means: heapless::Vec<[f32; 3], MAX_POSES> = poses.iter().map(|p| p.mean).collect();
-        let mut keep: heapless::Vec<bool, MAX_POSES> = poses.iter().map(|_| true).collect();
+        let mut means: heapless::Vec<[f32; 3], MAX_POSES> = heapless::Vec::new();
+        let mut keep: heapless::Vec<bool, MAX_POSES> = heapless::Vec::new();
+        for p in poses {
+            // Capacity checked above (a `collect` would carry a panicking branch).
+            let _ = means.push(p.mean);
+            let _ = keep.push(true);
+        }
         let initial = initial_estimate(&means, &mut keep, init, gravity, rule)?;
         let frame = frame_of(&initial.params, gravity)?;
         let mut start = frame.to_deviation(&initial.params);

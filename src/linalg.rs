@@ -151,6 +151,9 @@ pub fn weak_pivots<const N: usize>(a: &Matrix<N>, order: &[usize; N], min_pivot:
     let mut l = [[0.0f32; N]; N];
     for p in 0..N {
         let j = order[p];
+        if j >= N {
+            continue; // not a permutation of 0..N: ignored (and no bounds check below)
+        }
         let diag = entry(j, j);
         if !(diag > 0.0 && diag.is_finite()) {
             weak[j] = true;
@@ -168,6 +171,9 @@ pub fn weak_pivots<const N: usize>(a: &Matrix<N>, order: &[usize; N], min_pivot:
         l[p][p] = root;
         for r in p + 1..N {
             let i = order[r];
+            if i >= N {
+                continue;
+            }
             let di = entry(i, i);
             if !(di > 0.0 && di.is_finite()) {
                 continue;
