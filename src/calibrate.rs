@@ -246,6 +246,7 @@ fn seed_population<R: Rng, const POP: usize>(
 }
 
 /// The GA's search box for `intervals` around `start` (held parameters pinned to a zero-width-like box).
+#[inline(never)] // its matrices need not share a stack frame with the GA's state
 pub fn search_box(
     intervals: &Intervals,
     start: &Deviation,

@@ -102,7 +102,9 @@ impl<const MAX_POSES: usize> NormalizedPoses<MAX_POSES> {
         Self::prepare(poses, Init::SixPosition, gravity, &OutlierRule::KEEP_ALL)
     }
 
-    /// The initial estimate chosen by `init`, and the poses it keeps normalised in its frame.
+    /// The initial estimate chosen by `init`, and the poses it keeps normalised in its frame. Out of
+    /// line: its temporaries (the means, the ellipsoid's matrices) need not share a frame with the GA.
+    #[inline(never)]
     pub fn prepare(poses: &[Pose], init: Init, gravity: f32, rule: &OutlierRule) -> Result<Self, InitError> {
         if poses.len() > MAX_POSES {
             return Err(InitError::TooManyPoses { got: poses.len(), capacity: MAX_POSES });

@@ -268,6 +268,7 @@ pub const HOLD_STD: Deviation = [0.05, 0.05, 0.05, 0.02, 0.02, 0.02, 0.01, 0.01,
 /// others held) exceeds [`HOLD_STD`] by the largest factor, until every free parameter is within it.
 /// The user's verdict bounds play no part: a parameter fitted but worse determined than they ask
 /// fails the verdict instead.
+#[inline(never)] // its matrices need not share a stack frame with the solvers'
 pub fn parameters_to_hold(
     x: &Deviation,
     frame: &Frame,
