@@ -258,7 +258,8 @@ pub fn search_box(
         Intervals::Fixed(widths) => return widths.search_box(start),
         Intervals::Uncertainty { sigmas } => *sigmas,
     };
-    let cov = information_matrix(start, frame, set, true).and_then(|i| crate::verdict::covariance_holding(i, held));
+    let info = information_matrix(start, frame, set, held, true);
+    let cov = info.and_then(|i| crate::verdict::covariance_holding(i, held));
     let Some(cov) = cov else { return SearchWidths::DEFAULT.search_box(start) };
     let mut lower = *start;
     let mut upper = *start;
@@ -342,12 +343,13 @@ pub fn calibrate<R: Rng, const POP: usize, const MAX_POSES: usize>(
     let normalized = NormalizedPoses::<MAX_POSES>::prepare(poses, config.init, config.gravity, &config.outliers)?;
     let norm = normalized.poses();
     let frame = *normalized.frame();
-    if norm.len() < PARAM_COUNT {
-        return Err(SolveError::TooFewPoses { got: norm.len() }.into());
-    }
     let set = PoseSet { poses, norm, source: normalized.source() };
     let initial = *normalized.initial();
     let held = parameters_to_hold(&normalized.start(), &frame, &set, initial.held);
+    // One pose per parameter fitted (six faces fit the biases and scale factors).
+    if norm.len() < held.iter().filter(|&&h| !h).count() {
+        return Err(SolveError::TooFewPoses { got: norm.len() }.into());
+    }
     let mut start = normalized.start();
     for i in 0..PARAM_COUNT {
         if held[i] {

@@ -85,7 +85,7 @@ use crate::frame::{Frame, NormPose, modulus_error_gradient};
 use crate::init::{Init, NormalizedPoses};
 use crate::model::PARAM_COUNT;
 use crate::sensor::AccelSensor;
-use crate::verdict::{Failures, VerdictBounds};
+use crate::verdict::{Failures, VerdictBounds, Warnings};
 
 // ---------------------------------------------------------------------------------------------
 // Orientations
@@ -165,6 +165,21 @@ impl CubeDirection {
         }
     }
 
+    /// For a face, its name in vehicle terms, with the sensor in a vehicle's NED body axes (x forward,
+    /// y right, z down): `level`, `upside down`, `nose up`, `nose down`, `left side down`,
+    /// `right side down`; `None` for edges and vertices.
+    pub const fn vehicle_name(&self) -> Option<&'static str> {
+        match self.signs {
+            [0, 0, -1] => Some("level"),
+            [0, 0, 1] => Some("upside down"),
+            [1, 0, 0] => Some("nose up"),
+            [-1, 0, 0] => Some("nose down"),
+            [0, 1, 0] => Some("left side down"),
+            [0, -1, 0] => Some("right side down"),
+            _ => None,
+        }
+    }
+
     /// The unit vector in the sensor axes.
     pub fn unit(&self) -> [f32; 3] {
         let c = match self.kind() {
@@ -197,10 +212,39 @@ impl core::fmt::Display for CubeDirection {
 // Configuration, errors, progress
 // ---------------------------------------------------------------------------------------------
 
+/// How the session guides the person and what it accepts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Mode {
+    /// The full 9-parameter calibration: the next orientation is the most informative one (any
+    /// start, any order); [`Session::finish`] accepts only a fit of every parameter.
+    #[default]
+    Guided,
+    /// The six faces, as ArduPilot and PX4 ask for them ([`CubeDirection::vehicle_name`]): level,
+    /// upside down, nose up, nose down, left side down, right side down. Fits the biases and scale
+    /// factors (six directions cannot see the non-orthogonality, which is held at 0 and said so);
+    /// ready when the six faces are captured.
+    SixFace,
+}
+
+/// The six faces in the order [`Mode::SixFace`] asks for them, in the vehicle's NED body axes
+/// (x forward, y right, z down): level (-z up), upside down, nose up, nose down, left side down (the
+/// right side, +y, up), right side down.
+pub const SIX_FACES: [CubeDirection; 6] = [
+    CubeDirection::face(2, false),
+    CubeDirection::face(2, true),
+    CubeDirection::face(0, true),
+    CubeDirection::face(0, false),
+    CubeDirection::face(1, true),
+    CubeDirection::face(1, false),
+];
+
 /// Session settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SessionConfig {
+    /// Guidance and acceptance. Defaults to [`Mode::Guided`].
+    pub mode: Mode,
     /// Static detection. Defaults to [`AccumulatorConfig::DEFAULT`].
     pub accumulator: AccumulatorConfig,
     /// The calibration run by [`Session::finish`]; its `gravity` (output unit) is the blob's and its
@@ -221,12 +265,16 @@ pub struct SessionConfig {
 impl SessionConfig {
     /// The documented defaults.
     pub const DEFAULT: Self = Self {
+        mode: Mode::Guided,
         accumulator: AccumulatorConfig::DEFAULT,
         calibration: CalibrationConfig::DEFAULT,
         min_poses: 12,
         hold_samples: 1000,
         duplicate_angle_deg: 10.0,
     };
+
+    /// The six-face quick mode ([`Mode::SixFace`]) with the other defaults (6 poses at least).
+    pub const SIX_FACE: Self = Self { mode: Mode::SixFace, min_poses: 6, ..Self::DEFAULT };
 
     /// Checks the accumulator settings, `min_poses >= 9`, `hold_samples >= min_pose_samples`, the
     /// duplicate angle, a finite positive gravity and positive (possibly infinite) parameter bounds.
@@ -236,7 +284,8 @@ impl SessionConfig {
         let g = self.calibration.gravity;
         let b = &self.calibration.bounds;
         let positive = |v: f32| v > 0.0;
-        let ok = self.min_poses >= PARAM_COUNT
+        let fewest = if self.mode == Mode::SixFace { 6 } else { PARAM_COUNT };
+        let ok = self.min_poses >= fewest
             && self.hold_samples >= self.accumulator.min_pose_samples
             && (0.0..90.0).contains(&self.duplicate_angle_deg)
             && g.is_finite()
@@ -269,6 +318,10 @@ pub enum SessionError {
     /// [`Session::last_calibration`]); no blob is made. Capture more poses, or remove a bad one, and
     /// finish again.
     Verdict(Failures),
+    /// The fit passed its verdict but could not determine every parameter (held at nominal) or left
+    /// poses out; [`Mode::Guided`] wants them all: capture the orientations the guidance asks for
+    /// (the calibration is in [`Session::last_calibration`]).
+    Incomplete(Warnings),
     /// No pose has this index.
     NoSuchPose,
     /// The session is [`State::Done`]; start a new one.
@@ -282,6 +335,9 @@ impl core::fmt::Display for SessionError {
             Self::Accumulator(e) => write!(f, "accumulator: {e}"),
             Self::Calibration(e) => write!(f, "calibration: {e}"),
             Self::Verdict(_) => f.write_str("the calibration failed its verdict: capture more orientations"),
+            Self::Incomplete(_) => f.write_str(
+                "the poses do not determine every parameter: capture the orientations the guidance asks for",
+            ),
             Self::NoSuchPose => f.write_str("no pose has this index"),
             Self::Finished => f.write_str("the session is finished; start a new one"),
         }
@@ -347,6 +403,8 @@ pub enum GuidanceBasis {
     /// The predicted parameter standard deviations in the frame of the initial estimate (see the
     /// [module docs](self)).
     Information,
+    /// [`Mode::SixFace`]: the next face not yet captured, in the order of [`SIX_FACES`].
+    Faces,
 }
 
 /// What to do next, updated at every captured pose.
@@ -382,6 +440,8 @@ pub struct Progress {
     pub sensor_errors: u32,
     /// What to do next.
     pub guidance: Guidance,
+    /// How many of the six faces have a pose (the raw mean within 25 deg of the face).
+    pub faces_done: u8,
     /// The done criterion is met: at least [`SessionConfig::min_poses`] poses and every predicted
     /// standard deviation within its bound. A prediction: [`Session::finish`] judges the fit itself
     /// (a misfit or a bad pose can still fail it, after which this is `false` until a new pose).
@@ -498,7 +558,7 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize, const POP: usize> Sessi
         }
         let acc = Accumulator::new(config.accumulator)?;
         let duplicate_cos = libm::cosf(config.duplicate_angle_deg.to_radians());
-        Ok(Self {
+        let mut session = Self {
             config,
             acc,
             state: State::WaitingForStillness,
@@ -510,7 +570,9 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize, const POP: usize> Sessi
             duplicate_cos,
             result: None,
             last: None,
-        })
+        };
+        session.refresh_guidance();
+        Ok(session)
     }
 
     /// Feeds one sample (x, y, z, input unit). An `Err` leaves the session as it was except that a
@@ -581,8 +643,13 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize, const POP: usize> Sessi
         self.last = Some(calibration);
         #[cfg(feature = "defmt")]
         defmt::info!("session: pass {}, RMSE {} mg", calibration.verdict.pass(), calibration.verdict.rmse_after_mg);
-        if !calibration.verdict.pass() {
-            return Err(self.fail(SessionError::Verdict(calibration.verdict.failures)));
+        let verdict = &calibration.verdict;
+        if !verdict.pass() {
+            return Err(self.fail(SessionError::Verdict(verdict.failures)));
+        }
+        // Left-out poses are named but accepted; held parameters only in the six-face mode.
+        if self.config.mode == Mode::Guided && verdict.warnings.held.iter().any(|&h| h) {
+            return Err(self.fail(SessionError::Incomplete(verdict.warnings)));
         }
         let result = SessionResult {
             calibration,
@@ -611,6 +678,7 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize, const POP: usize> Sessi
             rejections: self.acc.rejections(),
             sensor_errors: self.sensor_errors,
             guidance: self.guidance,
+            faces_done: faces_done(self.acc.poses()).count_ones() as u8,
             ready: self.ready,
         }
     }
@@ -716,9 +784,20 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize, const POP: usize> Sessi
     fn refresh_guidance(&mut self) {
         let poses = self.acc.poses();
         self.guidance = guidance_for::<POSES>(poses, &self.config.calibration);
-        self.ready = poses.len() >= self.config.min_poses
-            && self.guidance.basis == GuidanceBasis::Information
-            && self.guidance.worst_std <= 1.0;
+        let enough = poses.len() >= self.config.min_poses;
+        self.ready = match self.config.mode {
+            Mode::Guided => {
+                enough && self.guidance.basis == GuidanceBasis::Information && self.guidance.worst_std <= 1.0
+            }
+            Mode::SixFace => {
+                let done = faces_done(poses);
+                if let Some(next) = SIX_FACES.iter().enumerate().find(|(i, _)| done & (1 << i) == 0) {
+                    self.guidance.next = *next.1;
+                }
+                self.guidance.basis = GuidanceBasis::Faces;
+                enough && done == 0x3f
+            }
+        };
     }
 
     /// Removes pose `index` (a bad pose, or one to capture again: remove it, then hold the board in
@@ -810,6 +889,25 @@ fn guidance_for<const POSES: usize>(poses: &[Pose], calibration: &CalibrationCon
         Err(_) => (provisional_frame(poses, g), GuidanceBasis::Provisional),
     };
     Guidance { basis, ..information_guidance(&frame, poses, &calibration.bounds) }
+}
+
+/// Cosine of the largest angle between a raw pose mean and a face for the pose to count as that face
+/// (25 deg).
+const FACE_COS: f32 = 0.906;
+
+/// Bit `i` set when some pose lies within 25 deg of [`SIX_FACES`]`[i]` (raw means: the offsets are
+/// small against 1 g on the sensors the session serves).
+fn faces_done(poses: &[Pose]) -> u8 {
+    let mut done = 0u8;
+    for p in poses {
+        let norm = libm::sqrtf(dot3(p.mean, p.mean));
+        for (i, face) in SIX_FACES.iter().enumerate() {
+            if dot3(p.mean, face.unit()) >= FACE_COS * norm && norm > 0.0 {
+                done |= 1 << i;
+            }
+        }
+    }
+    done
 }
 
 /// Zero offset and the mean reading magnitude (1 when there is none) as `g` on every axis.
@@ -1266,6 +1364,28 @@ mod tests {
     }
 
     #[test]
+    fn the_six_face_quick_mode_asks_for_the_faces_in_vehicle_terms() {
+        let mut session = TestSession::new(SessionConfig { hold_samples: 300, ..SessionConfig::SIX_FACE }).unwrap();
+        let mut stream = Stream { state: 19 };
+        let mut asked = heapless::Vec::<&str, 6>::new();
+        while !session.progress().ready {
+            let next = session.guidance().next;
+            assert_eq!(session.guidance().basis, GuidanceBasis::Faces);
+            let _ = asked.push(next.vehicle_name().unwrap());
+            let p = pose(&mut session, &mut stream, next.unit());
+            assert_eq!(usize::from(p.faces_done), asked.len());
+            assert!(asked.len() <= 6);
+        }
+        let expected = ["level", "upside down", "nose up", "nose down", "left side down", "right side down"];
+        assert_eq!(asked.as_slice(), &expected);
+        let result = session.finish(rand_xoshiro::Xoshiro128PlusPlus::seed_from_u64(1)).unwrap();
+        let v = result.calibration.verdict;
+        assert!(v.pass(), "{v:?}");
+        assert_eq!(v.warnings.held, [false, false, false, false, false, false, true, true, true]);
+        assert_eq!(result.calibration.params.nonorth, [0.0; 3]);
+    }
+
+    #[test]
     fn a_bad_pose_can_be_removed() {
         let mut session = TestSession::new(config()).unwrap();
         let mut stream = Stream { state: 13 };
@@ -1378,9 +1498,11 @@ mod tests {
         for d in faces() {
             pose(&mut session, &mut stream, d);
         }
-        // Six poses cannot be fitted (fewer than nine): an error, poses kept.
+        // Six faces fit the biases and scale factors only: the guided mode wants them all.
         let e = session.finish(rand_xoshiro::Xoshiro128PlusPlus::seed_from_u64(1)).unwrap_err();
-        assert!(matches!(e, SessionError::Calibration(_)), "{e:?}");
+        let SessionError::Incomplete(warnings) = e else { panic!("{e:?}") };
+        assert_eq!(warnings.held, [false, false, false, false, false, false, true, true, true]);
+        assert_eq!(session.result(), None);
         assert_eq!(session.state(), State::Failed(e));
         assert_eq!(session.poses().len(), 6);
         // Capture resumes after a failed finish.

@@ -122,8 +122,9 @@ impl Default for NewtonConfig {
     }
 }
 
-fn check_input(x: &Deviation, poses: &[NormPose]) -> Result<(), SolveError> {
-    if poses.len() < PARAM_COUNT {
+/// At least one pose per free parameter, everything finite.
+fn check_input(x: &Deviation, poses: &[NormPose], held: &[bool; PARAM_COUNT]) -> Result<(), SolveError> {
+    if poses.len() < held.iter().filter(|&&h| !h).count() || poses.is_empty() {
         return Err(SolveError::TooFewPoses { got: poses.len() });
     }
     let poses_finite = poses.iter().all(|p| p.q.is_finite() && p.u.iter().all(|v| v.is_finite()));
@@ -201,7 +202,7 @@ pub fn levenberg_marquardt_holding(
     config: &LmConfig,
     held: &[bool; PARAM_COUNT],
 ) -> Result<SolveReport, SolveError> {
-    check_input(&x0, poses)?;
+    check_input(&x0, poses, held)?;
     let mut x = x0;
     let mut cost = objective(&x, poses);
     if !cost.is_finite() {
@@ -262,7 +263,7 @@ pub fn newton_holding(
     config: &NewtonConfig,
     held: &[bool; PARAM_COUNT],
 ) -> Result<SolveReport, SolveError> {
-    check_input(&x0, poses)?;
+    check_input(&x0, poses, held)?;
     let mut x = x0;
     for iteration in 1..=config.max_iterations {
         let mut hessian = [[0.0; PARAM_COUNT]; PARAM_COUNT];

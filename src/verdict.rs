@@ -171,28 +171,32 @@ fn error_variance(x: &Deviation, frame: &Frame, pose: &Pose, norm: &NormPose) ->
 }
 
 /// Information matrix `sum g g^T / var(E)` of the deviation vector, with each pose's noise from its
-/// variance, or (poses without variance) the residual variance `sum E^2 / (N - 9)` for all; with
-/// `inflate`, every variance is scaled up by the reduced chi-square when that exceeds 1 (the residuals
-/// are larger than the noise: the uncertainty of an estimate that is not yet the optimum).
+/// variance, or (poses without variance) the residual variance `sum E^2 / (N - p)` for all, `p` the
+/// number of parameters not in `held`; with `inflate`, every variance is scaled up by the reduced
+/// chi-square when that exceeds 1 (the residuals are larger than the noise: the uncertainty of an
+/// estimate that is not yet the optimum). `None` with fewer poses than free parameters (or no more,
+/// when the residuals must give the noise).
 pub fn information_matrix(
     x: &Deviation,
     frame: &Frame,
     set: &PoseSet<'_>,
+    held: &[bool; PARAM_COUNT],
     inflate: bool,
 ) -> Option<Matrix<PARAM_COUNT>> {
     let n = set.len();
-    if n < PARAM_COUNT {
+    let free = held.iter().filter(|&&h| !h).count();
+    if n < free || n == 0 {
         return None;
     }
     let all_noisy = set.pairs().all(|(p, m)| error_variance(x, frame, p, m).is_some());
-    let dof = n.saturating_sub(PARAM_COUNT).max(1) as f32;
+    let dof = n.saturating_sub(free).max(1) as f32;
     let scale = if !all_noisy {
-        if n == PARAM_COUNT {
+        if n == free {
             return None;
         }
         let sum: f32 = set.norm.iter().map(|m| crate::model::square(crate::frame::modulus_error(x, m))).sum();
         (sum / dof).max(f32::MIN_POSITIVE)
-    } else if inflate {
+    } else if inflate && n > free {
         let chi2: f32 = set
             .pairs()
             .filter_map(|(p, m)| {
@@ -225,7 +229,7 @@ pub fn deviation_covariance(
     set: &PoseSet<'_>,
     held: &[bool; PARAM_COUNT],
 ) -> Option<Matrix<PARAM_COUNT>> {
-    covariance_holding(information_matrix(x, frame, set, false)?, held)
+    covariance_holding(information_matrix(x, frame, set, held, false)?, held)
 }
 
 /// Inverse of `info` with the `held` rows and columns replaced by the identity, then zeroed.
@@ -277,7 +281,7 @@ pub fn parameters_to_hold(
 ) -> [bool; PARAM_COUNT] {
     let structural = undetermined_parameters(x, set.norm);
     let mut held: [bool; PARAM_COUNT] = core::array::from_fn(|i| held[i] || structural[i]);
-    let Some(info) = information_matrix(x, frame, set, false) else { return held };
+    let Some(info) = information_matrix(x, frame, set, &held, false) else { return held };
     while let Some(cov) = covariance_holding(info, &held) {
         let worst = (0..PARAM_COUNT)
             .filter(|&i| !held[i])

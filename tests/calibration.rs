@@ -141,12 +141,15 @@ fn lm_from_the_coarse_start_reaches_the_optimum_it_reaches_from_the_truth() {
 fn too_few_poses_and_missing_axes_are_typed_errors() {
     use accelcal::calibrate::CalibrationError;
     use accelcal::coarse::CoarseError;
-    use accelcal::solve::SolveError;
     let all = poses(&PAPER_TRUTH, &cube_directions(26), 1.0, 0.0);
     let rng = || Xoshiro128PlusPlus::seed_from_u64(1);
-    // Six faces only: coarse works, but 6 < 9 poses.
-    let r = calibrate::<_, 40, 32>(&all[..6], &config(Method::TagaLm), rng());
-    assert_eq!(r.err(), Some(CalibrationError::Solve(SolveError::TooFewPoses { got: 6 })));
+    // Six faces only: six poses fit the biases and scale factors; the non-orthogonality is held.
+    let cal = calibrate::<_, 40, 32>(&all[..6], &config(Method::TagaLm), rng()).unwrap();
+    assert_eq!(cal.verdict.warnings.held, [false, false, false, false, false, false, true, true, true]);
+    // Five poses: too few for even that.
+    let r = calibrate::<_, 40, 32>(&all[..5], &config(Method::TagaLm), rng());
+    let too_few = accelcal::ellipsoid::EllipsoidError::TooFewPoses { got: 5 };
+    assert_eq!(r.err(), Some(CalibrationError::Init(InitError::Ellipsoid(too_few))));
     // No pose with z down: the paper's six-position start refuses, the ellipsoid start needs no face.
     let no_z_down: Vec<Pose> = all.iter().copied().filter(|p| p.mean[2] > -9.0).collect();
     let six = CalibrationConfig { init: Init::SixPosition, ..config(Method::Lm) };

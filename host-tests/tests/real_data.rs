@@ -599,7 +599,11 @@ fn unusable_sets_read_and_are_refused() {
     assert_eq!(poses.len(), 6);
     let config = CalibrationConfig { gravity: 1.0, before: Some(Params::IDENTITY), ..CalibrationConfig::DEFAULT };
     let result = calibrate::<_, 40, 512>(&poses, &config, Xoshiro128PlusPlus::seed_from_u64(1));
-    assert!(result.is_err(), "6 poses cannot determine 9 parameters");
+    // Six faces: the biases and scale factors (as ArduPilot and PX4 fit them); the non-orthogonality
+    // is invisible to them and held at 0, said so.
+    let cal = result.expect("six faces fit six parameters");
+    assert_eq!(cal.verdict.warnings.held, [false, false, false, false, false, false, true, true, true]);
+    assert!(cal.verdict.rmse_after_mg < cal.verdict.rmse_before_mg, "{:?}", cal.verdict);
 
     // Raw z-up log: a title line, then a header with two names run together ("time (s)x (g)").
     // The title is skipped as a preamble; the columns must be given by index.
