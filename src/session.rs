@@ -273,6 +273,24 @@ impl SessionConfig {
         duplicate_angle_deg: 10.0,
     };
 
+    /// The defaults for a sensor read at `sample_rate_hz`: a pose held `hold_s` seconds before the
+    /// session says [`State::MoveOn`], and still intervals shorter than `min_still_s` seconds not kept
+    /// (both rounded to samples, at least one). The defaults are 5 s and 0.5 s at 200 Hz.
+    pub fn at_rate(sample_rate_hz: f32, hold_s: f32, min_still_s: f32) -> Self {
+        let samples = |s: f32| {
+            let n = libm::roundf(s * sample_rate_hz);
+            if n >= 1.0 && n < u32::MAX as f32 {
+                n as u32
+            } else if n >= 1.0 {
+                u32::MAX
+            } else {
+                1
+            }
+        };
+        let accumulator = AccumulatorConfig { min_pose_samples: samples(min_still_s), ..AccumulatorConfig::DEFAULT };
+        Self { accumulator, hold_samples: samples(hold_s), ..Self::DEFAULT }
+    }
+
     /// The six-face quick mode ([`Mode::SixFace`]) with the other defaults (6 poses at least).
     pub const SIX_FACE: Self = Self { mode: Mode::SixFace, min_poses: 6, ..Self::DEFAULT };
 
@@ -1264,6 +1282,19 @@ mod tests {
         assert_eq!(CubeDirection::new([1, 0, -1]).unwrap().to_string(), "edge +x-z");
         assert_eq!(CubeDirection::new([0, 0, 0]), None);
         assert_eq!(CubeDirection::new([2, 0, 0]), None);
+    }
+
+    #[test]
+    fn configuration_in_seconds_at_a_sample_rate() {
+        let c = SessionConfig::at_rate(200.0, 5.0, 0.5);
+        assert_eq!((c.hold_samples, c.accumulator.min_pose_samples), (1000, 100));
+        assert_eq!(c, SessionConfig::DEFAULT);
+        let c = SessionConfig::at_rate(1000.0, 2.0, 0.25);
+        assert_eq!((c.hold_samples, c.accumulator.min_pose_samples), (2000, 250));
+        // Nonsense rounds to a valid count or is refused by `new`.
+        let c = SessionConfig::at_rate(f32::NAN, 2.0, 0.25);
+        assert_eq!((c.hold_samples, c.accumulator.min_pose_samples), (1, 1));
+        assert_eq!(TestSession::new(c).err(), Some(SessionError::InvalidConfig));
     }
 
     #[test]

@@ -115,7 +115,8 @@ fn capture(session: &mut Guided, hand: &mut Hand, up: [f32; 3], out: &mut dyn Fn
 /// Runs the guided scenario, writes the report to `out`; `true` when it went as described above.
 pub fn run(out: &mut dyn FnMut(fmt::Arguments<'_>)) -> bool {
     let calibration = CalibrationConfig { bounds: BOUNDS, ..CalibrationConfig::DEFAULT };
-    let config = SessionConfig { calibration, hold_samples: 400, min_poses: 9, ..SessionConfig::DEFAULT };
+    // 200 Hz, a pose held 2 s, still intervals under 0.5 s not kept.
+    let config = SessionConfig { calibration, min_poses: 9, ..SessionConfig::at_rate(200.0, 2.0, 0.5) };
     let Ok(mut session) = Guided::new(config) else {
         out(format_args!("error: guided: session configuration"));
         return false;
