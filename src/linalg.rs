@@ -69,7 +69,7 @@ pub fn solve_lu<const N: usize>(mut a: Matrix<N>, mut b: [f32; N]) -> Result<[f3
 pub fn cholesky<const N: usize>(a: &Matrix<N>) -> Result<Matrix<N>, LinalgError> {
     let mut l = [[0.0; N]; N];
     for i in 0..N {
-        for j in 0..=i {
+        for j in 0..i + 1 {
             let mut s = a[i][j];
             for k in 0..j {
                 s -= l[i][k] * l[j][k];

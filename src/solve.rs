@@ -141,7 +141,7 @@ fn normal_equations(x: &Deviation, poses: &[NormPose]) -> (Matrix<PARAM_COUNT>, 
         let (e, g) = modulus_error_gradient(x, pose);
         for i in 0..PARAM_COUNT {
             jte[i] += g[i] * e;
-            for j in 0..=i {
+            for j in 0..i + 1 {
                 jtj[i][j] += g[i] * g[j];
             }
         }
@@ -235,7 +235,7 @@ pub fn newton(x0: Deviation, poses: &[NormPose], config: &NewtonConfig) -> Resul
             let jr = residual_jacobian(pose.u);
             for i in 0..PARAM_COUNT {
                 gradient[i] += e * g[i];
-                for j in 0..=i {
+                for j in 0..i + 1 {
                     let second: f32 = (0..3).map(|r| jr[r][i] * jr[r][j]).sum();
                     hessian[i][j] += g[i] * g[j] + 2.0 * e * second;
                 }
