@@ -465,8 +465,7 @@ impl<R: Reading> Sums<R> {
     }
 
     fn pose(&self) -> Pose {
-        let mut pose =
-            Pose { n: self.n, start_index: self.start_index, end_index: self.end_index, ..Pose::default() };
+        let mut pose = Pose { n: self.n, start_index: self.start_index, end_index: self.end_index, ..Pose::default() };
         for a in 0..3 {
             (pose.mean[a], pose.variance[a]) =
                 R::mean_and_variance(self.reference[a], self.sum[a], self.sum_sq[a], self.n);
@@ -762,7 +761,9 @@ mod tests {
 
     #[test]
     fn ratios_are_rounded_once() {
-        for (total, n) in [(0i64, 1u32), (-3, 7), (1, 3), (2, 3), (-(1 << 46), 1 << 31), (123_456_789_012, 4_000_000_000)] {
+        for (total, n) in
+            [(0i64, 1u32), (-3, 7), (1, 3), (2, 3), (-(1 << 46), 1 << 31), (123_456_789_012, 4_000_000_000)]
+        {
             let exact = total as f64 / f64::from(n);
             assert_eq!(ratio_to_f32(total, n), exact as f32, "{total} / {n}");
         }

@@ -292,7 +292,8 @@ mod tests {
             let mean = [32768.0 + 16000.0 * libm::cosf(t), -412.5 + 16000.0 * libm::sinf(t), 1903.25 + 37.3 * t];
             let pose = frame.normalize(mean);
             let u: [f64; 3] = core::array::from_fn(|i| {
-                (f64::from(mean[i]) - f64::from(frame.offset[i])) / (f64::from(frame.gain[i]) * f64::from(frame.gravity))
+                (f64::from(mean[i]) - f64::from(frame.offset[i]))
+                    / (f64::from(frame.gain[i]) * f64::from(frame.gravity))
             });
             let q = u[0] * u[0] + u[1] * u[1] + u[2] * u[2] - 1.0;
             for i in 0..3 {

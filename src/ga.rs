@@ -579,9 +579,12 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
     }
 
     fn mutate(&mut self, i: usize, d: usize, spread: &[f32; DIM]) {
-        let (Some(&gene), Some(&lo), Some(&hi), Some(&width)) =
-            (self.offspring.get(i).and_then(|x| x.get(d)), self.bounds.lower.get(d), self.bounds.upper.get(d), spread.get(d))
-        else {
+        let (Some(&gene), Some(&lo), Some(&hi), Some(&width)) = (
+            self.offspring.get(i).and_then(|x| x.get(d)),
+            self.bounds.lower.get(d),
+            self.bounds.upper.get(d),
+            spread.get(d),
+        ) else {
             return;
         };
         let step = if self.uniform() < self.config.global_mutation {
@@ -620,7 +623,8 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
             let mean = self.population.iter().map(|x| x[d]).sum::<f32>() / POP as f32;
             let var = self.population.iter().map(|x| (x[d] - mean) * (x[d] - mean)).sum::<f32>() / POP as f32;
             let floor = self.config.mutation_floor * (self.bounds.upper[d] - self.bounds.lower[d]);
-            out[d] = (LOCAL_STEP * libm::sqrtf(var)).max(floor);
+            let width = LOCAL_STEP * crate::linalg::sqrt_f32(var);
+            out[d] = if width > floor { width } else { floor };
         }
         out
     }
