@@ -288,7 +288,8 @@ pub fn parameters_to_hold(
             .map(|i| (i, libm::sqrtf(cov[i][i].max(0.0)) / HOLD_STD[i]))
             .fold(None, |a: Option<(usize, f32)>, b| if a.is_none_or(|a| !(b.1 <= a.1)) { Some(b) } else { a });
         match worst {
-            Some((i, ratio)) if !(ratio <= 1.0) => held[i] = true,
+            // (`i < PARAM_COUNT` always; said so the bounds check goes.)
+            Some((i, ratio)) if !(ratio <= 1.0) && i < PARAM_COUNT => held[i] = true,
             _ => break,
         }
     }
