@@ -215,6 +215,10 @@ pub struct Calibration {
     pub evaluations: u32,
     /// Newton or LM iterations (0 for TAGA alone).
     pub iterations: u32,
+    /// Why the GA stopped (`None` without GA).
+    pub ga_termination: Option<crate::ga::Termination>,
+    /// Why Newton or LM stopped (`None` for TAGA alone).
+    pub solver_termination: Option<SolveTermination>,
     /// The verdict.
     pub verdict: Verdict,
 }
@@ -292,87 +296,228 @@ fn run_ga<R: Rng, const POP: usize>(
 }
 
 /// What the optimiser did.
+#[derive(Clone, Copy)]
 struct Optimised {
     x: Deviation,
     generations: u32,
     evaluations: u32,
     iterations: u32,
-    converged: bool,
+    ga_termination: Option<crate::ga::Termination>,
+    solver_termination: Option<SolveTermination>,
 }
 
-/// Runs `config.method` from `start` with the `held` parameters fixed.
-fn optimise<R: Rng, const POP: usize>(
+impl Optimised {
+    /// Nothing run yet: the start.
+    fn at(x: Deviation) -> Self {
+        Self { x, generations: 0, evaluations: 0, iterations: 0, ga_termination: None, solver_termination: None }
+    }
+
+    fn from_ga(report: &crate::ga::GaReport<PARAM_COUNT>) -> Self {
+        let ga_termination = Some(report.termination);
+        Self {
+            x: report.best,
+            generations: report.generations,
+            evaluations: report.evaluations,
+            ga_termination,
+            ..Self::at(report.best)
+        }
+    }
+
+    /// Newton or LM from `self.x` (a GA's best, or the start) ran and gave `r`.
+    fn polished(self, r: crate::solve::SolveReport) -> Self {
+        Self { x: r.x, iterations: r.iterations, solver_termination: Some(r.termination), ..self }
+    }
+}
+
+/// The problem every optimiser solves: the poses normalised in the frame of the initial estimate, the
+/// parameters held at nominal, and the start (held parameters at 0).
+pub struct Prepared<const MAX_POSES: usize> {
+    normalized: NormalizedPoses<MAX_POSES>,
+    held: [bool; PARAM_COUNT],
     start: Deviation,
-    problem: (&Frame, &PoseSet<'_>),
-    held: &[bool; PARAM_COUNT],
-    config: &CalibrationConfig,
-    rng: R,
-) -> Result<Optimised, CalibrationError> {
-    let (frame, set) = problem;
-    let norm = set.norm;
-    let solved = |r: crate::solve::SolveReport, generations, evaluations| Optimised {
-        x: r.x,
-        generations,
-        evaluations,
-        iterations: r.iterations,
-        converged: r.termination != SolveTermination::MaxIterations,
-    };
-    Ok(match config.method {
-        Method::Newton => solved(newton_holding(start, norm, &config.newton, held)?, 0, 0),
-        Method::Lm => solved(levenberg_marquardt_holding(start, norm, &config.lm, held)?, 0, 0),
-        Method::Taga | Method::TagaLm => {
-            let bounds = search_box(&config.intervals, &start, frame, set, held)?;
-            let report = run_ga::<R, POP>(norm, &start, bounds, config.ga, rng)?;
-            if config.method == Method::Taga {
-                let (generations, evaluations) = (report.generations, report.evaluations);
-                Optimised { x: report.best, generations, evaluations, iterations: 0, converged: true }
-            } else {
-                let r = levenberg_marquardt_holding(report.best, norm, &config.lm, held)?;
-                solved(r, report.generations, report.evaluations)
+}
+
+impl<const MAX_POSES: usize> Prepared<MAX_POSES> {
+    /// The initial estimate ([`CalibrationConfig::init`]), the parameters to hold, the start.
+    pub fn new(poses: &[Pose], config: &CalibrationConfig) -> Result<Self, CalibrationError> {
+        let normalized = NormalizedPoses::<MAX_POSES>::prepare(poses, config.init, config.gravity, &config.outliers)?;
+        let set = normalized.pose_set(poses);
+        let held = parameters_to_hold(&normalized.start(), normalized.frame(), &set, normalized.initial().held);
+        // One pose per parameter fitted (six faces fit the biases and scale factors).
+        let norm = normalized.poses();
+        if norm.len() < held.iter().filter(|&&h| !h).count() {
+            return Err(SolveError::TooFewPoses { got: norm.len() }.into());
+        }
+        let mut start = normalized.start();
+        for i in 0..PARAM_COUNT {
+            if held[i] {
+                start[i] = 0.0;
             }
         }
-    })
+        Ok(Self { normalized, held, start })
+    }
+
+    /// The normalised poses used.
+    pub fn poses(&self) -> &[NormPose] {
+        self.normalized.poses()
+    }
+
+    /// The GA's search box ([`search_box`]).
+    fn search_box(&self, poses: &[Pose], config: &CalibrationConfig) -> Result<SearchBox<PARAM_COUNT>, GaError> {
+        search_box(
+            &config.intervals,
+            &self.start,
+            self.normalized.frame(),
+            &self.normalized.pose_set(poses),
+            &self.held,
+        )
+    }
+
+    /// Newton or LM (per `config.method`; LM for TAGA+LM) from `run.x`.
+    fn polish(&self, run: Optimised, config: &CalibrationConfig) -> Result<Optimised, CalibrationError> {
+        let norm = self.poses();
+        let r = match config.method {
+            Method::Newton => newton_holding(run.x, norm, &config.newton, &self.held)?,
+            _ => levenberg_marquardt_holding(run.x, norm, &config.lm, &self.held)?,
+        };
+        Ok(run.polished(r))
+    }
+
+    /// The calibration at the optimiser's result: held parameters exactly at nominal, the verdict.
+    fn conclude(&self, poses: &[Pose], run: &Optimised, config: &CalibrationConfig) -> Calibration {
+        let frame = self.normalized.frame();
+        let set = self.normalized.pose_set(poses);
+        let initial = *self.normalized.initial();
+        // The GA moves held genes within its smallest interval; they are held exactly.
+        let x: Deviation = core::array::from_fn(|i| if self.held[i] { self.start[i] } else { run.x[i] });
+        let before = config.before.unwrap_or_else(|| frame.to_params(&[0.0; PARAM_COUNT]));
+        let warnings = Warnings { held: self.held, excluded: initial.excluded };
+        let mut verdict = judge(&x, frame, &set, &before, &config.bounds, warnings);
+        verdict.failures.not_converged = run.solver_termination == Some(SolveTermination::MaxIterations);
+        Calibration {
+            params: frame.to_params(&x),
+            initial,
+            method: config.method,
+            objective: objective_value(&x, set.norm, config.gravity),
+            generations: run.generations,
+            evaluations: run.evaluations,
+            iterations: run.iterations,
+            ga_termination: run.ga_termination,
+            solver_termination: run.solver_termination,
+            verdict,
+        }
+    }
 }
 
-/// Calibrates from captured poses with a GA population of `POP` and room for `MAX_POSES` poses.
+/// Calibrates from captured poses with a GA population of `POP` and room for `MAX_POSES` poses, in one
+/// call (see [`Calibrator`] for the same in bounded steps).
 pub fn calibrate<R: Rng, const POP: usize, const MAX_POSES: usize>(
     poses: &[Pose],
     config: &CalibrationConfig,
     rng: R,
 ) -> Result<Calibration, CalibrationError> {
-    let normalized = NormalizedPoses::<MAX_POSES>::prepare(poses, config.init, config.gravity, &config.outliers)?;
-    let norm = normalized.poses();
-    let frame = *normalized.frame();
-    let set = PoseSet { poses, norm, source: normalized.source() };
-    let initial = *normalized.initial();
-    let held = parameters_to_hold(&normalized.start(), &frame, &set, initial.held);
-    // One pose per parameter fitted (six faces fit the biases and scale factors).
-    if norm.len() < held.iter().filter(|&&h| !h).count() {
-        return Err(SolveError::TooFewPoses { got: norm.len() }.into());
-    }
-    let mut start = normalized.start();
-    for i in 0..PARAM_COUNT {
-        if held[i] {
-            start[i] = 0.0;
+    let prepared = Prepared::<MAX_POSES>::new(poses, config)?;
+    let start = Optimised::at(prepared.start);
+    let run = match config.method {
+        Method::Newton | Method::Lm => prepared.polish(start, config)?,
+        Method::Taga | Method::TagaLm => {
+            let bounds = prepared.search_box(poses, config)?;
+            let report = run_ga::<R, POP>(prepared.poses(), &prepared.start, bounds, config.ga, rng)?;
+            let ga = Optimised::from_ga(&report);
+            if config.method == Method::Taga { ga } else { prepared.polish(ga, config)? }
         }
+    };
+    Ok(prepared.conclude(poses, &run, config))
+}
+
+/// What one [`Calibrator::step`] did.
+// No allocator to box the calibration in, and it is returned once: the size difference is the point.
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Step {
+    /// One GA generation ran; call again.
+    Running {
+        /// Generations run so far.
+        generation: u32,
+    },
+    /// The calibration is finished (the polish and the verdict ran in this step).
+    Finished(Calibration),
+}
+
+/// [`calibrate`] in bounded steps, to run beside a control loop or in an async task: [`Calibrator::new`]
+/// makes the initial estimate and the first population, each [`Calibrator::step`] runs one GA
+/// generation (about 60 k cycles on a Cortex-M4F at population 40 and 24 poses), and the last step
+/// polishes (LM, some 100 k cycles) and judges. The same seeds give the same result as [`calibrate`].
+///
+/// ```
+/// use accelcal::accumulator::Pose;
+/// use accelcal::calibrate::{calibrate, CalibrationConfig, Calibrator, DefaultRng, Step};
+/// use accelcal::model::Params;
+/// use rand_core::SeedableRng;
+/// let truth = Params { bias: [0.1, -0.2, 0.05], scale: [0.98, 1.01, 1.0], nonorth: [0.01, -0.01, 0.005] };
+/// let dirs = [[0.3f32, 0.9, 0.3], [-0.8, 0.5, 0.33], [0.1, -0.7, 0.7], [0.6, 0.0, -0.8], [-0.2, -0.3, -0.93],
+///     [0.9, -0.4, 0.17], [-0.5, -0.8, 0.33], [0.0, 0.6, -0.8], [-0.7, 0.1, -0.7], [0.57, 0.57, 0.57]];
+/// let poses = dirs.map(|d| {
+///     let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+///     Pose::from_mean(truth.invert(d.map(|v| v / n * 9.80665)).unwrap(), 500)
+/// });
+/// let config = CalibrationConfig::DEFAULT;
+/// let mut calibrator = Calibrator::<_, 40, 16>::new(&poses, &config, DefaultRng::seed_from_u64(3)).unwrap();
+/// let stepped = loop {
+///     match calibrator.step(&poses).unwrap() {
+///         Step::Running { .. } => continue, // other work here
+///         Step::Finished(cal) => break cal,
+///     }
+/// };
+/// let at_once = calibrate::<_, 40, 16>(&poses, &config, DefaultRng::seed_from_u64(3)).unwrap();
+/// assert_eq!(stepped, at_once);
+/// ```
+pub struct Calibrator<R, const POP: usize, const MAX_POSES: usize> {
+    config: CalibrationConfig,
+    prepared: Prepared<MAX_POSES>,
+    /// The GA, for the GA methods.
+    ga: Option<Ga<R, POP, PARAM_COUNT>>,
+}
+
+impl<R: Rng, const POP: usize, const MAX_POSES: usize> Calibrator<R, POP, MAX_POSES> {
+    /// The initial estimate, the held parameters and (for the GA methods) the first population.
+    pub fn new(poses: &[Pose], config: &CalibrationConfig, rng: R) -> Result<Self, CalibrationError> {
+        let prepared = Prepared::<MAX_POSES>::new(poses, config)?;
+        let ga = match config.method {
+            Method::Newton | Method::Lm => None,
+            Method::Taga | Method::TagaLm => {
+                let mut ga = Ga::empty(config.ga, prepared.search_box(poses, config)?, rng);
+                seed_population(&mut ga, prepared.poses(), &prepared.start)?;
+                Some(ga)
+            }
+        };
+        Ok(Self { config: *config, prepared, ga })
     }
-    let run = optimise::<R, POP>(start, (&frame, &set), &held, config, rng)?;
-    // The GA moves held genes within its smallest interval; they are held exactly.
-    let x: Deviation = core::array::from_fn(|i| if held[i] { start[i] } else { run.x[i] });
-    let before = config.before.unwrap_or_else(|| frame.to_params(&[0.0; PARAM_COUNT]));
-    let warnings = Warnings { held, excluded: initial.excluded };
-    let mut verdict = judge(&x, &frame, &set, &before, &config.bounds, warnings);
-    verdict.failures.not_converged = !run.converged;
-    Ok(Calibration {
-        params: frame.to_params(&x),
-        initial,
-        method: config.method,
-        objective: objective_value(&x, norm, config.gravity),
-        generations: run.generations,
-        evaluations: run.evaluations,
-        iterations: run.iterations,
-        verdict,
-    })
+
+    /// One bounded step on the same `poses` as [`Calibrator::new`]: a GA generation while the GA runs,
+    /// then the polish and the verdict.
+    pub fn step(&mut self, poses: &[Pose]) -> Result<Step, CalibrationError> {
+        let norm = self.prepared.poses();
+        let mut run = Optimised::at(self.prepared.start);
+        if let Some(ga) = self.ga.as_mut() {
+            let Some(termination) = ga.termination() else {
+                ga.step(&|x: &Deviation| objective(x, norm));
+                return Ok(Step::Running { generation: ga.generation() });
+            };
+            run = Optimised {
+                x: *ga.best(),
+                generations: ga.generation(),
+                evaluations: ga.evaluations(),
+                ga_termination: Some(termination),
+                ..run
+            };
+        }
+        if self.config.method != Method::Taga {
+            run = self.prepared.polish(run, &self.config)?;
+        }
+        Ok(Step::Finished(self.prepared.conclude(poses, &run, &self.config)))
+    }
 }
 
 /// The paper's objective `fE` (output unit to the fourth) at `x`. The per-pose errors are accurate to
