@@ -894,32 +894,43 @@ impl<const POSES: usize, const BLOCK: usize, const POP: usize> Session<i16, POSE
     ) -> Result<SessionResult, RunError<S::Error>> {
         let mut consecutive_errors = 0u32;
         for _ in 0..limits.max_samples {
-            let progress = match sensor.read_raw() {
-                Ok(sample) => {
-                    consecutive_errors = 0;
-                    match self.push(sample) {
-                        Ok(progress) => progress,
-                        Err(SessionError::Accumulator(AccumulatorError::Full)) => break,
-                        Err(e) => return Err(e.into()),
-                    }
-                }
-                Err(e) => {
-                    consecutive_errors = consecutive_errors.saturating_add(1);
-                    let progress = self.read_failed(consecutive_errors)?;
-                    if consecutive_errors > limits.max_consecutive_errors {
-                        return Err(RunError::Sensor(e));
-                    }
-                    if self.sensor_errors > limits.max_read_errors {
-                        return Err(RunError::ReadErrorBudget(e));
-                    }
-                    progress
-                }
-            };
+            let Some(progress) = self.take_read(sensor.read_raw(), &mut consecutive_errors, limits)? else { break };
             if on_progress(&progress).is_break() {
                 break;
             }
         }
         Ok(self.finish(rng)?)
+    }
+
+    /// One read of a run: pushed (a failed read counted, see [`RunLimits`]); `None` when the pose
+    /// capacity is full (the run finishes).
+    pub(crate) fn take_read<E>(
+        &mut self,
+        read: Result<[i16; 3], E>,
+        consecutive_errors: &mut u32,
+        limits: &RunLimits,
+    ) -> Result<Option<Progress>, RunError<E>> {
+        match read {
+            Ok(sample) => {
+                *consecutive_errors = 0;
+                match self.push(sample) {
+                    Ok(progress) => Ok(Some(progress)),
+                    Err(SessionError::Accumulator(AccumulatorError::Full)) => Ok(None),
+                    Err(e) => Err(e.into()),
+                }
+            }
+            Err(e) => {
+                *consecutive_errors = consecutive_errors.saturating_add(1);
+                let progress = self.read_failed(*consecutive_errors)?;
+                if *consecutive_errors > limits.max_consecutive_errors {
+                    return Err(RunError::Sensor(e));
+                }
+                if self.sensor_errors > limits.max_read_errors {
+                    return Err(RunError::ReadErrorBudget(e));
+                }
+                Ok(Some(progress))
+            }
+        }
     }
 }
 
