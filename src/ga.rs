@@ -510,7 +510,8 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
                 (taken.get_mut(best), self.offspring.get_mut(e), elite_costs.get_mut(e), self.population.get(best))
             {
                 *flag = true;
-                *slot = *genes;
+                // `copy_from_slice` is a non-overlapping copy; an assignment here linked `memmove` (1.5 KB).
+                slot.copy_from_slice(genes);
                 *cost = self.costs[best];
             }
         }
@@ -550,7 +551,9 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
             }
         }
 
-        core::mem::swap(&mut self.population, &mut self.offspring);
+        // A copy, not a swap: every offspring slot is rewritten before it is read in the next generation,
+        // and a swap of two large arrays links a 1.5 KB `memmove`.
+        self.population = self.offspring;
         // Elites keep their costs; only offspring are evaluated.
         for i in 0..POP {
             self.costs[i] = if i < elites { elite_costs[i] } else { self.evaluate(cost, i) };
