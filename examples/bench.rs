@@ -149,7 +149,8 @@ mod firmware {
         let norm = normalized.poses();
         let config = CalibrationConfig::DEFAULT;
         let rng = Xoshiro128PlusPlus::seed_from_u64(GA_SEED);
-        let mut ga: Taga = match ga_solver(norm, &config.widths, config.ga, rng) {
+        let start = normalized.start();
+        let mut ga: Taga = match ga_solver(norm, &start, &accelcal::coarse::SearchWidths::DEFAULT, config.ga, rng) {
             Ok(ga) => ga,
             Err(_) => fail("ga"),
         };

@@ -189,6 +189,96 @@ pub fn spd_inverse<const N: usize>(a: &Matrix<N>) -> Result<Matrix<N>, LinalgErr
     Ok(inv)
 }
 
+/// Smallest share of a column's information not explained by the columns before it (the pivot of
+/// the Jacobi-scaled Cholesky factorisation) for it to count as determined.
+pub const DETERMINED_PIVOT: f32 = 1e-5;
+
+/// Columns of the symmetric matrix `a` that are (to f32 precision) combinations of the columns before
+/// them, taken in the order `order`: a Cholesky factorisation of the Jacobi-scaled `a` in that order,
+/// where a column whose remaining pivot is below `min_pivot` is flagged and then left out. Only the
+/// lower triangle (`a[i][j]`, `j <= i`) is read. A zero or non-finite diagonal is flagged too.
+pub fn weak_pivots<const N: usize>(a: &Matrix<N>, order: &[usize; N], min_pivot: f32) -> [bool; N] {
+    let entry = |i: usize, j: usize| a[i.max(j)][i.min(j)];
+    let mut weak = [false; N];
+    // l[p][q]: factor in permuted positions p, q.
+    let mut l = [[0.0f32; N]; N];
+    for p in 0..N {
+        let j = order[p];
+        if j >= N {
+            continue; // not a permutation of 0..N: ignored (and no bounds check below)
+        }
+        let diag = entry(j, j);
+        if !(diag > 0.0 && diag.is_finite()) {
+            weak[j] = true;
+            continue;
+        }
+        let mut pivot = 1.0;
+        for q in 0..p {
+            pivot -= l[p][q] * l[p][q];
+        }
+        if !(pivot > min_pivot) {
+            weak[j] = true;
+            continue;
+        }
+        let root = libm::sqrtf(pivot);
+        l[p][p] = root;
+        for r in p + 1..N {
+            let i = order[r];
+            if i >= N {
+                continue;
+            }
+            let di = entry(i, i);
+            if !(di > 0.0 && di.is_finite()) {
+                continue;
+            }
+            let mut s = entry(i, j) / libm::sqrtf(di * diag);
+            for q in 0..p {
+                s -= l[r][q] * l[p][q];
+            }
+            l[r][p] = s / root;
+        }
+    }
+    weak
+}
+
+/// Solves `a x = b` (`a` symmetric positive semi-definite, lower triangle read) with the entries of
+/// `x` flagged in `held` fixed at 0: their rows and columns are replaced by the identity.
+pub fn solve_spd_holding<const N: usize>(
+    a: &Matrix<N>,
+    b: &[f32; N],
+    held: &[bool; N],
+) -> Result<[f32; N], LinalgError> {
+    let mut m = [[0.0f32; N]; N];
+    let mut rhs = [0.0f32; N];
+    for i in 0..N {
+        for j in 0..=i {
+            let v = if held[i] || held[j] { if i == j { 1.0 } else { 0.0 } } else { a[i][j] };
+            m[i][j] = v;
+            m[j][i] = v;
+        }
+        rhs[i] = if held[i] { 0.0 } else { b[i] };
+    }
+    let mut d = [0.0f32; N];
+    for i in 0..N {
+        if !(m[i][i] > 0.0 && m[i][i].is_finite()) {
+            return Err(LinalgError::Singular);
+        }
+        d[i] = 1.0 / libm::sqrtf(m[i][i]);
+    }
+    for i in 0..N {
+        for j in 0..N {
+            m[i][j] *= d[i] * d[j];
+        }
+        rhs[i] *= d[i];
+    }
+    let y = cholesky_solve(&cholesky(&m)?, rhs);
+    let mut x = [0.0f32; N];
+    for i in 0..N {
+        x[i] = y[i] * d[i];
+    }
+    if x.iter().all(|v| v.is_finite()) { Ok(x) } else { Err(LinalgError::Singular) }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -122,8 +122,9 @@ impl Default for NewtonConfig {
     }
 }
 
-fn check_input(x: &Deviation, poses: &[NormPose]) -> Result<(), SolveError> {
-    if poses.len() < PARAM_COUNT {
+/// At least one pose per free parameter, everything finite.
+fn check_input(x: &Deviation, poses: &[NormPose], held: &[bool; PARAM_COUNT]) -> Result<(), SolveError> {
+    if poses.len() < held.iter().filter(|&&h| !h).count() || poses.is_empty() {
         return Err(SolveError::TooFewPoses { got: poses.len() });
     }
     let poses_finite = poses.iter().all(|p| p.q.is_finite() && p.u.iter().all(|v| v.is_finite()));
@@ -192,9 +193,34 @@ fn add(x: &Deviation, step: &Deviation) -> Deviation {
 ///
 /// Damped Gauss-Newton with Marquardt's diagonal scaling; the 9x9 system is solved by Cholesky on the
 /// stack. Stops on a small step, on no further decrease, or at `max_iterations`.
-#[inline(never)] // its frame need not merge with the caller's (peak stack on the device)
 pub fn levenberg_marquardt(x0: Deviation, poses: &[NormPose], config: &LmConfig) -> Result<SolveReport, SolveError> {
-    check_input(&x0, poses)?;
+    levenberg_marquardt_holding(x0, poses, config, &[false; PARAM_COUNT])
+}
+
+/// Holds the parameters flagged in `held` at their start values: their rows and columns of the
+/// normal equations become the identity and their right-hand side 0, so their step is 0.
+fn hold(jtj: &mut Matrix<PARAM_COUNT>, rhs: &mut Deviation, held: &[bool; PARAM_COUNT]) {
+    for i in 0..PARAM_COUNT {
+        for j in 0..PARAM_COUNT {
+            if held[i] || held[j] {
+                jtj[i][j] = if i == j { 1.0 } else { 0.0 };
+            }
+        }
+        if held[i] {
+            rhs[i] = 0.0;
+        }
+    }
+}
+
+/// [`levenberg_marquardt`] with the parameters flagged in `held` fixed at their values in `x0`.
+#[inline(never)] // its frame need not merge with the caller's (peak stack on the device)
+pub fn levenberg_marquardt_holding(
+    x0: Deviation,
+    poses: &[NormPose],
+    config: &LmConfig,
+    held: &[bool; PARAM_COUNT],
+) -> Result<SolveReport, SolveError> {
+    check_input(&x0, poses, held)?;
     let mut x = x0;
     let mut cost = objective(&x, poses);
     if !cost.is_finite() {
@@ -203,6 +229,7 @@ pub fn levenberg_marquardt(x0: Deviation, poses: &[NormPose], config: &LmConfig)
     let mut lambda = config.initial_damping;
     let (mut jtj, mut jte) = ([[0.0; PARAM_COUNT]; PARAM_COUNT], [0.0; PARAM_COUNT]);
     normal_equations(&x, poses, &mut jtj, &mut jte);
+    hold(&mut jtj, &mut jte, held);
     for iteration in 1..=config.max_iterations {
         let mut damped = jtj;
         for i in 0..PARAM_COUNT {
@@ -228,6 +255,7 @@ pub fn levenberg_marquardt(x0: Deviation, poses: &[NormPose], config: &LmConfig)
                 return Ok(SolveReport { x, cost, iterations: iteration, termination: SolveTermination::Converged });
             }
             normal_equations(&x, poses, &mut jtj, &mut jte);
+            hold(&mut jtj, &mut jte, held);
         } else {
             lambda *= 10.0;
             if lambda > 1e10 {
@@ -246,7 +274,17 @@ pub fn levenberg_marquardt(x0: Deviation, poses: &[NormPose], config: &LmConfig)
 /// The classical Newton iteration on `fE` (the paper's baseline): full Hessian
 /// `H = (2/N) sum(grad E grad E^T + 2 E Jr^T Jr)`, undamped step `H d = -grad fE`, no line search.
 pub fn newton(x0: Deviation, poses: &[NormPose], config: &NewtonConfig) -> Result<SolveReport, SolveError> {
-    check_input(&x0, poses)?;
+    newton_holding(x0, poses, config, &[false; PARAM_COUNT])
+}
+
+/// [`newton`] with the parameters flagged in `held` fixed at their values in `x0`.
+pub fn newton_holding(
+    x0: Deviation,
+    poses: &[NormPose],
+    config: &NewtonConfig,
+    held: &[bool; PARAM_COUNT],
+) -> Result<SolveReport, SolveError> {
+    check_input(&x0, poses, held)?;
     let mut x = x0;
     for iteration in 1..=config.max_iterations {
         let mut hessian = [[0.0; PARAM_COUNT]; PARAM_COUNT];
@@ -263,6 +301,7 @@ pub fn newton(x0: Deviation, poses: &[NormPose], config: &NewtonConfig) -> Resul
             }
         }
         symmetrize(&mut hessian);
+        hold(&mut hessian, &mut gradient, held);
         // The common factor 2/N cancels in H d = -g.
         let step = solve_lu(hessian, gradient.map(|v| -v)).map_err(|_| SolveError::Singular)?;
         x = add(&x, &step);
