@@ -269,7 +269,7 @@ pub fn search_box(
     let mut upper = *start;
     for i in 0..PARAM_COUNT {
         // A floor keeps the box valid where a parameter is held or determined exactly.
-        let half = (sigmas * libm::sqrtf(cov[i][i].max(0.0))).max(MIN_HALF_WIDTH);
+        let half = (sigmas * crate::linalg::sqrt_f32(cov[i][i].max(0.0))).max(MIN_HALF_WIDTH);
         lower[i] -= half;
         upper[i] += half;
     }

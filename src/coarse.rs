@@ -190,7 +190,7 @@ impl CoarseCalibration {
                 let half_range = 0.5 * (hi[a] - lo[a]);
                 normalized[a] = if half_range > 0.0 { (m[a] - 0.5 * (hi[a] + lo[a])) / half_range } else { 0.0 };
             }
-            let norm = libm::sqrtf(normalized.iter().map(|v| v * v).sum());
+            let norm = crate::linalg::sqrt_f32(normalized.iter().map(|v| v * v).sum());
             for a in 0..3 {
                 if norm > 0.0 && normalized[a].abs() >= DOMINANCE * norm {
                     let side = usize::from(normalized[a] < 0.0);

@@ -312,7 +312,7 @@ impl ModulusErrors<'_> {
     fn iter(&self) -> impl Iterator<Item = (usize, f32)> + '_ {
         self.means.iter().zip(self.keep).enumerate().filter(|(_, (_, k))| **k).map(|(i, (m, _))| {
             let f = self.params.apply(*m);
-            (i, libm::sqrtf(crate::model::norm_squared(f)) / self.gravity - 1.0)
+            (i, crate::linalg::sqrt_f32(crate::model::norm_squared(f)) / self.gravity - 1.0)
         })
     }
 
@@ -322,7 +322,7 @@ impl ModulusErrors<'_> {
 
     fn rms(&self) -> f32 {
         let (sum, n) = self.iter().fold((0.0f32, 0u32), |(s, n), (_, e)| (s + e * e, n + 1));
-        libm::sqrtf(sum / n.max(1) as f32)
+        crate::linalg::sqrt_f32(sum / n.max(1) as f32)
     }
 
     /// Lower median of `|e|` without a buffer: the smallest value with at least half the values at or
@@ -355,7 +355,7 @@ fn reference(means: &[[f32; 3]], keep: &[bool]) -> ([f32; 3], f32, usize) {
     for (m, _) in means.iter().zip(keep).filter(|(_, k)| **k) {
         spread += crate::model::norm_squared([m[0] - center[0], m[1] - center[1], m[2] - center[2]]);
     }
-    (center, libm::sqrtf(spread / n.max(1) as f32), n)
+    (center, crate::linalg::sqrt_f32(spread / n.max(1) as f32), n)
 }
 
 /// One least-squares fit of the quadric to the kept poses, factored into the model.
@@ -427,7 +427,7 @@ fn factor(theta: &[f32; COEFFS], m0: [f32; 3], s: f32, gravity: f32) -> Option<P
 }
 
 fn sqrt_positive(v: f32) -> Option<f32> {
-    (v > 0.0 && v.is_finite()).then(|| libm::sqrtf(v))
+    (v > 0.0 && v.is_finite()).then(|| crate::linalg::sqrt_f32(v))
 }
 
 /// Half-axes with no kept pose within 60 deg, seen from the per-axis mid-range of the readings
@@ -445,7 +445,7 @@ pub fn missing_directions(means: &[[f32; 3]], keep: &[bool]) -> Directions {
     let mut seen = 0u8;
     for (m, _) in means.iter().zip(keep).filter(|(_, k)| **k) {
         let u: [f32; 3] = core::array::from_fn(|a| (m[a] - 0.5 * (hi[a] + lo[a])) / half.max(f32::MIN_POSITIVE));
-        let norm = libm::sqrtf(crate::model::norm_squared(u));
+        let norm = crate::linalg::sqrt_f32(crate::model::norm_squared(u));
         for a in 0..3 {
             seen |= visited(u, norm, a);
         }

@@ -96,7 +96,7 @@ pub fn cholesky<const N: usize>(a: &Matrix<N>) -> Result<Matrix<N>, LinalgError>
                 if !(s > 0.0 && s.is_finite()) {
                     return Err(LinalgError::Singular);
                 }
-                l[i][i] = libm::sqrtf(s);
+                l[i][i] = sqrt_f32(s);
             } else {
                 l[i][j] = s / l[j][j];
             }
@@ -168,7 +168,7 @@ pub fn spd_inverse<const N: usize>(a: &Matrix<N>) -> Result<Matrix<N>, LinalgErr
         if !(a[i][i] > 0.0 && a[i][i].is_finite()) {
             return Err(LinalgError::Singular);
         }
-        d[i] = 1.0 / libm::sqrtf(a[i][i]);
+        d[i] = 1.0 / sqrt_f32(a[i][i]);
     }
     let mut scaled = [[0.0; N]; N];
     for i in 0..N {
@@ -220,7 +220,7 @@ pub fn weak_pivots<const N: usize>(a: &Matrix<N>, order: &[usize; N], min_pivot:
             weak[j] = true;
             continue;
         }
-        let root = libm::sqrtf(pivot);
+        let root = sqrt_f32(pivot);
         l[p][p] = root;
         for r in p + 1..N {
             let i = order[r];
@@ -231,7 +231,7 @@ pub fn weak_pivots<const N: usize>(a: &Matrix<N>, order: &[usize; N], min_pivot:
             if !(di > 0.0 && di.is_finite()) {
                 continue;
             }
-            let mut s = entry(i, j) / libm::sqrtf(di * diag);
+            let mut s = entry(i, j) / sqrt_f32(di * diag);
             for q in 0..p {
                 s -= l[r][q] * l[p][q];
             }
@@ -263,7 +263,7 @@ pub fn solve_spd_holding<const N: usize>(
         if !(m[i][i] > 0.0 && m[i][i].is_finite()) {
             return Err(LinalgError::Singular);
         }
-        d[i] = 1.0 / libm::sqrtf(m[i][i]);
+        d[i] = 1.0 / sqrt_f32(m[i][i]);
     }
     for i in 0..N {
         for j in 0..N {

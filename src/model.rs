@@ -127,8 +127,9 @@ pub fn modulus_rmse_mg(params: &Params, poses: &[[f32; 3]], gravity: f32) -> Opt
     if poses.is_empty() || !(gravity > 0.0) {
         return None;
     }
-    let sum: f32 = poses.iter().map(|&p| square(libm::sqrtf(norm_squared(params.apply(p))) - gravity)).sum();
-    Some(libm::sqrtf(sum / poses.len() as f32) / gravity * 1000.0)
+    let sum: f32 =
+        poses.iter().map(|&p| square(crate::linalg::sqrt_f32(norm_squared(params.apply(p))) - gravity)).sum();
+    Some(crate::linalg::sqrt_f32(sum / poses.len() as f32) / gravity * 1000.0)
 }
 
 #[cfg(test)]

@@ -971,7 +971,7 @@ const FACE_COS: f32 = 0.906;
 fn faces_done(poses: &[Pose]) -> u8 {
     let mut done = 0u8;
     for p in poses {
-        let norm = libm::sqrtf(dot3(p.mean, p.mean));
+        let norm = crate::linalg::sqrt_f32(dot3(p.mean, p.mean));
         for (i, face) in SIX_FACES.iter().enumerate() {
             if dot3(p.mean, face.unit()) >= FACE_COS * norm && norm > 0.0 {
                 done |= 1 << i;
@@ -983,7 +983,7 @@ fn faces_done(poses: &[Pose]) -> u8 {
 
 /// Zero offset and the mean reading magnitude (1 when there is none) as `g` on every axis.
 fn provisional_frame(poses: &[Pose], gravity: f32) -> Frame {
-    let sum: f32 = poses.iter().map(|p| libm::sqrtf(dot3(p.mean, p.mean))).sum();
+    let sum: f32 = poses.iter().map(|p| crate::linalg::sqrt_f32(dot3(p.mean, p.mean))).sum();
     let magnitude =
         if poses.is_empty() || !(sum > 0.0 && sum.is_finite()) { gravity } else { sum / poses.len() as f32 };
     let gain = magnitude / gravity;
@@ -994,14 +994,14 @@ fn provisional_frame(poses: &[Pose], gravity: f32) -> Frame {
 /// offsets are small against 1 g on the sensors the session serves).
 fn find_duplicate(poses: &[Pose], index: usize, min_cos: f32) -> Option<usize> {
     let new = poses.get(index)?.mean;
-    let new_norm = libm::sqrtf(dot3(new, new));
+    let new_norm = crate::linalg::sqrt_f32(dot3(new, new));
     let mut best: Option<(usize, f32)> = None;
     for (j, p) in poses.iter().enumerate() {
         if j == index {
             continue;
         }
         let d = p.mean;
-        let cos = dot3(new, d) / (new_norm * libm::sqrtf(dot3(d, d)));
+        let cos = dot3(new, d) / (new_norm * crate::linalg::sqrt_f32(dot3(d, d)));
         if cos >= min_cos && best.is_none_or(|(_, c)| cos > c) {
             best = Some((j, cos));
         }

@@ -285,7 +285,7 @@ pub fn parameters_to_hold(
     while let Some(cov) = covariance_holding(info, &held) {
         let worst = (0..PARAM_COUNT)
             .filter(|&i| !held[i])
-            .map(|i| (i, libm::sqrtf(cov[i][i].max(0.0)) / HOLD_STD[i]))
+            .map(|i| (i, crate::linalg::sqrt_f32(cov[i][i].max(0.0)) / HOLD_STD[i]))
             .fold(None, |a: Option<(usize, f32)>, b| if a.is_none_or(|a| !(b.1 <= a.1)) { Some(b) } else { a });
         match worst {
             // (`i < PARAM_COUNT` always; said so the bounds check goes.)
@@ -325,7 +325,7 @@ pub fn param_std(frame: &Frame, covariance: &Matrix<PARAM_COUNT>) -> [f32; PARAM
                 v += t[i][a] * covariance[a][b] * t[i][b];
             }
         }
-        *o = libm::sqrtf(v.max(0.0));
+        *o = crate::linalg::sqrt_f32(v.max(0.0));
     }
     out
 }
@@ -342,27 +342,27 @@ pub fn noise_floor_mg(x: &Deviation, frame: &Frame, set: &PoseSet<'_>, fitted: u
         sum += error_variance(x, frame, p, n)? / 4.0;
     }
     let n = set.len() as f32;
-    Some(libm::sqrtf(sum / n * (n - fitted as f32) / n) * 1000.0)
+    Some(crate::linalg::sqrt_f32(sum / n * (n - fitted as f32) / n) * 1000.0)
 }
 
 /// Modulus RMSE (mg) of the normalised poses at `x`, free of the cancellation of raw counts.
 fn rmse_normalised_mg(x: &Deviation, norm: &[NormPose]) -> f32 {
     let mut sum = 0.0;
     for n in norm {
-        let m = libm::sqrtf((1.0 + crate::frame::modulus_error(x, n)).max(0.0));
+        let m = crate::linalg::sqrt_f32((1.0 + crate::frame::modulus_error(x, n)).max(0.0));
         sum += crate::model::square(m - 1.0);
     }
-    if norm.is_empty() { f32::NAN } else { libm::sqrtf(sum / norm.len() as f32) * 1000.0 }
+    if norm.is_empty() { f32::NAN } else { crate::linalg::sqrt_f32(sum / norm.len() as f32) * 1000.0 }
 }
 
 /// Modulus RMSE (mg) of the poses used under `p`.
 fn rmse_mg(p: &Params, set: &PoseSet<'_>, g: f32) -> f32 {
     let mut sum = 0.0;
     for (pose, _) in set.pairs() {
-        let m = libm::sqrtf(crate::model::norm_squared(p.apply(pose.mean)));
+        let m = crate::linalg::sqrt_f32(crate::model::norm_squared(p.apply(pose.mean)));
         sum += crate::model::square(m - g);
     }
-    if set.is_empty() { f32::NAN } else { libm::sqrtf(sum / set.len() as f32) / g * 1000.0 }
+    if set.is_empty() { f32::NAN } else { crate::linalg::sqrt_f32(sum / set.len() as f32) / g * 1000.0 }
 }
 
 /// Judges `x` (deviation in `frame`) on the poses of `set` against `bounds`; `before` is the model the
