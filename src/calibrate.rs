@@ -27,6 +27,7 @@ use crate::solve::{LmConfig, NewtonConfig, SolveError, SolveTermination, levenbe
 use crate::verdict::{Verdict, VerdictBounds, judge, undetermined_parameters};
 
 /// The recommended seeded generator for the GA: 32-bit state arithmetic, fast on a Cortex-M4.
+#[cfg(feature = "default-rng")]
 pub type DefaultRng = rand_xoshiro::Xoshiro128PlusPlus;
 
 /// Which optimiser runs after the coarse calibration.

@@ -51,6 +51,8 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+#[cfg(feature = "accelerometer")]
+pub mod accelerometer;
 pub mod accumulator;
 pub mod blob;
 pub mod calibrate;
@@ -59,11 +61,23 @@ pub mod frame;
 pub mod ga;
 pub mod linalg;
 pub mod model;
+#[cfg(feature = "default-rng")]
+pub mod rng;
+#[cfg(feature = "mpu6050")]
 pub mod mpu6050;
 pub mod sensor;
 pub mod session;
 pub mod solve;
+#[cfg(feature = "storage")]
+pub mod storage;
 pub mod verdict;
+
+/// The random-number traits the GA is generic over, so that firmware needs no own dependency on them.
+pub use rand_core;
+#[cfg(feature = "default-rng")]
+pub use calibrate::DefaultRng;
+#[cfg(feature = "default-rng")]
+pub use rng::seeded_rng;
 
 /// The README's usage example, compiled as a doctest.
 #[cfg(doctest)]
