@@ -338,9 +338,11 @@ fn read_v2(bytes: &[u8]) -> Result<Blob, BlobError> {
     if flags & !(FLAG_SENSOR | FLAG_TEMPERATURE | FLAG_EFFECTS) != 0 || bytes[6..8] != [0, 0] {
         return Err(BlobError::ReservedBitsSet);
     }
-    for (flag, range) in
-        [(FLAG_SENSOR, AT_SENSOR..AT_TEMPERATURE), (FLAG_TEMPERATURE, AT_TEMPERATURE..AT_EFFECTS), (FLAG_EFFECTS, AT_EFFECTS..AT_CRC)]
-    {
+    for (flag, range) in [
+        (FLAG_SENSOR, AT_SENSOR..AT_TEMPERATURE),
+        (FLAG_TEMPERATURE, AT_TEMPERATURE..AT_EFFECTS),
+        (FLAG_EFFECTS, AT_EFFECTS..AT_CRC),
+    ] {
         if flags & flag == 0 && bytes[range].iter().any(|&b| b != 0) {
             return Err(BlobError::ReservedBitsSet);
         }

@@ -61,10 +61,10 @@ pub mod frame;
 pub mod ga;
 pub mod linalg;
 pub mod model;
-#[cfg(feature = "default-rng")]
-pub mod rng;
 #[cfg(feature = "mpu6050")]
 pub mod mpu6050;
+#[cfg(feature = "default-rng")]
+pub mod rng;
 pub mod sensor;
 pub mod session;
 pub mod solve;
@@ -72,10 +72,10 @@ pub mod solve;
 pub mod storage;
 pub mod verdict;
 
-/// The random-number traits the GA is generic over, so that firmware needs no own dependency on them.
-pub use rand_core;
 #[cfg(feature = "default-rng")]
 pub use calibrate::DefaultRng;
+/// The random-number traits the GA is generic over, so that firmware needs no own dependency on them.
+pub use rand_core;
 #[cfg(feature = "default-rng")]
 pub use rng::seeded_rng;
 

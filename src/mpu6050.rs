@@ -167,6 +167,13 @@ pub struct Mpu6050<I2C> {
     range: AccelRange,
 }
 
+#[cfg(feature = "defmt")]
+impl<I2C> defmt::Format for Mpu6050<I2C> {
+    fn format(&self, f: defmt::Formatter<'_>) {
+        defmt::write!(f, "Mpu6050 {{ address: {=u8:#04x}, range: {} }}", self.address, self.range)
+    }
+}
+
 impl<I2C: I2c> Mpu6050<I2C> {
     /// Takes the bus; talks to nothing until [`Mpu6050::init`]. The range is assumed to be the
     /// power-on [`AccelRange::G2`] until `init` writes it.

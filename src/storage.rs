@@ -95,6 +95,13 @@ pub struct CalibrationStore<F> {
     slot_len: u32,
 }
 
+#[cfg(feature = "defmt")]
+impl<F> defmt::Format for CalibrationStore<F> {
+    fn format(&self, f: defmt::Formatter<'_>) {
+        defmt::write!(f, "CalibrationStore {{ base: {=u32:#x}, slot_len: {=u32} }}", self.base, self.slot_len)
+    }
+}
+
 /// `true` when sequence `a` was written after `b` (serial-number arithmetic, wraps at `u32::MAX`).
 pub const fn is_newer(a: u32, b: u32) -> bool {
     (a.wrapping_sub(b) as i32) > 0
@@ -109,7 +116,12 @@ impl<F: NorFlash> CalibrationStore<F> {
         let (base, slot_len) = (base as usize, slot_len as usize);
         let end = slot_len.checked_mul(2).and_then(|two| two.checked_add(base));
         let fits = end.is_some_and(|end| end <= store.flash.capacity());
-        if F::ERASE_SIZE == 0 || base % F::ERASE_SIZE != 0 || slot_len % F::ERASE_SIZE != 0 || slot_len < padded || !fits {
+        if F::ERASE_SIZE == 0
+            || base % F::ERASE_SIZE != 0
+            || slot_len % F::ERASE_SIZE != 0
+            || slot_len < padded
+            || !fits
+        {
             return Err(StorageError::Geometry);
         }
         Ok(store)

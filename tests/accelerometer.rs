@@ -53,7 +53,16 @@ fn saturation_follows_the_raw_format() {
     let mpu_16g = RawFormat { full_scale_g: 16.0, ..RawFormat::MPU6050_2G };
     assert_eq!(mpu_16g.saturation_counts(), i16::MAX);
     assert_eq!(mpu_16g.lsb_per_g(), 2048.0);
-    assert_eq!(RawFormat { resolution_bits: 0, ..twelve_bit }.validate(), Err(accelcal::sensor::RawFormatError::Resolution));
-    assert_eq!(RawFormat { resolution_bits: 17, ..twelve_bit }.validate(), Err(accelcal::sensor::RawFormatError::Resolution));
-    assert_eq!(RawFormat { full_scale_g: f32::NAN, ..twelve_bit }.validate(), Err(accelcal::sensor::RawFormatError::FullScale));
+    assert_eq!(
+        RawFormat { resolution_bits: 0, ..twelve_bit }.validate(),
+        Err(accelcal::sensor::RawFormatError::Resolution)
+    );
+    assert_eq!(
+        RawFormat { resolution_bits: 17, ..twelve_bit }.validate(),
+        Err(accelcal::sensor::RawFormatError::Resolution)
+    );
+    assert_eq!(
+        RawFormat { full_scale_g: f32::NAN, ..twelve_bit }.validate(),
+        Err(accelcal::sensor::RawFormatError::FullScale)
+    );
 }

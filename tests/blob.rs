@@ -27,7 +27,11 @@ fn full_blob() -> Blob {
         gravity: G,
         sensor: Some(SensorSetup { full_scale_g: 4.0, lsb_per_g: 8192.0, sensor_id: 0x68 }),
         temperature_c: Some(23.5),
-        effects: Some(Effects { bias_per_c: [1e-3, -2e-3, 0.0], scale_per_c: [1e-4, 0.0, -1e-4], square: [0.0, 1e-5, 0.0] }),
+        effects: Some(Effects {
+            bias_per_c: [1e-3, -2e-3, 0.0],
+            scale_per_c: [1e-4, 0.0, -1e-4],
+            square: [0.0, 1e-5, 0.0],
+        }),
     }
 }
 
@@ -112,9 +116,12 @@ fn reserved_bits_and_absent_fields_must_be_zero() {
     }
 }
 
+/// A change to a blob that one check must refuse.
+type Edit = fn(&mut Blob);
+
 #[test]
 fn non_finite_values_name_their_field() {
-    let cases: [(fn(&mut Blob), Field); 10] = [
+    let cases: [(Edit, Field); 10] = [
         (|b| b.params.bias[1] = f32::NAN, Field::Bias),
         (|b| b.params.scale[2] = f32::INFINITY, Field::Scale),
         (|b| b.params.nonorth[0] = f32::NAN, Field::Nonorth),

@@ -3,7 +3,9 @@
 use accelcal::blob::Blob;
 use accelcal::model::Params;
 use accelcal::storage::{CalibrationStore, RECORD_LEN, StorageError};
-use embedded_storage::nor_flash::{ErrorType, NorFlash, NorFlashErrorKind, ReadNorFlash, check_erase, check_read, check_write};
+use embedded_storage::nor_flash::{
+    ErrorType, NorFlash, NorFlashErrorKind, ReadNorFlash, check_erase, check_read, check_write,
+};
 
 const SECTOR: usize = 256;
 const CAPACITY: usize = 4 * SECTOR;
