@@ -424,6 +424,6 @@ mod tests {
     #[test]
     fn layout_offsets_add_up() {
         assert_eq!(AT_CRC + 4, BLOB_LEN);
-        assert_eq!(BLOB_V1_LEN, 48);
+        assert_eq!(BLOB_V1_LEN, 52);
     }
 }

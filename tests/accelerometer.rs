@@ -66,3 +66,30 @@ fn saturation_follows_the_raw_format() {
         Err(accelcal::sensor::RawFormatError::FullScale)
     );
 }
+
+/// A 12-bit left-justified part held with x on its rail (2047 << 4, below the i16 limit): counted as
+/// saturated only when the accumulator is configured from the sensor's `RawFormat`.
+fn saturated_poses(config: accelcal::accumulator::AccumulatorConfig) -> (usize, u32) {
+    let mut acc: accelcal::accumulator::Accumulator<i16, 16, 32> =
+        accelcal::accumulator::Accumulator::new(config).unwrap();
+    let mut noise = 1u32;
+    for _ in 0..1500 {
+        noise = noise.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+        let step = ((noise >> 28) as i16 - 8) * 16; // +-8 steps of the 12-bit converter
+        acc.push([2047 << 4, 2000 + step, 3000 - step]).unwrap();
+    }
+    for i in 0..200 {
+        acc.push([30000 - i * 100, 2000 + i * 50, 3000]).unwrap();
+    }
+    acc.finish().unwrap();
+    (acc.poses().len(), acc.rejections().saturated)
+}
+
+#[test]
+fn accumulator_flags_saturation_at_the_format_rail() {
+    use accelcal::accumulator::AccumulatorConfig;
+    let twelve_bit = RawFormat { full_scale_g: 2.0, resolution_bits: 12, left_justified: true };
+    assert_eq!(saturated_poses(AccumulatorConfig::DEFAULT), (1, 0), "i16 limits only: the rail is a pose");
+    let config = AccumulatorConfig { full_scale: twelve_bit.accumulator_full_scale(), ..AccumulatorConfig::DEFAULT };
+    assert_eq!(saturated_poses(config), (0, 1));
+}
