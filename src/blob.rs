@@ -246,16 +246,20 @@ impl Blob {
 
     /// Reads a version 2 or version 1 blob and checks that it is a plausible calibration.
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, BlobError> {
-        let body_len = match bytes.len() {
-            BLOB_LEN => AT_CRC,
-            BLOB_V1_LEN => BLOB_V1_LEN - 4,
-            got => return Err(BlobError::WrongLength { got }),
-        };
-        check_frame(bytes, body_len)?;
-        let blob = match (bytes[4], bytes.len()) {
-            (1, BLOB_V1_LEN) => read_v1(bytes)?,
-            (VERSION, BLOB_LEN) => read_v2(bytes)?,
-            (found, _) => return Err(BlobError::UnsupportedVersion { found }),
+        let blob = if let Ok(v2) = <&[u8; BLOB_LEN]>::try_from(bytes) {
+            check_frame(v2)?;
+            match v2[4] {
+                VERSION => read_v2(v2)?,
+                found => return Err(BlobError::UnsupportedVersion { found }),
+            }
+        } else if let Ok(v1) = <&[u8; BLOB_V1_LEN]>::try_from(bytes) {
+            check_frame(v1)?;
+            match v1[4] {
+                1 => read_v1(v1)?,
+                found => return Err(BlobError::UnsupportedVersion { found }),
+            }
+        } else {
+            return Err(BlobError::WrongLength { got: bytes.len() });
         };
         blob.check()?;
         Ok(blob)
@@ -313,27 +317,27 @@ fn check_sensor(s: &SensorSetup, p: &Params, gravity: f32) -> Result<(), BlobErr
     }
 }
 
-/// Length, CRC and magic of a blob whose CRC follows its first `body_len` bytes.
-fn check_frame(bytes: &[u8], body_len: usize) -> Result<(), BlobError> {
-    let (body, crc) = bytes.split_at(body_len);
-    let stored = u32::from_le_bytes([crc[0], crc[1], crc[2], crc[3]]);
-    if crc32(body) != stored {
-        return Err(if body[..4] == MAGIC { BlobError::BadChecksum } else { BlobError::BadMagic });
+/// CRC and magic of a blob whose last 4 bytes are the CRC of the others.
+fn check_frame<const N: usize>(bytes: &[u8; N]) -> Result<(), BlobError> {
+    let Some((body, crc)) = bytes.split_last_chunk::<4>() else { return Err(BlobError::WrongLength { got: N }) };
+    let magic_ok = body.first_chunk::<4>() == Some(&MAGIC);
+    if crc32(body) != u32::from_le_bytes(*crc) {
+        return Err(if magic_ok { BlobError::BadChecksum } else { BlobError::BadMagic });
     }
-    if body[..4] != MAGIC {
+    if !magic_ok {
         return Err(BlobError::BadMagic);
     }
     Ok(())
 }
 
-fn read_v1(bytes: &[u8]) -> Result<Blob, BlobError> {
+fn read_v1(bytes: &[u8; BLOB_V1_LEN]) -> Result<Blob, BlobError> {
     if bytes[5..8] != [0, 0, 0] {
         return Err(BlobError::ReservedBitsSet);
     }
     Ok(Blob::new(read_params(bytes), read_f32(bytes, AT_GRAVITY)))
 }
 
-fn read_v2(bytes: &[u8]) -> Result<Blob, BlobError> {
+fn read_v2(bytes: &[u8; BLOB_LEN]) -> Result<Blob, BlobError> {
     let flags = bytes[5];
     if flags & !(FLAG_SENSOR | FLAG_TEMPERATURE | FLAG_EFFECTS) != 0 || bytes[6..8] != [0, 0] {
         return Err(BlobError::ReservedBitsSet);
@@ -343,7 +347,7 @@ fn read_v2(bytes: &[u8]) -> Result<Blob, BlobError> {
         (FLAG_TEMPERATURE, AT_TEMPERATURE..AT_EFFECTS),
         (FLAG_EFFECTS, AT_EFFECTS..AT_CRC),
     ] {
-        if flags & flag == 0 && bytes[range].iter().any(|&b| b != 0) {
+        if flags & flag == 0 && bytes.get(range).is_some_and(|field| field.iter().any(|&b| b != 0)) {
             return Err(BlobError::ReservedBitsSet);
         }
     }

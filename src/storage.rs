@@ -200,7 +200,8 @@ fn write_record(out: &mut [u8; MAX_PADDED_LEN], sequence: u32, blob: &Blob) {
 }
 
 fn read_record(record: &[u8; MAX_PADDED_LEN]) -> Option<StoredCalibration> {
-    let word = |at: usize| u32::from_le_bytes([record[at], record[at + 1], record[at + 2], record[at + 3]]);
+    let word =
+        |at: usize| record.get(at..at + 4).and_then(|w| <[u8; 4]>::try_from(w).ok()).map_or(0, u32::from_le_bytes);
     if record[..4] != RECORD_MAGIC || crc32(&record[..RECORD_LEN - 4]) != word(RECORD_LEN - 4) {
         return None;
     }
