@@ -12,6 +12,11 @@
 //! - [`verdict`]: RMSE before/after, noise floor, parameter standard deviations, pass/fail.
 //! - [`calibrate`]: all of it in one call; [`blob`]: the result for flash; [`sensor`]: the sample source.
 //!
+//! Features: `mpu6050` (driver), `micromath` (vector types), `default-rng` (`DefaultRng`,
+//! `seeded_rng`) are on by default; `storage` (two-slot power-loss-safe flash storage of the blob on
+//! an `embedded-storage` NorFlash), `accelerometer` (any `accelerometer` crate driver as the sensor)
+//! and `defmt` are opt-in.
+//!
 //! ```
 //! use accelcal::accumulator::{Accumulator, AccumulatorConfig};
 //! use accelcal::calibrate::{calibrate, CalibrationConfig};

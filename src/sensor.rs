@@ -1,8 +1,10 @@
 //! The sensor path: anything that gives one raw triaxial sample.
 //!
-//! Implement [`AccelSensor`] for a driver (or wrap an existing embedded-hal driver crate); the
-//! calibration code only ever asks for the next sample. Drivers give their bus back with their own
-//! `release()` (see [`crate::mpu6050`]).
+//! Implement [`AccelSensor`] for a driver; the calibration code only ever asks for the next sample.
+//! With the `accelerometer` feature every `accelerometer::RawAccelerometer<I16x3>` driver already is
+//! one (`accelcal::accelerometer`). Drivers give their bus back with their own `release()` (see
+//! `accelcal::mpu6050`, feature `mpu6050`). [`RawFormat`] describes the register encoding (full scale,
+//! resolution, justification) and where a reading saturates.
 //!
 //! ```
 //! use accelcal::sensor::AccelSensor;
