@@ -62,8 +62,10 @@ pub mod accumulator;
 pub mod blob;
 pub mod calibrate;
 pub mod coarse;
+pub mod ellipsoid;
 pub mod frame;
 pub mod ga;
+pub mod init;
 pub mod linalg;
 pub mod model;
 #[cfg(feature = "mpu6050")]
