@@ -74,6 +74,8 @@ pub mod mpu6050;
 pub mod rng;
 pub mod sensor;
 pub mod session;
+#[cfg(feature = "async")]
+pub mod session_async;
 pub mod solve;
 #[cfg(feature = "storage")]
 pub mod storage;
