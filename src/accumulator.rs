@@ -549,6 +549,7 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
 
     /// [`Accumulator::push`] for micromath's vector types (`I16x3`, `F32x3`), which the embedded
     /// sensor-driver ecosystem returns.
+    #[cfg(feature = "micromath")]
     #[inline]
     pub fn push_vector(&mut self, v: micromath::vector::Vector3d<R>) -> Result<Option<Event>, AccumulatorError>
     where

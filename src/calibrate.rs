@@ -29,6 +29,7 @@ use crate::solve::{LmConfig, NewtonConfig, SolveError, SolveTermination, levenbe
 use crate::verdict::{PoseSet, Verdict, VerdictBounds, Warnings, information_matrix, judge, parameters_to_hold};
 
 /// The recommended seeded generator for the GA: 32-bit state arithmetic, fast on a Cortex-M4.
+#[cfg(feature = "default-rng")]
 pub type DefaultRng = rand_xoshiro::Xoshiro128PlusPlus;
 
 /// Which optimiser runs after the initial estimate.

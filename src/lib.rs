@@ -12,6 +12,11 @@
 //! - [`verdict`]: RMSE before/after, noise floor, parameter standard deviations, pass/fail.
 //! - [`calibrate`]: all of it in one call; [`blob`]: the result for flash; [`sensor`]: the sample source.
 //!
+//! Features: `mpu6050` (driver), `micromath` (vector types), `default-rng` (`DefaultRng`,
+//! `seeded_rng`) are on by default; `storage` (two-slot power-loss-safe flash storage of the blob on
+//! an `embedded-storage` NorFlash), `accelerometer` (any `accelerometer` crate driver as the sensor)
+//! and `defmt` are opt-in.
+//!
 //! ```
 //! use accelcal::accumulator::{Accumulator, AccumulatorConfig};
 //! use accelcal::calibrate::{calibrate, CalibrationConfig};
@@ -51,6 +56,8 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+#[cfg(feature = "accelerometer")]
+pub mod accelerometer;
 pub mod accumulator;
 pub mod blob;
 pub mod calibrate;
@@ -61,13 +68,25 @@ pub mod ga;
 pub mod init;
 pub mod linalg;
 pub mod model;
+#[cfg(feature = "mpu6050")]
 pub mod mpu6050;
+#[cfg(feature = "default-rng")]
+pub mod rng;
 pub mod sensor;
 pub mod session;
 #[cfg(feature = "async")]
 pub mod session_async;
 pub mod solve;
+#[cfg(feature = "storage")]
+pub mod storage;
 pub mod verdict;
+
+#[cfg(feature = "default-rng")]
+pub use calibrate::DefaultRng;
+/// The random-number traits the GA is generic over, so that firmware needs no own dependency on them.
+pub use rand_core;
+#[cfg(feature = "default-rng")]
+pub use rng::seeded_rng;
 
 /// The README's usage example, compiled as a doctest.
 #[cfg(doctest)]

@@ -68,6 +68,7 @@ impl Params {
     }
 
     /// [`Params::apply`] on micromath's `F32x3`.
+    #[cfg(feature = "micromath")]
     #[inline]
     pub fn apply_vector(&self, f_s: micromath::vector::F32x3) -> micromath::vector::F32x3 {
         let [x, y, z] = self.apply([f_s.x, f_s.y, f_s.z]);

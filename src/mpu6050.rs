@@ -32,6 +32,7 @@
 //! imu.init()?;
 //! imu.set_full_scale(AccelRange::G4)?;
 //! assert_eq!(imu.lsb_per_g(), 8192.0);
+//! assert_eq!(imu.raw_format().lsb_per_g(), imu.lsb_per_g());
 //! let [x, y, z] = imu.read_raw()?;
 //! assert_eq!((x, y, z), (0, 0, 8192));
 //! let _i2c = imu.release();
@@ -40,7 +41,7 @@
 
 use embedded_hal::i2c::I2c;
 
-use crate::sensor::AccelSensor;
+use crate::sensor::{AccelSensor, RawFormat};
 
 /// Register addresses (register map rev. 4.2).
 mod register {
@@ -167,6 +168,13 @@ pub struct Mpu6050<I2C> {
     range: AccelRange,
 }
 
+#[cfg(feature = "defmt")]
+impl<I2C> defmt::Format for Mpu6050<I2C> {
+    fn format(&self, f: defmt::Formatter<'_>) {
+        defmt::write!(f, "Mpu6050 {{ address: {=u8:#04x}, range: {} }}", self.address, self.range)
+    }
+}
+
 impl<I2C: I2c> Mpu6050<I2C> {
     /// Takes the bus; talks to nothing until [`Mpu6050::init`]. The range is assumed to be the
     /// power-on [`AccelRange::G2`] until `init` writes it.
@@ -209,6 +217,12 @@ impl<I2C: I2c> Mpu6050<I2C> {
     /// Sensitivity at the current full scale, LSB per g.
     pub const fn lsb_per_g(&self) -> f32 {
         self.range.lsb_per_g()
+    }
+
+    /// The register format at the current full scale (16-bit, right-justified): its
+    /// [`RawFormat::accumulator_full_scale`] makes the accumulator flag saturation.
+    pub const fn raw_format(&self) -> RawFormat {
+        RawFormat { full_scale_g: self.range.full_scale_g(), resolution_bits: 16, left_justified: false }
     }
 
     /// Reads X, Y, Z in counts: one 6-byte burst from ACCEL_XOUT_H, big-endian.

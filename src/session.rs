@@ -605,6 +605,7 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize, const POP: usize> Sessi
     }
 
     /// [`Session::push`] for micromath's vector types (`I16x3`, `F32x3`).
+    #[cfg(feature = "micromath")]
     #[inline]
     pub fn push_vector(&mut self, v: micromath::vector::Vector3d<R>) -> Result<Progress, SessionError>
     where
