@@ -491,6 +491,106 @@ pub fn generate(scenario: &Scenario) -> SimLog {
     SimLog { recording, temps_c }
 }
 
+/// Effects outside the diagnosis catalogue (a diagnosis should answer `none` or `unexplained`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Outside {
+    /// One pose offset by 5 to 15 mg along a random direction (a bad pose).
+    OneBadPose,
+    /// Cross-axis coupling: `c a_b a_c / g` added to axis `a` (products of two other axes).
+    CrossAxis,
+    /// Hysteresis: a bias that follows the direction of the last rotation (the change from the
+    /// previous pose), not the orientation itself.
+    Hysteresis,
+    /// A slow periodic bias (a few periods over the log, e.g. pickup from a cyclic heater).
+    PeriodicBias,
+}
+
+impl Outside {
+    /// Every kind.
+    pub const ALL: [Self; 4] = [Self::OneBadPose, Self::CrossAxis, Self::Hysteresis, Self::PeriodicBias];
+
+    /// A short name.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::OneBadPose => "one-bad-pose",
+            Self::CrossAxis => "cross-axis",
+            Self::Hysteresis => "hysteresis",
+            Self::PeriodicBias => "periodic-bias",
+        }
+    }
+}
+
+/// A clean random scenario (as [`random_scenario`] with [`EffectClass::None`]) with an
+/// out-of-catalogue effect applied.
+pub fn generate_outside(kind: Outside, seed: u64) -> SimLog {
+    let scenario = random_scenario(EffectClass::None, seed);
+    let cfg = &scenario.sim;
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x0075_1DE0);
+    let mg = sim::STANDARD_GRAVITY_MPS2 * 1e-3;
+    let poses = match cfg.plan {
+        Plan::Random(n) => n,
+        _ => 24,
+    };
+    let recording = match kind {
+        Outside::OneBadPose => {
+            let bad = 1 + (rng.next_u64() % (poses as u64 - 1)) as usize;
+            let offset = unit_vector(&mut rng).map(|c| c * uniform(&mut rng, 5.0, 15.0) * mg);
+            sim::simulate_with(
+                cfg,
+                &mut [&mut |_t: f64, pose: Option<usize>, r: &mut [f64; 3]| {
+                    if pose == Some(bad) {
+                        (0..3).for_each(|a| r[a] += offset[a]);
+                    }
+                }],
+            )
+        }
+        Outside::CrossAxis => {
+            let c: [f64; 3] = std::array::from_fn(|_| sign(&mut rng) * uniform(&mut rng, 3.0, 8.0) * 1e-3);
+            let g = sim::STANDARD_GRAVITY_MPS2;
+            sim::simulate_with(
+                cfg,
+                &mut [&mut |_t: f64, _p: Option<usize>, r: &mut [f64; 3]| {
+                    let x = *r;
+                    r[0] += c[0] * x[1] * x[2] / g;
+                    r[1] += c[1] * x[0] * x[2] / g;
+                    r[2] += c[2] * x[0] * x[1] / g;
+                }],
+            )
+        }
+        Outside::Hysteresis => {
+            let h: [f64; 3] = std::array::from_fn(|_| uniform(&mut rng, 3.0, 8.0) * mg);
+            let (mut last, mut previous_pose, mut bias) = (None::<[f64; 3]>, None, [0.0; 3]);
+            sim::simulate_with(
+                cfg,
+                &mut [&mut |_t: f64, pose: Option<usize>, r: &mut [f64; 3]| {
+                    if pose.is_some() && pose != previous_pose {
+                        if let Some(l) = last {
+                            bias = std::array::from_fn(|a| h[a] * (r[a] - l[a]).signum());
+                        }
+                        last = Some(*r);
+                        previous_pose = pose;
+                    }
+                    (0..3).for_each(|a| r[a] += bias[a]);
+                }],
+            )
+        }
+        Outside::PeriodicBias => {
+            let amp: [f64; 3] = std::array::from_fn(|_| uniform(&mut rng, 2.0, 5.0) * mg);
+            let period = uniform(&mut rng, 40.0, 90.0);
+            let phase = uniform(&mut rng, 0.0, 6.3);
+            sim::simulate_with(
+                cfg,
+                &mut [&mut |t: f64, _p: Option<usize>, r: &mut [f64; 3]| {
+                    let k = (std::f64::consts::TAU * t / period + phase).sin();
+                    (0..3).for_each(|a| r[a] += amp[a] * k);
+                }],
+            )
+        }
+    };
+    let temps_c = recording.times_s.iter().map(|&t| (scenario.temperature.at(t) * 100.0).round() / 100.0).collect();
+    SimLog { recording, temps_c }
+}
+
 /// The log as `t,ax,ay,az,temp` CSV text (counts as integers, other units with 10 significant
 /// digits, temperatures with 2 decimals).
 pub fn to_csv_string(log: &SimLog) -> String {

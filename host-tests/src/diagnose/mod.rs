@@ -54,12 +54,13 @@ mod family;
 mod gap;
 mod locate;
 mod math;
+mod probe;
 mod report;
 mod verdict;
 
 use std::fmt;
 
-pub use report::{Allan, Candidate, Diagnosis, Gap, PoseReport};
+pub use report::{Allan, Candidate, Diagnosis, Gap, PoseReport, Probe};
 
 use crate::csvio::Table;
 
@@ -147,7 +148,8 @@ pub fn diagnose(table: &Table, opts: &DiagnoseOptions) -> Result<Diagnosis, Diag
     let ctx = family::Context::new(table, &m, opts)
         .ok_or_else(|| err(format!("{}: too few poses for cross-validation", table.file)))?;
     let evaluations: Vec<family::Evaluation> = family::all().iter().map(|f| f.evaluate(&ctx)).collect();
-    let decision = verdict::decide(&m, &evaluations);
+    let probes = probe::run(&ctx);
+    let decision = verdict::decide(&m, &evaluations, &probes);
     let scale: [f64; 3] = std::array::from_fn(|a| m.model.ka[a][a]);
     let mut d = Diagnosis {
         file: table.file.clone(),
@@ -163,13 +165,14 @@ pub fn diagnose(table: &Table, opts: &DiagnoseOptions) -> Result<Diagnosis, Diag
         allan: locate::longest_rest_allan(table, &m),
         candidates: evaluations.into_iter().map(|e| e.candidate).collect(),
         heldout_ratio_nominal: ctx.heldout_ratio_nominal,
+        probes,
         verdict: decision.verdict,
         unexplained_where: None,
         explained: decision.winner.is_some(),
         shrink: decision.shrink,
     };
     if d.verdict == "unexplained" {
-        d.unexplained_where = Some(locate::unexplained_location(&d));
+        d.unexplained_where = Some(decision.probe_where.unwrap_or_else(|| locate::unexplained_location(&d)));
     }
     Ok(d)
 }

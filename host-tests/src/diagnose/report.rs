@@ -89,6 +89,17 @@ pub struct Candidate {
     pub detail: String,
 }
 
+/// An out-of-catalogue probe (never a verdict; see `unexplained`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Probe {
+    /// The shape probed.
+    pub shape: &'static str,
+    /// Held-out gain, as for a candidate.
+    pub heldout_gain: f64,
+    /// The best parametrisation.
+    pub detail: String,
+}
+
 /// The whole diagnosis.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Diagnosis {
@@ -116,6 +127,8 @@ pub struct Diagnosis {
     pub allan: Allan,
     /// Step 3.
     pub candidates: Vec<Candidate>,
+    /// Out-of-catalogue probes.
+    pub probes: Vec<Probe>,
     /// Held-out ratio of the nominal model.
     pub heldout_ratio_nominal: f64,
     /// Step 3 verdict: an [`EFFECT_NAMES`](super::EFFECT_NAMES) entry, `none`, or `unexplained` (a significant gap no
@@ -206,6 +219,7 @@ impl Diagnosis {
                 "detail": c.detail,
             })).collect::<Vec<_>>(),
             "candidates_ranked": self.ranked().iter().map(|c| json!({"effect": c.effect, "heldout_gain": finite(c.heldout_gain)})).collect::<Vec<_>>(),
+            "probes": self.probes.iter().map(|p| json!({"shape": p.shape, "heldout_gain": finite(p.heldout_gain), "detail": p.detail})).collect::<Vec<_>>(),
             "verdict": {
                 "effect": self.verdict,
                 "where": self.unexplained_where,
@@ -216,34 +230,9 @@ impl Diagnosis {
         })
     }
 
-    /// The human-readable report, one block per step.
-    pub fn to_text(&self) -> String {
+    /// Step 2 of the text report.
+    fn write_where(&self, s: &mut String) {
         use std::fmt::Write as _;
-        let mut s = String::new();
-        let g = &self.gap;
-        let _ = writeln!(
-            s,
-            "{}: {} rows ({}), {} poses, seed {}",
-            self.file,
-            self.samples,
-            self.units,
-            self.poses.len(),
-            self.seed
-        );
-        let _ = writeln!(
-            s,
-            "1. gap: real modulus RMSE {:.4} mg, simulated {:.4} +- {:.4} mg ({} repeats, white noise {:.3}/{:.3}/{:.3} mg): ratio {:.2}, z {:.1} -> {}",
-            g.real_rmse_mg,
-            g.sim_rmse_mg,
-            g.sim_spread_mg,
-            self.repeats,
-            self.white_mg[0],
-            self.white_mg[1],
-            self.white_mg[2],
-            g.ratio_before,
-            g.z,
-            if g.significant { "significant" } else { "not significant" }
-        );
         let _ = writeln!(s, "2. where:");
         let mut worst: Vec<(usize, &PoseReport)> = self.poses.iter().enumerate().collect();
         worst.sort_by(|a, b| b.1.residual_mg.abs().total_cmp(&a.1.residual_mg.abs()));
@@ -293,6 +282,37 @@ impl Diagnosis {
                 a / w
             );
         }
+    }
+
+    /// The human-readable report, one block per step.
+    pub fn to_text(&self) -> String {
+        use std::fmt::Write as _;
+        let mut s = String::new();
+        let g = &self.gap;
+        let _ = writeln!(
+            s,
+            "{}: {} rows ({}), {} poses, seed {}",
+            self.file,
+            self.samples,
+            self.units,
+            self.poses.len(),
+            self.seed
+        );
+        let _ = writeln!(
+            s,
+            "1. gap: real modulus RMSE {:.4} mg, simulated {:.4} +- {:.4} mg ({} repeats, white noise {:.3}/{:.3}/{:.3} mg): ratio {:.2}, z {:.1} -> {}",
+            g.real_rmse_mg,
+            g.sim_rmse_mg,
+            g.sim_spread_mg,
+            self.repeats,
+            self.white_mg[0],
+            self.white_mg[1],
+            self.white_mg[2],
+            g.ratio_before,
+            g.z,
+            if g.significant { "significant" } else { "not significant" }
+        );
+        self.write_where(&mut s);
         let _ = writeln!(s, "3. candidates (held-out ratio of the nominal model {:.2}):", self.heldout_ratio_nominal);
         for c in &self.candidates {
             let _ = writeln!(

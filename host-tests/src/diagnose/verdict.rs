@@ -6,7 +6,7 @@ use super::MIN_GAIN;
 use super::family::Evaluation;
 use super::gap::Measured;
 use super::math::rms;
-use super::report::Gap;
+use super::report::{Gap, Probe};
 
 /// The decision: the verdict, the winner's index, the gap after it and the residuals after it.
 pub(crate) struct Decision {
@@ -15,17 +15,27 @@ pub(crate) struct Decision {
     pub(crate) gap: Gap,
     pub(crate) shrink: f64,
     pub(crate) after: Vec<Option<f64>>,
+    /// For `unexplained`: the probe that explains the withheld poses best, if one does.
+    pub(crate) probe_where: Option<String>,
 }
 
 /// Picks the verdict among the evaluated families and measures the shrink.
-pub(crate) fn decide(m: &Measured, evaluations: &[Evaluation]) -> Decision {
+pub(crate) fn decide(m: &Measured, evaluations: &[Evaluation], probes: &[Probe]) -> Decision {
     let significant = m.gap.significant;
+    let best_probe = probes
+        .iter()
+        .filter(|p| p.heldout_gain.is_finite() && p.heldout_gain >= MIN_GAIN)
+        .max_by(|a, b| a.heldout_gain.total_cmp(&b.heldout_gain));
     let best = evaluations
         .iter()
         .enumerate()
         .filter(|(_, e)| e.candidate.applicable && e.candidate.heldout_gain.is_finite())
         .max_by(|a, b| a.1.candidate.heldout_gain.total_cmp(&b.1.candidate.heldout_gain));
-    let winner = best.filter(|(_, e)| significant && e.candidate.heldout_gain >= MIN_GAIN).map(|(i, _)| i);
+    // A family wins only if no out-of-catalogue probe explains the withheld poses better.
+    let beaten = |gain: f64| best_probe.is_some_and(|p| p.heldout_gain > gain);
+    let winner = best
+        .filter(|(_, e)| significant && e.candidate.heldout_gain >= MIN_GAIN && !beaten(e.candidate.heldout_gain))
+        .map(|(i, _)| i);
     let mut gap = m.gap.clone();
     let (verdict, after) = match winner {
         Some(i) => {
@@ -47,5 +57,6 @@ pub(crate) fn decide(m: &Measured, evaluations: &[Evaluation]) -> Decision {
     } else {
         0.0
     };
-    Decision { verdict, winner, gap, shrink, after }
+    let probe_where = best_probe.map(|p| format!("{} (held-out gain {:.2})", p.detail, p.heldout_gain));
+    Decision { verdict, winner, gap, shrink, after, probe_where }
 }

@@ -66,7 +66,8 @@ impl Family for ColoredNoise {
 /// when there is a temperature column, so warm-up and temperature are not taken for noise), then
 /// the excess of its overlapping Allan variance over white noise for `tau` from 1/50 to 1/5 of the
 /// rest is fitted as a random walk `K^2 tau / 3` plus a flat bias-instability floor (weighted
-/// least squares; when one term comes out negative, the better of the two alone). Returns `(K^2 per s, floor variance)`; both zero when the excess is not at
+/// least squares; when one term comes out negative, the better of the two alone). Returns
+/// `(K^2 per s, floor variance)`; both zero when the excess is not at
 /// least [`WALK_EXCESS`] times the white noise at the longest `tau`.
 pub(crate) fn colored_noise_estimate(table: &Table, first: usize, end: usize, rate: f64, white: V3) -> (V3, V3) {
     let n = end - first;
@@ -75,12 +76,29 @@ pub(crate) fn colored_noise_estimate(table: &Table, first: usize, end: usize, ra
     if n < 200 {
         return (walk, floor);
     }
+    let rows = trend_design(table, first, end, rate);
+    let idx: Vec<usize> = (0..n).collect();
+    for a in 0..3 {
+        let y: Vec<f64> = table.samples[first..end].iter().map(|s| -s[a]).collect();
+        let Some(x) = lstsq(&rows, &y, &idx) else { continue };
+        let detrended: Vec<f64> = (0..n).map(|i| -predict(&rows, &y, &x, i)).collect();
+        let (points, last_excess) = allan_excess(&detrended, rate, white[a]);
+        if points.is_empty() || !(last_excess > WALK_EXCESS) {
+            continue;
+        }
+        (walk[a], floor[a]) = fit_walk_and_floor(&points);
+    }
+    (walk, floor)
+}
+
+/// The trend a rest is cleared of: quadratic in time, linear in temperature when it varies.
+fn trend_design(table: &Table, first: usize, end: usize, rate: f64) -> Vec<Vec<f64>> {
     let t0 = row_time(table, first, rate);
     let span = (row_time(table, end - 1, rate) - t0).max(1e-9);
     let temps = table.temps_c.as_ref().map(|t| &t[first..end]);
     let t_mean = temps.map_or(0.0, mean);
     let has_temp = temps.is_some_and(|t| t.iter().any(|v| (v - t_mean).abs() > 1e-9));
-    let rows: Vec<Vec<f64>> = (first..end)
+    (first..end)
         .map(|i| {
             let x = 2.0 * (row_time(table, i, rate) - t0) / span - 1.0;
             let mut row = vec![1.0, x, x * x];
@@ -89,64 +107,52 @@ pub(crate) fn colored_noise_estimate(table: &Table, first: usize, end: usize, ra
             }
             row
         })
-        .collect();
-    let idx: Vec<usize> = (0..n).collect();
-    for a in 0..3 {
-        let y: Vec<f64> = table.samples[first..end].iter().map(|s| -s[a]).collect();
-        let Some(x) = lstsq(&rows, &y, &idx) else { continue };
-        let detrended: Vec<f64> = (0..n).map(|i| -predict(&rows, &y, &x, i)).collect();
-        // Prefix sums for the overlapping Allan variance.
-        let mut prefix = vec![0.0; n + 1];
-        for i in 0..n {
-            prefix[i + 1] = prefix[i] + detrended[i];
-        }
-        let mut points = Vec::new();
-        let mut last_excess = 0.0;
-        let mut m = ((n as f64 / 50.0) as usize).max(1);
-        while 5 * m <= n {
-            let tau = m as f64 / rate;
-            let count = n - 2 * m + 1;
-            let mut sum = 0.0;
-            for k in 0..count {
-                let first_mean = prefix[k + m] - prefix[k];
-                let second_mean = prefix[k + 2 * m] - prefix[k + m];
-                sum += (second_mean - first_mean).powi(2);
-            }
-            let avar = sum / (2.0 * count as f64 * (m * m) as f64);
-            let white_avar = white[a] / m as f64;
-            let excess = avar - white_avar;
-            // Weighted by the number of independent clusters over the relative variance.
-            let w = (n as f64 / m as f64) / (avar * avar).max(1e-300);
-            points.push((tau, excess, w));
-            last_excess = excess / white_avar;
-            m *= 2;
-        }
-        if points.is_empty() || !(last_excess > WALK_EXCESS) {
-            continue;
-        }
-        let sum = |f: &dyn Fn(f64, f64) -> f64| points.iter().map(|&(t, e, w)| w * f(t, e)).sum::<f64>();
-        let k2 = (sum(&|t, e| e * t / 3.0) / sum(&|t, _| (t / 3.0).powi(2))).max(0.0);
-        let level = (sum(&|_, e| e) / sum(&|_, _| 1.0)).max(0.0);
-        // Both terms together when both come out positive, else the better single term.
-        let (saa, sab, sbb) = (sum(&|t, _| (t / 3.0).powi(2)), sum(&|t, _| t / 3.0), sum(&|_, _| 1.0));
-        let (sea, seb) = (sum(&|t, e| e * t / 3.0), sum(&|_, e| e));
-        let det = saa * sbb - sab * sab;
-        let joint = (det > 0.0).then(|| ((sea * sbb - seb * sab) / det, (saa * seb - sab * sea) / det));
-        match joint {
-            Some((k, c)) if k >= 0.0 && c >= 0.0 => {
-                walk[a] = k;
-                floor[a] = c;
-            }
-            _ => {
-                let misfit_walk = sum(&|t, e| (e - k2 * t / 3.0).powi(2));
-                let misfit_floor = sum(&|_, e| (e - level).powi(2));
-                if misfit_walk <= misfit_floor {
-                    walk[a] = k2;
-                } else {
-                    floor[a] = level;
-                }
-            }
+        .collect()
+}
+
+/// Overlapping Allan variance in excess of white noise (`white` per sample) for `tau` from 1/50 to
+/// 1/5 of the record: `(tau s, excess, weight)` per `tau`, and the excess at the longest `tau` in
+/// units of the white Allan variance there.
+fn allan_excess(detrended: &[f64], rate: f64, white: f64) -> (Vec<(f64, f64, f64)>, f64) {
+    let n = detrended.len();
+    let mut prefix = vec![0.0; n + 1];
+    for i in 0..n {
+        prefix[i + 1] = prefix[i] + detrended[i];
+    }
+    let mut points = Vec::new();
+    let mut last_excess = 0.0;
+    let mut m = ((n as f64 / 50.0) as usize).max(1);
+    while 5 * m <= n {
+        let count = n - 2 * m + 1;
+        let sum: f64 = (0..count).map(|k| (prefix[k + 2 * m] - 2.0 * prefix[k + m] + prefix[k]).powi(2)).sum();
+        let avar = sum / (2.0 * count as f64 * (m * m) as f64);
+        let white_avar = white / m as f64;
+        let excess = avar - white_avar;
+        // Weighted by the number of independent clusters over the relative variance.
+        let w = (n as f64 / m as f64) / (avar * avar).max(1e-300);
+        points.push((m as f64 / rate, excess, w));
+        last_excess = excess / white_avar;
+        m *= 2;
+    }
+    (points, last_excess)
+}
+
+/// The excess fitted as a random walk `K^2 tau / 3` plus a flat floor (weighted least squares):
+/// both when both come out positive, else the better single term. Returns `(K^2, floor)`.
+fn fit_walk_and_floor(points: &[(f64, f64, f64)]) -> (f64, f64) {
+    let sum = |f: &dyn Fn(f64, f64) -> f64| points.iter().map(|&(t, e, w)| w * f(t, e)).sum::<f64>();
+    let k2 = (sum(&|t, e| e * t / 3.0) / sum(&|t, _| (t / 3.0).powi(2))).max(0.0);
+    let level = (sum(&|_, e| e) / sum(&|_, _| 1.0)).max(0.0);
+    let (saa, sab, sbb) = (sum(&|t, _| (t / 3.0).powi(2)), sum(&|t, _| t / 3.0), sum(&|_, _| 1.0));
+    let (sea, seb) = (sum(&|t, e| e * t / 3.0), sum(&|_, e| e));
+    let det = saa * sbb - sab * sab;
+    let joint = (det > 0.0).then(|| ((sea * sbb - seb * sab) / det, (saa * seb - sab * sea) / det));
+    match joint {
+        Some((k, c)) if k >= 0.0 && c >= 0.0 => (k, c),
+        _ => {
+            let misfit_walk = sum(&|t, e| (e - k2 * t / 3.0).powi(2));
+            let misfit_floor = sum(&|_, e| (e - level).powi(2));
+            if misfit_walk <= misfit_floor { (k2, 0.0) } else { (0.0, level) }
         }
     }
-    (walk, floor)
 }
