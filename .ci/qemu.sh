@@ -61,7 +61,7 @@ echo "== the same run on the host (tests/qemu_parity.rs)"
 QEMU_PARITY_OUT="$OUT/host.txt" cargo test -p accelcal --test qemu_parity
 
 # The report lines (QEMU adds nothing to stdout today; filter anyway so a notice cannot break the check).
-report='^(run|poses|pose|method|param|verdict|blob|result|error)\b'
+report='^(run|poses|pose|method|param|verdict|blob|result|error|guided)\b'
 grep -E "$report" "$OUT/qemu.txt" >"$OUT/qemu.report" || true
 grep -E "$report" "$OUT/host.txt" >"$OUT/host.report" || true
 if [ "$(grep -c '^param ' "$OUT/qemu.report")" -ne 9 ]; then

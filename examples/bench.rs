@@ -11,7 +11,7 @@
 //! | symbol | what one call does |
 //! |---|---|
 //! | `accumulate_sample` | `Accumulator<i16, 24, 32>::push` of one raw sample (called for every sample of the stream) |
-//! | `apply_sample` | `Params::apply` of one sample (called for every captured pose mean) |
+//! | `apply_sample` | `Params::apply` of a batch of `APPLY_BATCH` samples in place (the pose means; the report gives cycles per sample) |
 //! | `taga_generation` | one `Ga::step` on the normalised 24-pose problem, population 40 (called `GENERATIONS` = 10 times) |
 //! | `lm` | `levenberg_marquardt` from the coarse start (deviation 0) |
 //! | `full_calibration` | `calibrate::<_, 40, 24>` with `CalibrationConfig::DEFAULT`: coarse, TAGA, LM, verdict |
@@ -57,7 +57,10 @@ mod firmware {
     /// Samples per static-detection block.
     const BLOCK: usize = 32;
     /// GA population.
-    const POP: usize = 40;
+    const POP: usize = 24;
+    /// Samples per `apply_sample` call (a stream is calibrated in batches: the parameters stay in
+    /// registers).
+    pub const APPLY_BATCH: usize = 24;
     /// Calls of `taga_generation` (one generation each); the report gives the mean.
     pub const GENERATIONS: u32 = 10;
 
@@ -71,11 +74,13 @@ mod firmware {
         acc.push(sample)
     }
 
-    /// One sample through the calibration model.
+    /// A batch of samples through the calibration model, in place.
     #[unsafe(no_mangle)]
     #[inline(never)]
-    pub fn apply_sample(params: &Params, sample: [f32; 3]) -> [f32; 3] {
-        params.apply(sample)
+    pub fn apply_sample(params: &Params, samples: &mut [[f32; 3]]) {
+        for s in samples {
+            *s = params.apply(*s);
+        }
     }
 
     /// One TAGA generation on the normalised problem.
@@ -128,9 +133,13 @@ mod firmware {
 
         let gain = sim_sensor::LSB_PER_G / accelcal::model::STANDARD_GRAVITY_MPS2;
         let params = Params { scale: [1.0 / gain; 3], ..Params::IDENTITY };
-        for p in poses {
-            black_box(apply_sample(black_box(&params), black_box(p.mean)));
+        let mut batch = [[0.0f32; 3]; APPLY_BATCH];
+        for (b, p) in batch.iter_mut().zip(poses) {
+            *b = p.mean;
         }
+        apply_sample(black_box(&params), black_box(&mut batch));
+        black_box(&batch);
+        hprintln!("bench: apply samples_per_call {}", APPLY_BATCH);
 
         let gravity = CalibrationConfig::DEFAULT.gravity;
         let normalized = match NormalizedPoses::<POSES>::new(poses, gravity) {
@@ -140,7 +149,8 @@ mod firmware {
         let norm = normalized.poses();
         let config = CalibrationConfig::DEFAULT;
         let rng = Xoshiro128PlusPlus::seed_from_u64(GA_SEED);
-        let mut ga: Taga = match ga_solver(norm, &config.widths, config.ga, rng) {
+        let start = normalized.start();
+        let mut ga: Taga = match ga_solver(norm, &start, &accelcal::coarse::SearchWidths::DEFAULT, config.ga, rng) {
             Ok(ga) => ga,
             Err(_) => fail("ga"),
         };
@@ -157,19 +167,21 @@ mod firmware {
         let rng = Xoshiro128PlusPlus::seed_from_u64(GA_SEED);
         match full_calibration(poses, rng) {
             Ok(cal) => hprintln!(
-                "bench: full_calibration generations {} evaluations {} iterations {} pass {}",
+                "bench: full_calibration generations {} evaluations {} iterations {} pass {} objective_bits {}",
                 cal.generations,
                 cal.evaluations,
                 cal.iterations,
-                cal.verdict.pass() as u8
+                cal.verdict.pass() as u8,
+                cal.objective.to_bits()
             ),
             Err(_) => fail("calibrate"),
         }
         hprintln!(
-            "bench: sizes accumulator {} ga {} normalized_poses {}",
+            "bench: sizes accumulator {} ga {} normalized_poses {} population {}",
             core::mem::size_of::<Acc>(),
             core::mem::size_of::<Taga>(),
-            core::mem::size_of::<NormalizedPoses<POSES>>()
+            core::mem::size_of::<NormalizedPoses<POSES>>(),
+            POP
         );
         debug::exit(debug::EXIT_SUCCESS);
         #[allow(clippy::empty_loop)]

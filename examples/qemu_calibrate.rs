@@ -1,4 +1,6 @@
-//! The paper's 24-position simulation, calibrated on an emulated Cortex-M4F.
+//! The paper's 24-position simulation, calibrated on an emulated Cortex-M4F; then a guided session
+//! from a free-hand start whose early finish fails its verdict, keeps its poses, and passes after the
+//! poses the guidance asks for (`common/guided.rs`).
 //!
 //! A simulated MPU-6050 with the paper's table 1 errors (`common/sim_sensor.rs`) is read through
 //! [`AccelSensor`](accelcal::sensor::AccelSensor) into an `Accumulator<i16, 32, 32>`, calibrated with
@@ -20,6 +22,9 @@
 fn main() {}
 
 #[cfg(target_os = "none")]
+#[path = "common/guided.rs"]
+mod guided;
+#[cfg(target_os = "none")]
 #[path = "common/pipeline.rs"]
 mod pipeline;
 #[cfg(target_os = "none")]
@@ -38,7 +43,8 @@ mod firmware {
 
     #[cortex_m_rt::entry]
     fn main() -> ! {
-        let pass = crate::pipeline::run(&mut |line| hprintln!("{}", line));
+        let mut pass = crate::pipeline::run(&mut |line| hprintln!("{}", line));
+        pass &= crate::guided::run(&mut |line| hprintln!("{}", line));
         debug::exit(if pass { debug::EXIT_SUCCESS } else { debug::EXIT_FAILURE });
         #[allow(clippy::empty_loop)]
         loop {}

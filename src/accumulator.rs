@@ -24,6 +24,22 @@
 
 use core::ops::{Add, AddAssign, Mul, Sub};
 
+/// Most samples one pose (or block) averages: its count saturates here, and later quiet blocks are not
+/// added to it. Below `2^31` the `i64` sums of `i16` readings cannot overflow (each squared deviation
+/// from the reference sample is below `2^32`).
+pub const MAX_POSE_SAMPLES: u32 = i32::MAX as u32;
+
+/// Exact sums of one block of samples, relative to its first sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BlockSums<S> {
+    /// Per-axis sum of `sample - first`.
+    pub sum: [S; 3],
+    /// Per-axis sum of `(sample - first)^2`.
+    pub sum_sq: [S; 3],
+    /// A sample of the block is saturated.
+    pub saturated: bool,
+}
+
 /// A per-axis sample type the accumulator can sum exactly.
 pub trait Reading: Copy + Default {
     /// Exact running-sum type.
@@ -34,12 +50,14 @@ pub trait Reading: Copy + Default {
     fn delta(self, reference: Self) -> Self::Sum;
     /// `n` in the sum type.
     fn count(n: u32) -> Self::Sum;
-    /// A sum as `f64` (pose close) .
-    fn sum_to_f64(s: Self::Sum) -> f64;
+    /// The exact sums of `samples` relative to the first one (zero for none), and whether one of them
+    /// is saturated at `limit`. Called once per block.
+    fn block_sums(samples: &[[Self; 3]], limit: Self::Limit) -> BlockSums<Self::Sum>;
+    /// Mean and (population) variance of `n` samples, from their sums relative to `reference`
+    /// (pose close; no software `f64` for `i16` on a Cortex-M4F).
+    fn mean_and_variance(reference: Self, sum: Self::Sum, sum_sq: Self::Sum, n: u32) -> (f32, f32);
     /// A (small, relative) sum as `f32` (block statistics).
     fn sum_to_f32(s: Self::Sum) -> f32;
-    /// The value as `f64`.
-    fn to_f64(self) -> f64;
     /// The value as `f32` (exact for `i16`; no software `f64` on a Cortex-M4F).
     fn to_f32(self) -> f32;
     /// `false` for NaN or infinity.
@@ -52,6 +70,57 @@ pub trait Reading: Copy + Default {
     fn saturated(self, limit: Self::Limit) -> bool;
 }
 
+/// `v` as `f32` from its two 32-bit halves: two hardware conversions instead of the library's
+/// `__aeabi_l2f` (rounded twice: within 1 ulp, enough for block statistics).
+#[inline]
+fn i64_to_f32(v: i64) -> f32 {
+    const TWO_POW_32: f32 = 4_294_967_296.0;
+    // v = high 2^32 + low with |low| <= 2^31: exact below 2^31 (high = 0, the usual case).
+    let low = v as i32;
+    let high = (v - i64::from(low)) >> 32;
+    (high as i32) as f32 * TWO_POW_32 + low as f32
+}
+
+/// `total / n` rounded once to the nearest `f32` (integer division of the total scaled to at least 26
+/// quotient bits, the remainder kept as a sticky bit, one correctly rounded conversion, an exact
+/// power-of-two scaling): the exact mean of integer samples without `f64`.
+fn ratio_to_f32(total: i64, n: u32) -> f32 {
+    let n = u64::from(n.max(1));
+    let magnitude = total.unsigned_abs();
+    let bits = |x: u64| 64 - x.leading_zeros();
+    // magnitude << shift has at most max(bits(magnitude), 27 + bits(n)) <= 63 bits; the quotient has >= 26.
+    let shift = (27 + bits(n)).saturating_sub(bits(magnitude));
+    let scaled = magnitude << shift;
+    let (q, r) = (scaled / n, scaled % n);
+    let unscale = f32::from_bits((127 - shift) << 23);
+    let v = (q | u64::from(r != 0)) as f32 * unscale;
+    if total < 0 { -v } else { v }
+}
+
+/// Raw sums `(sum x, sum x^2)` of axis `axis` of `i16` samples, in registers. The `i32` sum is exact
+/// for up to `2^16` samples (`2^16 * 2^15 = 2^31`), so longer slices are summed in chunks of that
+/// length; each square (at most `2^30`) is added into the `i64` by one multiply-accumulate.
+#[inline(always)]
+fn raw_i16_axis_sums(samples: &[[i16; 3]], axis: usize) -> (i64, i64) {
+    let (mut sum, mut sum_sq) = (0i64, 0i64);
+    for chunk in samples.chunks(1 << 16) {
+        let mut s = 0i32;
+        for v in chunk {
+            let x = i32::from(v.get(axis).copied().unwrap_or(0));
+            s += x;
+            sum_sq += i64::from(x) * i64::from(x);
+        }
+        sum += i64::from(s);
+    }
+    (sum, sum_sq)
+}
+
+/// Raw per-axis sums `(sum x, sum x^2)` of `i16` samples, one axis at a time.
+fn raw_i16_sums(samples: &[[i16; 3]]) -> ([i64; 3], [i64; 3]) {
+    let (x, y, z) = (raw_i16_axis_sums(samples, 0), raw_i16_axis_sums(samples, 1), raw_i16_axis_sums(samples, 2));
+    ([x.0, y.0, z.0], [x.1, y.1, z.1])
+}
+
 impl Reading for i16 {
     type Sum = i64;
     const QUANTUM_VARIANCE: f32 = 3.0 / 12.0;
@@ -62,14 +131,40 @@ impl Reading for i16 {
     fn count(n: u32) -> i64 {
         i64::from(n)
     }
-    fn sum_to_f64(s: i64) -> f64 {
-        s as f64
+    fn block_sums(samples: &[[i16; 3]], limit: i32) -> BlockSums<i64> {
+        let mut out = BlockSums { sum: [0; 3], sum_sq: [0; 3], saturated: false };
+        let Some(first) = samples.first() else { return out };
+        let n = samples.len() as i64;
+        let (raw, raw_sq) = raw_i16_sums(samples);
+        for a in 0..3 {
+            let r = i64::from(first[a]);
+            out.sum[a] = raw[a] - n * r;
+            out.sum_sq[a] = raw_sq[a] - 2 * r * raw[a] + n * r * r;
+            // Every sample is within sqrt(sum_sq) of the first: none can reach the limit (nor a rail)
+            // when sum_sq < (min(limit, i16::MAX) - |first|)^2. Only otherwise are the samples checked.
+            let margin = i64::from(limit.min(i32::from(i16::MAX))) - r.abs();
+            if margin <= 0 || out.sum_sq[a] >= margin * margin {
+                out.saturated |= samples.iter().any(|v| v[a].saturated(limit));
+            }
+        }
+        out
     }
+    fn mean_and_variance(reference: i16, sum: i64, sum_sq: i64, n: u32) -> (f32, f32) {
+        let count = n.max(1);
+        let n = i64::from(count);
+        let mean = ratio_to_f32(n * i64::from(reference) + sum, count);
+        // sum = q n + rem with 0 <= rem < n.
+        let (q, rem) = (sum.div_euclid(n), sum.rem_euclid(n));
+        // Squares about reference + q, exactly: sum (d - q)^2 = sum_sq - 2 q sum + n q^2 is below 2^63
+        // and is computed modulo 2^64, so the wrapped intermediate terms cancel exactly.
+        let about_q = sum_sq.wrapping_sub(q.wrapping_mul(sum).wrapping_mul(2)).wrapping_add(n.wrapping_mul(q * q));
+        let fraction = rem as f32 / n as f32;
+        let variance = i64_to_f32(about_q) / n as f32 - fraction * fraction;
+        (mean, if variance > 0.0 { variance } else { 0.0 })
+    }
+    #[inline]
     fn sum_to_f32(s: i64) -> f32 {
-        s as f32
-    }
-    fn to_f64(self) -> f64 {
-        f64::from(self)
+        i64_to_f32(s)
     }
     fn to_f32(self) -> f32 {
         f32::from(self)
@@ -81,7 +176,7 @@ impl Reading for i16 {
     type Limit = i32;
     fn saturation_limit(full_scale: f32) -> i32 {
         // |x| >= full_scale  <=>  |x| >= ceil(full_scale) for integer x; beyond the type: never.
-        if full_scale > 32_768.0 { 32_769 } else { libm::ceilf(full_scale.max(0.0)) as i32 }
+        if full_scale > 32_768.0 { 32_769 } else { libm::ceilf(if full_scale > 0.0 { full_scale } else { 0.0 }) as i32 }
     }
     #[inline]
     fn saturated(self, limit: i32) -> bool {
@@ -99,14 +194,27 @@ impl Reading for f32 {
     fn count(n: u32) -> f64 {
         f64::from(n)
     }
-    fn sum_to_f64(s: f64) -> f64 {
-        s
+    fn block_sums(samples: &[[f32; 3]], limit: f32) -> BlockSums<f64> {
+        let mut out = BlockSums { sum: [0.0; 3], sum_sq: [0.0; 3], saturated: false };
+        let Some(first) = samples.first() else { return out };
+        for v in samples {
+            for a in 0..3 {
+                let d = v[a].delta(first[a]);
+                out.sum[a] += d;
+                out.sum_sq[a] += d * d;
+            }
+            out.saturated |= v[0].saturated(limit) | v[1].saturated(limit) | v[2].saturated(limit);
+        }
+        out
+    }
+    fn mean_and_variance(reference: f32, sum: f64, sum_sq: f64, n: u32) -> (f32, f32) {
+        let n = f64::from(n.max(1));
+        let m = sum / n;
+        let variance = sum_sq / n - m * m;
+        ((f64::from(reference) + m) as f32, if variance > 0.0 { variance as f32 } else { 0.0 })
     }
     fn sum_to_f32(s: f64) -> f32 {
         s as f32
-    }
-    fn to_f64(self) -> f64 {
-        f64::from(self)
     }
     fn to_f32(self) -> f32 {
         self
@@ -123,6 +231,19 @@ impl Reading for f32 {
     fn saturated(self, limit: f32) -> bool {
         self.abs() >= limit
     }
+}
+
+/// `f32::min` as a comparison (the method is a library call on a Cortex-M4F): the other value when one
+/// is NaN.
+#[inline]
+fn min_f32(a: f32, b: f32) -> f32 {
+    if b < a || a.is_nan() { b } else { a }
+}
+
+/// `f32::max` as a comparison: the other value when one is NaN.
+#[inline]
+fn max_f32(a: f32, b: f32) -> f32 {
+    if b > a || a.is_nan() { b } else { a }
 }
 
 /// One static position: the average of its samples.
@@ -294,6 +415,8 @@ struct Sums<R: Reading> {
     sum_sq: [R::Sum; 3],
     n: u32,
     start_index: u32,
+    /// Index one past the last sample summed (skipped non-finite samples lie between start and end).
+    end_index: u32,
     saturated: bool,
 }
 
@@ -305,12 +428,18 @@ impl<R: Reading> Sums<R> {
             sum_sq: [R::Sum::default(); 3],
             n: 0,
             start_index,
+            end_index: start_index,
             saturated: false,
         }
     }
 
-    /// Adds `other` (relative to its own reference) to these sums, exactly.
+    /// Adds `other` (relative to its own reference) to these sums, exactly. A merge that would take the
+    /// count above [`MAX_POSE_SAMPLES`] is not made: the count saturates and the sums stay exact.
     fn merge(&mut self, other: &Self) {
+        if other.n > MAX_POSE_SAMPLES - self.n.min(MAX_POSE_SAMPLES) {
+            return;
+        }
+        self.end_index = other.end_index;
         let n = R::count(other.n);
         for a in 0..3 {
             let shift = other.reference[a].delta(self.reference[a]);
@@ -329,23 +458,17 @@ impl<R: Reading> Sums<R> {
         for a in 0..3 {
             let m = R::sum_to_f32(self.sum[a]) / n;
             mean[a] = m;
-            var[a] = (R::sum_to_f32(self.sum_sq[a]) / n - m * m).max(0.0);
+            let v = R::sum_to_f32(self.sum_sq[a]) / n - m * m;
+            var[a] = if v > 0.0 { v } else { 0.0 };
         }
         (mean, var)
     }
 
     fn pose(&self) -> Pose {
-        let n = f64::from(self.n.max(1));
-        let mut pose = Pose {
-            n: self.n,
-            start_index: self.start_index,
-            end_index: self.start_index.saturating_add(self.n),
-            ..Pose::default()
-        };
+        let mut pose = Pose { n: self.n, start_index: self.start_index, end_index: self.end_index, ..Pose::default() };
         for a in 0..3 {
-            let m = R::sum_to_f64(self.sum[a]) / n;
-            pose.mean[a] = (self.reference[a].to_f64() + m) as f32;
-            pose.variance[a] = (R::sum_to_f64(self.sum_sq[a]) / n - m * m).max(0.0) as f32;
+            (pose.mean[a], pose.variance[a]) =
+                R::mean_and_variance(self.reference[a], self.sum[a], self.sum_sq[a], self.n);
         }
         pose
     }
@@ -364,8 +487,12 @@ pub struct Accumulator<R: Reading, const POSES: usize, const BLOCK: usize> {
     config: AccumulatorConfig,
     poses: heapless::Vec<Pose, POSES>,
     rejections: Rejections,
-    /// The open block (`n == 0`: none yet).
-    block: Sums<R>,
+    /// The open block's samples, summed when it is full (a push only stores its sample).
+    buffer: [[R; 3]; BLOCK],
+    /// Samples in `buffer`.
+    buffered: usize,
+    /// Index of the open block's first sample.
+    block_start: u32,
     saturation_limit: R::Limit,
     previous: Option<BlockStats<R>>,
     pending: Option<Sums<R>>,
@@ -375,7 +502,10 @@ pub struct Accumulator<R: Reading, const POSES: usize, const BLOCK: usize> {
 }
 
 impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, BLOCK> {
-    const VALID: () = assert!(BLOCK >= 4, "a block needs at least 4 samples to estimate a variance");
+    const VALID: () = {
+        assert!(BLOCK >= 4, "a block needs at least 4 samples to estimate a variance");
+        assert!(BLOCK <= 1 << 16, "a block is summed in 32 bits: at most 65536 samples");
+    };
 
     /// An empty accumulator.
     pub fn new(config: AccumulatorConfig) -> Result<Self, AccumulatorError> {
@@ -385,7 +515,9 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
             config,
             poses: heapless::Vec::new(),
             rejections: Rejections::default(),
-            block: Sums::new([R::default(); 3], 0),
+            buffer: [[R::default(); 3]; BLOCK],
+            buffered: 0,
+            block_start: 0,
             saturation_limit: R::saturation_limit(config.full_scale),
             previous: None,
             pending: None,
@@ -399,24 +531,17 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
     #[inline]
     pub fn push(&mut self, sample: [R; 3]) -> Result<Option<Event>, AccumulatorError> {
         if !(sample[0].is_finite() && sample[1].is_finite() && sample[2].is_finite()) {
-            self.samples_seen = self.samples_seen.saturating_add(1);
-            return Err(AccumulatorError::NonFiniteSample);
+            return Err(self.skip_sample());
         }
-        let index = self.samples_seen;
         self.samples_seen = self.samples_seen.saturating_add(1);
-        if self.block.n == 0 {
-            self.open_block(sample, index);
-        }
-        let block = &mut self.block;
-        for a in 0..3 {
-            let d = sample[a].delta(block.reference[a]);
-            block.sum[a] += d;
-            block.sum_sq[a] += d * d;
-        }
-        let limit = self.saturation_limit;
-        block.saturated |= sample[0].saturated(limit) | sample[1].saturated(limit) | sample[2].saturated(limit);
-        block.n += 1;
-        if block.n as usize >= BLOCK {
+        let Some(slot) = self.buffer.get_mut(self.buffered) else {
+            // Unreachable: a full buffer is summed at once.
+            self.buffered = 0;
+            return Ok(None);
+        };
+        *slot = sample;
+        self.buffered += 1;
+        if self.buffered >= BLOCK {
             return self.close_block();
         }
         Ok(None)
@@ -435,7 +560,7 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
     /// Marks a gap in the stream (e.g. a sensor read error): the open block is dropped and an open pose
     /// is closed as if motion had started. Poses already stored are kept.
     pub fn interrupt(&mut self) -> Result<Option<Event>, AccumulatorError> {
-        self.block.n = 0;
+        self.drop_block();
         self.previous = None;
         self.pending = None;
         self.close_pose()
@@ -443,7 +568,7 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
 
     /// Ends the stream: a pose still open is closed with every quiet block it has (no motion followed).
     pub fn finish(&mut self) -> Result<Option<Event>, AccumulatorError> {
-        self.block.n = 0;
+        self.drop_block();
         self.previous = None;
         if let (Some(pose), Some(pending)) = (self.pose.as_mut(), self.pending.take()) {
             pose.merge(&pending);
@@ -451,19 +576,43 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         self.close_pose()
     }
 
-    /// Starts a block at `sample` (once per `BLOCK` samples; out of line so that `push` updates the
-    /// open block in place).
+    /// Counts a skipped non-finite sample (out of line: not the hot path).
     #[inline(never)]
-    fn open_block(&mut self, sample: [R; 3], index: u32) {
-        self.block = Sums::new(sample, index);
+    fn skip_sample(&mut self) -> AccumulatorError {
+        self.samples_seen = self.samples_seen.saturating_add(1);
+        if self.buffered == 0 {
+            self.block_start = self.samples_seen;
+        }
+        AccumulatorError::NonFiniteSample
+    }
+
+    /// Drops the open block's samples; the next block starts at the next sample.
+    fn drop_block(&mut self) {
+        self.buffered = 0;
+        self.block_start = self.samples_seen;
+    }
+
+    /// The full buffer's sums; the next block starts at the next sample.
+    fn take_block(&mut self) -> Sums<R> {
+        let BlockSums { sum, sum_sq, saturated } = R::block_sums(&self.buffer, self.saturation_limit);
+        let sums = Sums {
+            reference: self.buffer[0],
+            sum,
+            sum_sq,
+            n: BLOCK as u32,
+            start_index: self.block_start,
+            end_index: self.samples_seen,
+            saturated,
+        };
+        self.drop_block();
+        sums
     }
 
     // Once per BLOCK samples: kept out of line so that `push`, inlined into the caller's sample loop, stays
     // small (inlined, its register pressure made every push save and restore all FPU registers).
     #[inline(never)]
     fn close_block(&mut self) -> Result<Option<Event>, AccumulatorError> {
-        let sums = self.block;
-        self.block.n = 0;
+        let sums = self.take_block();
         let (offset, var) = sums.mean_offset_and_variance();
         let mut mean = [0.0; 3];
         for a in 0..3 {
@@ -476,11 +625,8 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         } else {
             f32::INFINITY
         };
-        self.noise_variance = risen
-            .min(stats.variance)
-            .max(self.config.min_noise_variance)
-            .max(R::QUANTUM_VARIANCE)
-            .max(1e-12 * magnitude_sq);
+        let floor = max_f32(max_f32(self.config.min_noise_variance, R::QUANTUM_VARIANCE), 1e-12 * magnitude_sq);
+        self.noise_variance = max_f32(min_f32(risen, stats.variance), floor);
         let noise = self.noise_variance;
         let drift_unit = 2.0 * noise / BLOCK as f32;
         let drift = self.previous.map(|p| {
@@ -573,5 +719,66 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
     /// `true` while a pose is being averaged.
     pub fn is_capturing(&self) -> bool {
         self.pose.is_some()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pose_count_saturates_and_its_sums_stay_exact() {
+        // A pose that has averaged nearly MAX_POSE_SAMPLES samples (2^31 would take 124 days at 200 Hz).
+        let mut pose = Sums::<i16>::new([0; 3], 0);
+        pose.n = MAX_POSE_SAMPLES - 10;
+        pose.sum = [5; 3];
+        pose.sum_sq = [7; 3];
+        let mut block = Sums::<i16>::new([100; 3], 50);
+        block.n = 32;
+        block.end_index = 82;
+        pose.merge(&block);
+        assert_eq!(pose.n, MAX_POSE_SAMPLES - 10, "a merge past the limit is not made");
+        assert_eq!((pose.sum, pose.sum_sq), ([5; 3], [7; 3]));
+        block.n = 10;
+        pose.merge(&block);
+        assert_eq!(pose.n, MAX_POSE_SAMPLES);
+        assert_eq!(pose.sum[0], 5 + 10 * 100);
+        assert_eq!(pose.end_index, 82);
+        pose.merge(&block);
+        assert_eq!(pose.n, MAX_POSE_SAMPLES, "the count saturates");
+    }
+
+    #[test]
+    fn sample_index_saturates() {
+        let mut acc: Accumulator<i16, 4, 32> = Accumulator::new(AccumulatorConfig::DEFAULT).unwrap();
+        acc.samples_seen = u32::MAX - 40;
+        for _ in 0..64 {
+            acc.push([1, 2, 3]).unwrap();
+        }
+        assert_eq!(acc.samples_seen(), u32::MAX);
+        acc.finish().unwrap();
+    }
+
+    #[test]
+    fn ratios_are_rounded_once() {
+        for (total, n) in
+            [(0i64, 1u32), (-3, 7), (1, 3), (2, 3), (-(1 << 46), 1 << 31), (123_456_789_012, 4_000_000_000)]
+        {
+            let exact = total as f64 / f64::from(n);
+            assert_eq!(ratio_to_f32(total, n), exact as f32, "{total} / {n}");
+        }
+        for total in -2000i64..2000 {
+            let n = 997;
+            assert_eq!(ratio_to_f32(total * 16_384 + 5, n), ((total * 16_384 + 5) as f64 / 997.0) as f32);
+        }
+    }
+
+    #[test]
+    fn large_sums_convert_to_f32_within_an_ulp() {
+        for v in [0i64, -3, 1 << 31, -(1 << 31) - 1, 3 << 40, -(5 << 50) + 12_345] {
+            let exact = v as f64;
+            let got = f64::from(i64_to_f32(v));
+            assert!((got - exact).abs() <= exact.abs() * 2.0 * f64::from(f32::EPSILON), "{v}: {got}");
+        }
     }
 }

@@ -79,10 +79,9 @@ pub fn encode(params: &Params, gravity: f32) -> [u8; BLOB_LEN] {
     out[..4].copy_from_slice(&MAGIC);
     out[4] = VERSION;
     let values = params.to_array();
-    let mut at = 8;
-    for v in values.iter().chain(core::iter::once(&gravity)) {
-        out[at..at + 4].copy_from_slice(&v.to_le_bytes());
-        at += 4;
+    let at = 8 + 4 * (PARAM_COUNT + 1);
+    for (word, v) in out[8..at].chunks_exact_mut(4).zip(values.iter().chain(core::iter::once(&gravity))) {
+        word.copy_from_slice(&v.to_le_bytes());
     }
     let crc = crc32(&out[..at]);
     out[at..].copy_from_slice(&crc.to_le_bytes());

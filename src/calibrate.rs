@@ -19,23 +19,25 @@
 use rand_core::Rng;
 
 use crate::accumulator::Pose;
-use crate::coarse::{CoarseCalibration, CoarseError, SearchWidths};
-use crate::frame::{Deviation, NormPose, objective};
-use crate::ga::{Ga, GaConfig, GaError};
-use crate::model::{PARAM_COUNT, PARAM_NAMES, Params};
-use crate::solve::{LmConfig, NewtonConfig, SolveError, SolveTermination, levenberg_marquardt, newton};
-use crate::verdict::{Verdict, VerdictBounds, judge, undetermined_parameters};
+use crate::coarse::{CoarseError, SearchWidths};
+use crate::ellipsoid::OutlierRule;
+use crate::frame::{Deviation, Frame, NormPose, objective};
+use crate::ga::{Ga, GaConfig, GaError, SearchBox};
+pub use crate::init::{Init, InitError, Initial, NormalizedPoses};
+use crate::model::{PARAM_COUNT, Params};
+use crate::solve::{LmConfig, NewtonConfig, SolveError, SolveTermination, levenberg_marquardt_holding, newton_holding};
+use crate::verdict::{PoseSet, Verdict, VerdictBounds, Warnings, information_matrix, judge, parameters_to_hold};
 
 /// The recommended seeded generator for the GA: 32-bit state arithmetic, fast on a Cortex-M4.
 pub type DefaultRng = rand_xoshiro::Xoshiro128PlusPlus;
 
-/// Which optimiser runs after the coarse calibration.
+/// Which optimiser runs after the initial estimate.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Method {
-    /// The paper's classical Newton baseline, from the coarse estimate.
+    /// The paper's classical Newton baseline, from the initial estimate.
     Newton,
-    /// Levenberg-Marquardt from the coarse estimate.
+    /// Levenberg-Marquardt from the initial estimate.
     Lm,
     /// The paper's TAGA alone.
     Taga,
@@ -56,6 +58,27 @@ impl Method {
     }
 }
 
+/// How the GA's search intervals are set around the initial estimate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Intervals {
+    /// Fixed half-widths (the paper's way).
+    Fixed(SearchWidths),
+    /// `sigmas` standard deviations of the initial estimate on each side: the covariance of the
+    /// information matrix at the start, inflated by the reduced chi-square of its residuals (so a
+    /// rough start gets a wide box, an informative set of poses a tight one); fixed widths when the
+    /// covariance cannot be formed.
+    Uncertainty {
+        /// Standard deviations per side.
+        sigmas: f32,
+    },
+}
+
+impl Intervals {
+    /// The default: 6 standard deviations.
+    pub const DEFAULT: Self = Self::Uncertainty { sigmas: 6.0 };
+}
+
 /// Calibration settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -64,8 +87,12 @@ pub struct CalibrationConfig {
     pub gravity: f32,
     /// Optimiser. Defaults to [`Method::TagaLm`].
     pub method: Method,
-    /// GA search half-widths around the coarse estimate. Defaults to [`SearchWidths::DEFAULT`].
-    pub widths: SearchWidths,
+    /// The initial estimate. Defaults to [`Init::Auto`] (ellipsoid fit, six faces as a fallback).
+    pub init: Init,
+    /// Which poses the ellipsoid fit leaves out as far off. Defaults to [`OutlierRule::DEFAULT`].
+    pub outliers: OutlierRule,
+    /// GA search intervals. Defaults to [`Intervals::DEFAULT`].
+    pub intervals: Intervals,
     /// GA settings. Defaults to [`GaConfig::DEFAULT`] with 30 generations at most and a 10-generation
     /// stall stop: enough to seed the LM polish (TAGA+LM reaches the least-squares optimum from it).
     /// TAGA alone needs 150-200 generations to come within 2x of the Cramer-Rao bound on the paper's
@@ -77,8 +104,8 @@ pub struct CalibrationConfig {
     pub newton: NewtonConfig,
     /// Verdict bounds. Defaults to [`VerdictBounds::DEFAULT`].
     pub bounds: VerdictBounds,
-    /// Model the "before" RMSE is computed with; `None` (default) uses the coarse calibration, which
-    /// is the only meaningful reference for raw counts. Use `Some(Params::IDENTITY)` for readings
+    /// Model the "before" RMSE is computed with; `None` (default) uses the initial estimate without
+    /// its non-orthogonality (centre and per-axis gains), the only meaningful reference for raw counts. Use `Some(Params::IDENTITY)` for readings
     /// already in the gravity unit.
     pub before: Option<Params>,
 }
@@ -88,7 +115,9 @@ impl CalibrationConfig {
     pub const DEFAULT: Self = Self {
         gravity: crate::model::STANDARD_GRAVITY_MPS2,
         method: Method::TagaLm,
-        widths: SearchWidths::DEFAULT,
+        init: Init::Auto,
+        outliers: OutlierRule::DEFAULT,
+        intervals: Intervals::DEFAULT,
         ga: GaConfig { max_generations: 30, stall_generations: 10, ..GaConfig::DEFAULT },
         lm: LmConfig::DEFAULT,
         newton: NewtonConfig::DEFAULT,
@@ -123,40 +152,38 @@ pub enum CalibrationError {
         /// Capacity.
         capacity: usize,
     },
-    /// Coarse calibration failed (e.g. an axis was never pointed up or down).
-    Coarse(CoarseError),
+    /// No initial estimate (too few poses, a degenerate spread of directions, no faces).
+    Init(InitError),
     /// The GA could not be set up.
     Ga(GaError),
     /// The gradient solver failed.
     Solve(SolveError),
-    /// The poses cannot determine these parameters (`true` per parameter, [`PARAM_NAMES`] order): too
-    /// few distinct directions. Capture orientations between the faces (edges, corners).
-    Undetermined([bool; PARAM_COUNT]),
 }
 
 impl core::fmt::Display for CalibrationError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
             Self::TooManyPoses { got, capacity } => write!(f, "{got} poses given, capacity is {capacity}"),
-            Self::Coarse(e) => write!(f, "coarse calibration: {e}"),
+            Self::Init(e) => write!(f, "initial estimate: {e}"),
             Self::Ga(e) => write!(f, "genetic algorithm: {e}"),
             Self::Solve(e) => write!(f, "solver: {e}"),
-            Self::Undetermined(which) => {
-                f.write_str("the poses cannot determine")?;
-                for (name, _) in PARAM_NAMES.iter().zip(which).filter(|(_, u)| **u) {
-                    write!(f, " {name}")?;
-                }
-                f.write_str(": capture orientations between the faces (edges, corners)")
-            }
         }
     }
 }
 
 impl core::error::Error for CalibrationError {}
 
+impl From<InitError> for CalibrationError {
+    fn from(e: InitError) -> Self {
+        match e {
+            InitError::TooManyPoses { got, capacity } => Self::TooManyPoses { got, capacity },
+            e => Self::Init(e),
+        }
+    }
+}
 impl From<CoarseError> for CalibrationError {
     fn from(e: CoarseError) -> Self {
-        Self::Coarse(e)
+        Self::Init(InitError::Coarse(e))
     }
 }
 impl From<GaError> for CalibrationError {
@@ -176,8 +203,8 @@ impl From<SolveError> for CalibrationError {
 pub struct Calibration {
     /// The calibrated parameters (paper convention).
     pub params: Params,
-    /// The coarse (six-position) estimate.
-    pub coarse: Params,
+    /// The initial estimate (which initialisation, its model, what it left out or held).
+    pub initial: Initial,
     /// The optimiser used.
     pub method: Method,
     /// The paper's objective `fE` at `params`, output unit to the fourth.
@@ -188,69 +215,69 @@ pub struct Calibration {
     pub evaluations: u32,
     /// Newton or LM iterations (0 for TAGA alone).
     pub iterations: u32,
+    /// Why the GA stopped (`None` without GA).
+    pub ga_termination: Option<crate::ga::Termination>,
+    /// Why Newton or LM stopped (`None` for TAGA alone).
+    pub solver_termination: Option<SolveTermination>,
     /// The verdict.
     pub verdict: Verdict,
 }
 
-/// Poses normalised into a coarse frame, in a fixed buffer of `MAX_POSES`.
-pub struct NormalizedPoses<const MAX_POSES: usize> {
-    coarse: CoarseCalibration,
-    poses: heapless::Vec<NormPose, MAX_POSES>,
-}
-
-impl<const MAX_POSES: usize> NormalizedPoses<MAX_POSES> {
-    /// Coarse-calibrates `poses` against `gravity` and normalises them.
-    pub fn new(poses: &[Pose], gravity: f32) -> Result<Self, CalibrationError> {
-        if poses.len() > MAX_POSES {
-            return Err(CalibrationError::TooManyPoses { got: poses.len(), capacity: MAX_POSES });
-        }
-        let mut means: heapless::Vec<[f32; 3], MAX_POSES> = heapless::Vec::new();
-        for p in poses {
-            // Capacity checked above.
-            let _ = means.push(p.mean);
-        }
-        let coarse = CoarseCalibration::from_means(&means, gravity)?;
-        let mut out = heapless::Vec::new();
-        for m in &means {
-            let _ = out.push(coarse.frame().normalize(*m));
-        }
-        Ok(Self { coarse, poses: out })
-    }
-
-    /// The coarse calibration that defines the frame.
-    pub fn coarse(&self) -> &CoarseCalibration {
-        &self.coarse
-    }
-
-    /// The normalised poses.
-    pub fn poses(&self) -> &[NormPose] {
-        &self.poses
-    }
-}
-
-/// Runs a GA of population `POP` on the normalised problem: the box from `widths` around the coarse
-/// estimate, the coarse estimate injected as one individual.
+/// Runs a GA of population `POP` on the normalised problem: the box from `widths` around `start`, which
+/// is injected as one individual.
 pub fn ga_solver<R: Rng, const POP: usize>(
     norm: &[NormPose],
+    start: &Deviation,
     widths: &SearchWidths,
     config: GaConfig,
     rng: R,
 ) -> Result<Ga<R, POP, PARAM_COUNT>, GaError> {
-    let mut ga = Ga::empty(config, widths.search_box(&[0.0; PARAM_COUNT])?, rng);
-    seed_population(&mut ga, norm)?;
+    let mut ga = Ga::empty(config, widths.search_box(start)?, rng);
+    seed_population(&mut ga, norm, start)?;
     Ok(ga)
 }
 
-/// Draws the initial population of a calibration GA and injects the coarse estimate (`x = 0`).
+/// Draws the initial population of a calibration GA and injects the start.
 fn seed_population<R: Rng, const POP: usize>(
     ga: &mut Ga<R, POP, PARAM_COUNT>,
     norm: &[NormPose],
+    start: &Deviation,
 ) -> Result<(), GaError> {
     let cost = |x: &Deviation| objective(x, norm);
     ga.initialize(&cost)?;
-    ga.inject(&[0.0; PARAM_COUNT], &cost);
+    ga.inject(start, &cost);
     Ok(())
 }
+
+/// The GA's search box for `intervals` around `start` (held parameters pinned to a zero-width-like box).
+#[inline(never)] // its matrices need not share a stack frame with the GA's state
+pub fn search_box(
+    intervals: &Intervals,
+    start: &Deviation,
+    frame: &Frame,
+    set: &PoseSet<'_>,
+    held: &[bool; PARAM_COUNT],
+) -> Result<SearchBox<PARAM_COUNT>, GaError> {
+    let sigmas = match intervals {
+        Intervals::Fixed(widths) => return widths.search_box(start),
+        Intervals::Uncertainty { sigmas } => *sigmas,
+    };
+    let info = information_matrix(start, frame, set, held, true);
+    let cov = info.and_then(|i| crate::verdict::covariance_holding(i, held));
+    let Some(cov) = cov else { return SearchWidths::DEFAULT.search_box(start) };
+    let mut lower = *start;
+    let mut upper = *start;
+    for i in 0..PARAM_COUNT {
+        // A floor keeps the box valid where a parameter is held or determined exactly.
+        let half = (sigmas * libm::sqrtf(cov[i][i].max(0.0))).max(MIN_HALF_WIDTH);
+        lower[i] -= half;
+        upper[i] += half;
+    }
+    SearchBox::new(lower, upper)
+}
+
+/// Smallest half-width of a GA interval, deviation units.
+const MIN_HALF_WIDTH: f32 = 1e-7;
 
 /// Runs the GA to termination and returns only its report. Out of line: the GA state (population
 /// and offspring, `2 POP 9` floats) then lives in this frame alone, not in one merged with the LM
@@ -258,83 +285,244 @@ fn seed_population<R: Rng, const POP: usize>(
 #[inline(never)]
 fn run_ga<R: Rng, const POP: usize>(
     norm: &[NormPose],
-    widths: &SearchWidths,
+    start: &Deviation,
+    bounds: SearchBox<PARAM_COUNT>,
     config: GaConfig,
     rng: R,
 ) -> Result<crate::ga::GaReport<PARAM_COUNT>, GaError> {
-    let mut ga = Ga::<R, POP, PARAM_COUNT>::empty(config, widths.search_box(&[0.0; PARAM_COUNT])?, rng);
-    seed_population(&mut ga, norm)?;
+    let mut ga = Ga::<R, POP, PARAM_COUNT>::empty(config, bounds, rng);
+    seed_population(&mut ga, norm, start)?;
     Ok(ga.run(&|x: &Deviation| objective(x, norm)))
 }
 
-/// Calibrates from captured poses with a GA population of `POP` and room for `MAX_POSES` poses.
+/// What the optimiser did.
+#[derive(Clone, Copy)]
+struct Optimised {
+    x: Deviation,
+    generations: u32,
+    evaluations: u32,
+    iterations: u32,
+    ga_termination: Option<crate::ga::Termination>,
+    solver_termination: Option<SolveTermination>,
+}
+
+impl Optimised {
+    /// Nothing run yet: the start.
+    fn at(x: Deviation) -> Self {
+        Self { x, generations: 0, evaluations: 0, iterations: 0, ga_termination: None, solver_termination: None }
+    }
+
+    fn from_ga(report: &crate::ga::GaReport<PARAM_COUNT>) -> Self {
+        let ga_termination = Some(report.termination);
+        Self {
+            x: report.best,
+            generations: report.generations,
+            evaluations: report.evaluations,
+            ga_termination,
+            ..Self::at(report.best)
+        }
+    }
+
+    /// Newton or LM from `self.x` (a GA's best, or the start) ran and gave `r`.
+    fn polished(self, r: crate::solve::SolveReport) -> Self {
+        Self { x: r.x, iterations: r.iterations, solver_termination: Some(r.termination), ..self }
+    }
+}
+
+/// The problem every optimiser solves: the poses normalised in the frame of the initial estimate, the
+/// parameters held at nominal, and the start (held parameters at 0).
+pub struct Prepared<const MAX_POSES: usize> {
+    normalized: NormalizedPoses<MAX_POSES>,
+    held: [bool; PARAM_COUNT],
+    start: Deviation,
+}
+
+impl<const MAX_POSES: usize> Prepared<MAX_POSES> {
+    /// The initial estimate ([`CalibrationConfig::init`]), the parameters to hold, the start.
+    pub fn new(poses: &[Pose], config: &CalibrationConfig) -> Result<Self, CalibrationError> {
+        let normalized = NormalizedPoses::<MAX_POSES>::prepare(poses, config.init, config.gravity, &config.outliers)?;
+        let set = normalized.pose_set(poses);
+        let held = parameters_to_hold(&normalized.start(), normalized.frame(), &set, normalized.initial().held);
+        // One pose per parameter fitted (six faces fit the biases and scale factors).
+        let norm = normalized.poses();
+        if norm.len() < held.iter().filter(|&&h| !h).count() {
+            return Err(SolveError::TooFewPoses { got: norm.len() }.into());
+        }
+        let mut start = normalized.start();
+        for i in 0..PARAM_COUNT {
+            if held[i] {
+                start[i] = 0.0;
+            }
+        }
+        Ok(Self { normalized, held, start })
+    }
+
+    /// The normalised poses used.
+    pub fn poses(&self) -> &[NormPose] {
+        self.normalized.poses()
+    }
+
+    /// The GA's search box ([`search_box`]).
+    fn search_box(&self, poses: &[Pose], config: &CalibrationConfig) -> Result<SearchBox<PARAM_COUNT>, GaError> {
+        search_box(
+            &config.intervals,
+            &self.start,
+            self.normalized.frame(),
+            &self.normalized.pose_set(poses),
+            &self.held,
+        )
+    }
+
+    /// Newton or LM (per `config.method`; LM for TAGA+LM) from `run.x`.
+    fn polish(&self, run: Optimised, config: &CalibrationConfig) -> Result<Optimised, CalibrationError> {
+        let norm = self.poses();
+        let r = match config.method {
+            Method::Newton => newton_holding(run.x, norm, &config.newton, &self.held)?,
+            _ => levenberg_marquardt_holding(run.x, norm, &config.lm, &self.held)?,
+        };
+        Ok(run.polished(r))
+    }
+
+    /// The calibration at the optimiser's result: held parameters exactly at nominal, the verdict.
+    fn conclude(&self, poses: &[Pose], run: &Optimised, config: &CalibrationConfig) -> Calibration {
+        let frame = self.normalized.frame();
+        let set = self.normalized.pose_set(poses);
+        let initial = *self.normalized.initial();
+        // The GA moves held genes within its smallest interval; they are held exactly.
+        let x: Deviation = core::array::from_fn(|i| if self.held[i] { self.start[i] } else { run.x[i] });
+        let before = config.before.unwrap_or_else(|| frame.to_params(&[0.0; PARAM_COUNT]));
+        let warnings = Warnings { held: self.held, excluded: initial.excluded };
+        let mut verdict = judge(&x, frame, &set, &before, &config.bounds, warnings);
+        verdict.failures.not_converged = run.solver_termination == Some(SolveTermination::MaxIterations);
+        Calibration {
+            params: frame.to_params(&x),
+            initial,
+            method: config.method,
+            objective: objective_value(&x, set.norm, config.gravity),
+            generations: run.generations,
+            evaluations: run.evaluations,
+            iterations: run.iterations,
+            ga_termination: run.ga_termination,
+            solver_termination: run.solver_termination,
+            verdict,
+        }
+    }
+}
+
+/// Calibrates from captured poses with a GA population of `POP` and room for `MAX_POSES` poses, in one
+/// call (see [`Calibrator`] for the same in bounded steps).
 pub fn calibrate<R: Rng, const POP: usize, const MAX_POSES: usize>(
     poses: &[Pose],
     config: &CalibrationConfig,
     rng: R,
 ) -> Result<Calibration, CalibrationError> {
-    let normalized = NormalizedPoses::<MAX_POSES>::new(poses, config.gravity)?;
-    let norm = normalized.poses();
-    let frame = *normalized.coarse().frame();
-    let start = [0.0; PARAM_COUNT];
-    if norm.len() < PARAM_COUNT {
-        return Err(SolveError::TooFewPoses { got: norm.len() }.into());
-    }
-    let undetermined = undetermined_parameters(&start, norm);
-    if undetermined.iter().any(|&u| u) {
-        return Err(CalibrationError::Undetermined(undetermined));
-    }
-    let (mut generations, mut evaluations, mut iterations) = (0, 0, 0);
-    let mut converged = true;
-    let x = match config.method {
-        Method::Newton => {
-            let r = newton(start, norm, &config.newton)?;
-            iterations = r.iterations;
-            converged = r.termination != SolveTermination::MaxIterations;
-            r.x
-        }
-        Method::Lm => {
-            let r = levenberg_marquardt(start, norm, &config.lm)?;
-            iterations = r.iterations;
-            converged = r.termination != SolveTermination::MaxIterations;
-            r.x
-        }
+    let prepared = Prepared::<MAX_POSES>::new(poses, config)?;
+    let start = Optimised::at(prepared.start);
+    let run = match config.method {
+        Method::Newton | Method::Lm => prepared.polish(start, config)?,
         Method::Taga | Method::TagaLm => {
-            let report = run_ga::<R, POP>(norm, &config.widths, config.ga, rng)?;
-            generations = report.generations;
-            evaluations = report.evaluations;
-            if config.method == Method::TagaLm {
-                let r = levenberg_marquardt(report.best, norm, &config.lm)?;
-                iterations = r.iterations;
-                converged = r.termination != SolveTermination::MaxIterations;
-                r.x
-            } else {
-                report.best
-            }
+            let bounds = prepared.search_box(poses, config)?;
+            let report = run_ga::<R, POP>(prepared.poses(), &prepared.start, bounds, config.ga, rng)?;
+            let ga = Optimised::from_ga(&report);
+            if config.method == Method::Taga { ga } else { prepared.polish(ga, config)? }
         }
     };
-    let params = frame.to_params(&x);
-    let before = config.before.unwrap_or_else(|| normalized.coarse().params());
-    let mut verdict = judge(&x, &frame, poses, norm, &before, &config.bounds);
-    verdict.failures.not_converged = !converged;
-    // fE in f64: the per-pose errors are accurate to f32, their sum of squares need not lose more.
-    let g2 = f64::from(config.gravity) * f64::from(config.gravity);
-    let sum_sq: f64 = norm
-        .iter()
-        .map(|p| {
-            let e = f64::from(crate::frame::modulus_error(&x, p));
-            e * e
-        })
-        .sum();
-    let objective_value = (sum_sq / norm.len() as f64 * g2 * g2) as f32;
-    Ok(Calibration {
-        params,
-        coarse: normalized.coarse().params(),
-        method: config.method,
-        objective: objective_value,
-        generations,
-        evaluations,
-        iterations,
-        verdict,
-    })
+    Ok(prepared.conclude(poses, &run, config))
+}
+
+/// What one [`Calibrator::step`] did.
+// No allocator to box the calibration in, and it is returned once: the size difference is the point.
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Step {
+    /// One GA generation ran; call again.
+    Running {
+        /// Generations run so far.
+        generation: u32,
+    },
+    /// The calibration is finished (the polish and the verdict ran in this step).
+    Finished(Calibration),
+}
+
+/// [`calibrate`] in bounded steps, to run beside a control loop or in an async task: [`Calibrator::new`]
+/// makes the initial estimate and the first population, each [`Calibrator::step`] runs one GA
+/// generation (about 60 k cycles on a Cortex-M4F at population 40 and 24 poses), and the last step
+/// polishes (LM, some 100 k cycles) and judges. The same seeds give the same result as [`calibrate`].
+///
+/// ```
+/// use accelcal::accumulator::Pose;
+/// use accelcal::calibrate::{calibrate, CalibrationConfig, Calibrator, DefaultRng, Step};
+/// use accelcal::model::Params;
+/// use rand_core::SeedableRng;
+/// let truth = Params { bias: [0.1, -0.2, 0.05], scale: [0.98, 1.01, 1.0], nonorth: [0.01, -0.01, 0.005] };
+/// let dirs = [[0.3f32, 0.9, 0.3], [-0.8, 0.5, 0.33], [0.1, -0.7, 0.7], [0.6, 0.0, -0.8], [-0.2, -0.3, -0.93],
+///     [0.9, -0.4, 0.17], [-0.5, -0.8, 0.33], [0.0, 0.6, -0.8], [-0.7, 0.1, -0.7], [0.57, 0.57, 0.57]];
+/// let poses = dirs.map(|d| {
+///     let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+///     Pose::from_mean(truth.invert(d.map(|v| v / n * 9.80665)).unwrap(), 500)
+/// });
+/// let config = CalibrationConfig::DEFAULT;
+/// let mut calibrator = Calibrator::<_, 40, 16>::new(&poses, &config, DefaultRng::seed_from_u64(3)).unwrap();
+/// let stepped = loop {
+///     match calibrator.step(&poses).unwrap() {
+///         Step::Running { .. } => continue, // other work here
+///         Step::Finished(cal) => break cal,
+///     }
+/// };
+/// let at_once = calibrate::<_, 40, 16>(&poses, &config, DefaultRng::seed_from_u64(3)).unwrap();
+/// assert_eq!(stepped, at_once);
+/// ```
+pub struct Calibrator<R, const POP: usize, const MAX_POSES: usize> {
+    config: CalibrationConfig,
+    prepared: Prepared<MAX_POSES>,
+    /// The GA, for the GA methods.
+    ga: Option<Ga<R, POP, PARAM_COUNT>>,
+}
+
+impl<R: Rng, const POP: usize, const MAX_POSES: usize> Calibrator<R, POP, MAX_POSES> {
+    /// The initial estimate, the held parameters and (for the GA methods) the first population.
+    pub fn new(poses: &[Pose], config: &CalibrationConfig, rng: R) -> Result<Self, CalibrationError> {
+        let prepared = Prepared::<MAX_POSES>::new(poses, config)?;
+        let ga = match config.method {
+            Method::Newton | Method::Lm => None,
+            Method::Taga | Method::TagaLm => {
+                let mut ga = Ga::empty(config.ga, prepared.search_box(poses, config)?, rng);
+                seed_population(&mut ga, prepared.poses(), &prepared.start)?;
+                Some(ga)
+            }
+        };
+        Ok(Self { config: *config, prepared, ga })
+    }
+
+    /// One bounded step on the same `poses` as [`Calibrator::new`]: a GA generation while the GA runs,
+    /// then the polish and the verdict.
+    pub fn step(&mut self, poses: &[Pose]) -> Result<Step, CalibrationError> {
+        let norm = self.prepared.poses();
+        let mut run = Optimised::at(self.prepared.start);
+        if let Some(ga) = self.ga.as_mut() {
+            let Some(termination) = ga.termination() else {
+                ga.step(&|x: &Deviation| objective(x, norm));
+                return Ok(Step::Running { generation: ga.generation() });
+            };
+            run = Optimised {
+                x: *ga.best(),
+                generations: ga.generation(),
+                evaluations: ga.evaluations(),
+                ga_termination: Some(termination),
+                ..run
+            };
+        }
+        if self.config.method != Method::Taga {
+            run = self.prepared.polish(run, &self.config)?;
+        }
+        Ok(Step::Finished(self.prepared.conclude(poses, &run, &self.config)))
+    }
+}
+
+/// The paper's objective `fE` (output unit to the fourth) at `x`. The per-pose errors are accurate to
+/// f32; their mean square is summed in f32 from small numbers (each `E / g^2` is near 0).
+fn objective_value(x: &Deviation, norm: &[NormPose], gravity: f32) -> f32 {
+    let g2 = gravity * gravity;
+    objective(x, norm) * g2 * g2
 }

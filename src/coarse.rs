@@ -202,10 +202,8 @@ impl CoarseCalibration {
         let mut offset = [0.0; 3];
         let mut gain = [0.0; 3];
         for a in 0..3 {
-            for (side, up) in [(0, true), (1, false)] {
-                if counts[a][side] == 0 {
-                    return Err(CoarseError::MissingAxisPair { axis: a as u8, up });
-                }
+            if let Some(side) = counts[a].iter().position(|&c| c == 0) {
+                return Err(CoarseError::MissingAxisPair { axis: a as u8, up: side == 0 });
             }
             let v_up = sums[a][0] / f32::from(counts[a][0]);
             let v_down = sums[a][1] / f32::from(counts[a][1]);

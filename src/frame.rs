@@ -76,6 +76,40 @@ impl core::fmt::Display for FrameError {
 
 impl core::error::Error for FrameError {}
 
+/// `a + b` as `(sum, error)` with `sum + error` exact (Knuth's two-sum).
+#[inline]
+fn two_sum(a: f32, b: f32) -> (f32, f32) {
+    let sum = a + b;
+    let b_part = sum - a;
+    (sum, (a - (sum - b_part)) + (b - b_part))
+}
+
+/// The high and low halves of `a` (Veltkamp's split: 12 significant bits each).
+#[inline]
+fn split(a: f32) -> (f32, f32) {
+    let c = 4097.0 * a;
+    let high = c - (c - a);
+    (high, a - high)
+}
+
+/// `a b` as `(product, error)` with `product + error` exact (Dekker's two-product, no fused multiply-add).
+#[inline]
+fn two_product(a: f32, b: f32) -> (f32, f32) {
+    let product = a * b;
+    let ((ah, al), (bh, bl)) = (split(a), split(b));
+    (product, ((ah * bh - product) + ah * bl + al * bh) + al * bl)
+}
+
+/// `(n_hi + n_lo) / (d_hi + d_lo)` to about twice `f32` precision, as `(high, low)`.
+#[inline]
+fn quotient((n_hi, n_lo): (f32, f32), (d_hi, d_lo): (f32, f32)) -> (f32, f32) {
+    let high = n_hi / d_hi;
+    let (p, p_error) = two_product(high, d_hi);
+    // n_hi - p is exact (the two are within a rounding of each other).
+    let remainder = (n_hi - p) - p_error + n_lo - high * d_lo;
+    (high, remainder / d_hi)
+}
+
 impl Frame {
     /// A frame with per-axis `offset` and `gain` (input unit per output unit) and `gravity` (output unit).
     pub fn new(offset: [f32; 3], gain: [f32; 3], gravity: f32) -> Result<Self, FrameError> {
@@ -93,17 +127,23 @@ impl Frame {
         Ok(Self { offset, gain, gravity })
     }
 
-    /// Normalises one pose mean (input unit). `u` and `q` are formed in `f64` (once per pose, not per
-    /// cost evaluation): `q = |u|^2 - 1` is the small number every modulus error starts from, and
-    /// rounding `u` to `f32` first would cost it about 1e-7 absolute.
+    /// Normalises one pose mean (input unit). `u` and `q` are formed in double-`f32` arithmetic (exact
+    /// sums and products by error-free transformations; once per pose, not per cost evaluation, and no
+    /// software `f64` on a Cortex-M4F): `q = |u|^2 - 1` is the small number every modulus error starts
+    /// from, and rounding `u` to `f32` first would cost it about 1e-7 absolute.
     pub fn normalize(&self, mean: [f32; 3]) -> NormPose {
-        let mut u64 = [0.0f64; 3];
+        let mut u = [0.0f32; 3];
+        // q = sum(hi) - 1 + sum(lo), the large part summed without error.
+        let (mut q_hi, mut q_lo) = (-1.0f32, 0.0f32);
         for i in 0..3 {
-            let scale = f64::from(self.gain[i]) * f64::from(self.gravity);
-            u64[i] = (f64::from(mean[i]) - f64::from(self.offset[i])) / scale;
+            let (u_hi, u_lo) = quotient(two_sum(mean[i], -self.offset[i]), two_product(self.gain[i], self.gravity));
+            u[i] = u_hi + u_lo;
+            let (square_hi, square_lo) = two_product(u_hi, u_hi);
+            let (sum, error) = two_sum(q_hi, square_hi);
+            q_hi = sum;
+            q_lo += error + square_lo + 2.0 * u_hi * u_lo;
         }
-        let q = u64[0] * u64[0] + u64[1] * u64[1] + u64[2] * u64[2] - 1.0;
-        NormPose { u: u64.map(|v| v as f32), q: q as f32 }
+        NormPose { u, q: q_hi + q_lo }
     }
 
     /// Paper-convention parameters for a deviation vector.
@@ -242,6 +282,26 @@ mod tests {
         let e_norm = modulus_error(&x, &pose) * 9.80665f32 * 9.80665;
         let e_direct = p.modulus_error(mean, 9.80665);
         assert!((e_norm - e_direct).abs() < 1e-3 * e_direct.abs().max(1.0), "{e_norm} vs {e_direct}");
+    }
+
+    #[test]
+    fn normalize_matches_double_precision() {
+        let frame = Frame::new([32768.0, -412.5, 1903.25], [1671.3, 1669.9, 1675.1], 9.80665).unwrap();
+        for k in 0..500 {
+            let t = k as f32 * 0.0137;
+            let mean = [32768.0 + 16000.0 * libm::cosf(t), -412.5 + 16000.0 * libm::sinf(t), 1903.25 + 37.3 * t];
+            let pose = frame.normalize(mean);
+            let u: [f64; 3] = core::array::from_fn(|i| {
+                (f64::from(mean[i]) - f64::from(frame.offset[i]))
+                    / (f64::from(frame.gain[i]) * f64::from(frame.gravity))
+            });
+            let q = u[0] * u[0] + u[1] * u[1] + u[2] * u[2] - 1.0;
+            for i in 0..3 {
+                assert_eq!(pose.u[i], u[i] as f32, "k {k} axis {i}");
+            }
+            // Within one rounding of the double-precision value.
+            assert!((f64::from(pose.q) - q).abs() <= f64::from(f32::EPSILON) * q.abs() + 1e-13, "k {k}");
+        }
     }
 
     #[test]

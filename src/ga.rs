@@ -119,6 +119,7 @@ impl<const DIM: usize> SearchBox<DIM> {
     }
 
     /// Reflects `v` at the bounds of gene `i` and clamps what is still outside.
+    #[inline(always)]
     fn reflect(&self, i: usize, v: f32) -> f32 {
         let (lo, hi) = (self.lower[i], self.upper[i]);
         let r = if v < lo {
@@ -436,6 +437,11 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
     /// Replaces the worst individual by `x` (clamped into the box), e.g. a prior estimate.
     pub fn inject(&mut self, x: &[f32; DIM], cost: &impl CostFunction<DIM>) {
         let worst = argmax(&self.costs);
+        if worst >= POP {
+            // Unreachable (argmax returns an index of `costs`); lets the optimiser drop the bounds checks
+            // below when argmax is not inlined (opt-level "s").
+            return;
+        }
         for d in 0..DIM {
             self.population[worst][d] = self.bounds.reflect(d, x[d]);
         }
@@ -445,7 +451,7 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
 
     fn evaluate(&mut self, cost: &impl CostFunction<DIM>, i: usize) -> f32 {
         self.evaluations = self.evaluations.saturating_add(1);
-        let c = cost.cost(&self.population[i]);
+        let c = self.population.get(i).map_or(WORST_COST, |x| cost.cost(x));
         if c.is_finite() && c < WORST_COST { c } else { WORST_COST }
     }
 
@@ -462,7 +468,9 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
         ((r & 0xFFFF) as f32 * scale, (r >> 16) as f32 * scale)
     }
 
-    /// Binary tournament: the better of two individuals drawn at random.
+    /// Binary tournament: the better of two individuals drawn at random. Inlined: the caller then sees
+    /// that the index is below `POP` and indexes without bounds checks.
+    #[inline(always)]
     fn tournament(&mut self) -> usize {
         let r = self.rng.next_u32();
         let a = (((r & 0xFFFF) as usize) * POP) >> 16;
@@ -571,14 +579,23 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
     }
 
     fn mutate(&mut self, i: usize, d: usize, spread: &[f32; DIM]) {
-        self.offspring[i][d] = if self.uniform() < self.config.global_mutation {
-            let (lo, hi) = (self.bounds.lower[d], self.bounds.upper[d]);
-            let step = CAUCHY_SCALE * (hi - lo) * self.cauchy();
-            self.bounds.reflect(d, self.offspring[i][d] + step)
-        } else {
-            let step = self.triangular() * spread[d];
-            self.bounds.reflect(d, self.offspring[i][d] + step)
+        let (Some(&gene), Some(&lo), Some(&hi), Some(&width)) = (
+            self.offspring.get(i).and_then(|x| x.get(d)),
+            self.bounds.lower.get(d),
+            self.bounds.upper.get(d),
+            spread.get(d),
+        ) else {
+            return;
         };
+        let step = if self.uniform() < self.config.global_mutation {
+            CAUCHY_SCALE * (hi - lo) * self.cauchy()
+        } else {
+            self.triangular() * width
+        };
+        let mutated = self.bounds.reflect(d, gene + step);
+        if let Some(g) = self.offspring.get_mut(i).and_then(|x| x.get_mut(d)) {
+            *g = mutated;
+        }
     }
 
     /// Standard Cauchy: the ratio of the coordinates of a point uniform in the unit disc (no
@@ -606,7 +623,8 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
             let mean = self.population.iter().map(|x| x[d]).sum::<f32>() / POP as f32;
             let var = self.population.iter().map(|x| (x[d] - mean) * (x[d] - mean)).sum::<f32>() / POP as f32;
             let floor = self.config.mutation_floor * (self.bounds.upper[d] - self.bounds.lower[d]);
-            out[d] = (LOCAL_STEP * libm::sqrtf(var)).max(floor);
+            let width = LOCAL_STEP * crate::linalg::sqrt_f32(var);
+            out[d] = if width > floor { width } else { floor };
         }
         out
     }
@@ -681,21 +699,23 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
     }
 }
 
+/// Index of the first smallest value (0 for an empty slice); NaN never wins.
 fn argmin(v: &[f32]) -> usize {
-    let mut best = 0;
+    let (mut best, mut best_value) = (0, v.first().copied().unwrap_or(0.0));
     for (i, &c) in v.iter().enumerate() {
-        if c < v[best] {
-            best = i;
+        if c < best_value {
+            (best, best_value) = (i, c);
         }
     }
     best
 }
 
+/// Index of the first largest value (0 for an empty slice); NaN never wins.
 fn argmax(v: &[f32]) -> usize {
-    let mut worst = 0;
+    let (mut worst, mut worst_value) = (0, v.first().copied().unwrap_or(0.0));
     for (i, &c) in v.iter().enumerate() {
-        if c > v[worst] {
-            worst = i;
+        if c > worst_value {
+            (worst, worst_value) = (i, c);
         }
     }
     worst

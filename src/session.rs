@@ -7,7 +7,8 @@
 //! WaitingForStillness -> Capturing -> MoveOn -> PoseCaptured -> WaitingForStillness -> ...
 //!                                 \-> PoseRejected (moved too early, saturated) -/
 //! any -> Interrupted (sensor error; poses kept) -> WaitingForStillness
-//! finish() -> Done | Failed (poses kept: capture more and finish again)
+//! finish() -> Done (verdict passed: blob) | Failed (no fit, or a failed verdict: no blob; poses kept:
+//!             capture more, or remove_pose() a bad one, and finish again)
 //! ```
 //!
 //! Every [`Session::push`] returns a [`Progress`]: the state, poses captured, rejections, duplicates,
@@ -15,21 +16,24 @@
 //! few comparisons; the guidance is some ten thousand `f64` operations, software-emulated on a
 //! Cortex-M4F, done while the person is already turning the board):
 //!
-//! - until every axis has been seen pointing up and down, the guidance names the missing face;
-//! - then the poses are normalised with the coarse (six-position) frame and each of the 26 cube
-//!   directions ([`CubeDirection`]: faces, edges, vertices) is scored by the parameter standard
-//!   deviations the information matrix predicts if that orientation were added next (with the noise
-//!   measured so far). The standard deviations are normalised by the [`VerdictBounds`] of the
+//! - the poses are normalised in the frame of the initial estimate ([`crate::init`]: the ellipsoid fit,
+//!   or the six faces), or, before one can be made (fewer than 9 poses, too narrow a spread), in a
+//!   provisional frame (zero offset, the mean reading as 1 g): guidance works from the first pose, in
+//!   any order, with no face required;
+//! - each of the 26 cube directions ([`CubeDirection`]: faces, edges, vertices) is scored by the
+//!   parameter standard deviations the information matrix predicts if that orientation were added
+//!   next (with the noise measured so far). The standard deviations are normalised by the [`VerdictBounds`] of the
 //!   calibration (1 = at the bound); the best candidate minimises the worst one, ties broken by the
-//!   sum of squares (A-optimal). A weak prior (standard deviation 0.5 in every deviation coordinate
+//!   sum of squares (A-optimal); while some parameter is still above its bound, the candidate that adds
+//!   the most information wins instead (D-optimal), which asks for new directions first. A weak prior (standard deviation 0.5 in every deviation coordinate
 //!   of [`crate::frame`]) keeps the matrix invertible while some terms are not determined at all:
 //!   such a term shows the prior's standard deviation (e.g. 50 for a non-orthogonality term under
 //!   the default bounds), which no sensible bound accepts.
 //!
 //! [`Progress::ready`] says when the done criterion is met: at least
 //! [`SessionConfig::min_poses`] poses and every predicted standard deviation within its bound.
-//! [`Session::finish`] then runs [`calibrate`] (coarse, TAGA, LM, verdict) and returns the
-//! parameters, the verdict and the [`blob`](crate::blob) for flash.
+//! [`Session::finish`] then runs [`calibrate`] (initial estimate, TAGA, LM, verdict) and, when the
+//! verdict passes, returns the parameters, the verdict and the [`blob`](crate::blob) for flash.
 //!
 //! A new pose within [`SessionConfig::duplicate_angle_deg`] of an earlier one is *kept* and reported
 //! ([`State::PoseCaptured`]'s `duplicate_of`, [`Progress::duplicates`]): a repeated orientation still
@@ -77,11 +81,11 @@ use crate::accumulator::{
 };
 use crate::blob::{BLOB_LEN, encode};
 use crate::calibrate::{Calibration, CalibrationConfig, CalibrationError, calibrate};
-use crate::coarse::{CoarseCalibration, CoarseError};
 use crate::frame::{Frame, NormPose, modulus_error_gradient};
+use crate::init::{Init, NormalizedPoses};
 use crate::model::PARAM_COUNT;
 use crate::sensor::AccelSensor;
-use crate::verdict::VerdictBounds;
+use crate::verdict::{Failures, VerdictBounds, Warnings};
 
 // ---------------------------------------------------------------------------------------------
 // Orientations
@@ -161,6 +165,21 @@ impl CubeDirection {
         }
     }
 
+    /// For a face, its name in vehicle terms, with the sensor in a vehicle's NED body axes (x forward,
+    /// y right, z down): `level`, `upside down`, `nose up`, `nose down`, `left side down`,
+    /// `right side down`; `None` for edges and vertices.
+    pub const fn vehicle_name(&self) -> Option<&'static str> {
+        match self.signs {
+            [0, 0, -1] => Some("level"),
+            [0, 0, 1] => Some("upside down"),
+            [1, 0, 0] => Some("nose up"),
+            [-1, 0, 0] => Some("nose down"),
+            [0, 1, 0] => Some("left side down"),
+            [0, -1, 0] => Some("right side down"),
+            _ => None,
+        }
+    }
+
     /// The unit vector in the sensor axes.
     pub fn unit(&self) -> [f32; 3] {
         let c = match self.kind() {
@@ -193,10 +212,39 @@ impl core::fmt::Display for CubeDirection {
 // Configuration, errors, progress
 // ---------------------------------------------------------------------------------------------
 
+/// How the session guides the person and what it accepts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Mode {
+    /// The full 9-parameter calibration: the next orientation is the most informative one (any
+    /// start, any order); [`Session::finish`] accepts only a fit of every parameter.
+    #[default]
+    Guided,
+    /// The six faces, as ArduPilot and PX4 ask for them ([`CubeDirection::vehicle_name`]): level,
+    /// upside down, nose up, nose down, left side down, right side down. Fits the biases and scale
+    /// factors (six directions cannot see the non-orthogonality, which is held at 0 and said so);
+    /// ready when the six faces are captured.
+    SixFace,
+}
+
+/// The six faces in the order [`Mode::SixFace`] asks for them, in the vehicle's NED body axes
+/// (x forward, y right, z down): level (-z up), upside down, nose up, nose down, left side down (the
+/// right side, +y, up), right side down.
+pub const SIX_FACES: [CubeDirection; 6] = [
+    CubeDirection::face(2, false),
+    CubeDirection::face(2, true),
+    CubeDirection::face(0, true),
+    CubeDirection::face(0, false),
+    CubeDirection::face(1, true),
+    CubeDirection::face(1, false),
+];
+
 /// Session settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SessionConfig {
+    /// Guidance and acceptance. Defaults to [`Mode::Guided`].
+    pub mode: Mode,
     /// Static detection. Defaults to [`AccumulatorConfig::DEFAULT`].
     pub accumulator: AccumulatorConfig,
     /// The calibration run by [`Session::finish`]; its `gravity` (output unit) is the blob's and its
@@ -217,12 +265,34 @@ pub struct SessionConfig {
 impl SessionConfig {
     /// The documented defaults.
     pub const DEFAULT: Self = Self {
+        mode: Mode::Guided,
         accumulator: AccumulatorConfig::DEFAULT,
         calibration: CalibrationConfig::DEFAULT,
         min_poses: 12,
         hold_samples: 1000,
         duplicate_angle_deg: 10.0,
     };
+
+    /// The defaults for a sensor read at `sample_rate_hz`: a pose held `hold_s` seconds before the
+    /// session says [`State::MoveOn`], and still intervals shorter than `min_still_s` seconds not kept
+    /// (both rounded to samples, at least one). The defaults are 5 s and 0.5 s at 200 Hz.
+    pub fn at_rate(sample_rate_hz: f32, hold_s: f32, min_still_s: f32) -> Self {
+        let samples = |s: f32| {
+            let n = libm::roundf(s * sample_rate_hz);
+            if n >= 1.0 && n < u32::MAX as f32 {
+                n as u32
+            } else if n >= 1.0 {
+                u32::MAX
+            } else {
+                1
+            }
+        };
+        let accumulator = AccumulatorConfig { min_pose_samples: samples(min_still_s), ..AccumulatorConfig::DEFAULT };
+        Self { accumulator, hold_samples: samples(hold_s), ..Self::DEFAULT }
+    }
+
+    /// The six-face quick mode ([`Mode::SixFace`]) with the other defaults (6 poses at least).
+    pub const SIX_FACE: Self = Self { mode: Mode::SixFace, min_poses: 6, ..Self::DEFAULT };
 
     /// Checks the accumulator settings, `min_poses >= 9`, `hold_samples >= min_pose_samples`, the
     /// duplicate angle, a finite positive gravity and positive (possibly infinite) parameter bounds.
@@ -232,7 +302,8 @@ impl SessionConfig {
         let g = self.calibration.gravity;
         let b = &self.calibration.bounds;
         let positive = |v: f32| v > 0.0;
-        let ok = self.min_poses >= PARAM_COUNT
+        let fewest = if self.mode == Mode::SixFace { 6 } else { PARAM_COUNT };
+        let ok = self.min_poses >= fewest
             && self.hold_samples >= self.accumulator.min_pose_samples
             && (0.0..90.0).contains(&self.duplicate_angle_deg)
             && g.is_finite()
@@ -261,6 +332,16 @@ pub enum SessionError {
     Accumulator(AccumulatorError),
     /// The calibration failed; capture more poses (see the guidance) and finish again.
     Calibration(CalibrationError),
+    /// The calibration ran but failed its verdict (what failed; the calibration is in
+    /// [`Session::last_calibration`]); no blob is made. Capture more poses, or remove a bad one, and
+    /// finish again.
+    Verdict(Failures),
+    /// The fit passed its verdict but could not determine every parameter (held at nominal) or left
+    /// poses out; [`Mode::Guided`] wants them all: capture the orientations the guidance asks for
+    /// (the calibration is in [`Session::last_calibration`]).
+    Incomplete(Warnings),
+    /// No pose has this index.
+    NoSuchPose,
     /// The session is [`State::Done`]; start a new one.
     Finished,
 }
@@ -271,6 +352,11 @@ impl core::fmt::Display for SessionError {
             Self::InvalidConfig => f.write_str("session configuration out of range"),
             Self::Accumulator(e) => write!(f, "accumulator: {e}"),
             Self::Calibration(e) => write!(f, "calibration: {e}"),
+            Self::Verdict(_) => f.write_str("the calibration failed its verdict: capture more orientations"),
+            Self::Incomplete(_) => f.write_str(
+                "the poses do not determine every parameter: capture the orientations the guidance asks for",
+            ),
+            Self::NoSuchPose => f.write_str("no pose has this index"),
             Self::Finished => f.write_str("the session is finished; start a new one"),
         }
     }
@@ -329,10 +415,14 @@ pub enum State {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum GuidanceBasis {
-    /// Some axis has not been seen pointing up or down yet: the suggestion is that face.
-    MissingFace,
-    /// The predicted parameter standard deviations (see the [module docs](self)).
+    /// The predicted parameter standard deviations in a provisional frame (zero offset, the mean
+    /// reading as 1 g on every axis): too few poses, or too narrow a spread, for an initial estimate.
+    Provisional,
+    /// The predicted parameter standard deviations in the frame of the initial estimate (see the
+    /// [module docs](self)).
     Information,
+    /// [`Mode::SixFace`]: the next face not yet captured, in the order of [`SIX_FACES`].
+    Faces,
 }
 
 /// What to do next, updated at every captured pose.
@@ -344,25 +434,12 @@ pub struct Guidance {
     /// Why.
     pub basis: GuidanceBasis,
     /// Per parameter ([`crate::model::PARAM_NAMES`] order): predicted standard deviation above its
-    /// bound (all `true` before the six faces exist).
+    /// bound.
     pub poorly_determined: [bool; PARAM_COUNT],
-    /// Largest predicted standard deviation over its bound (1 = at the bound); infinite before the
-    /// six faces exist.
+    /// Largest predicted standard deviation over its bound (1 = at the bound).
     pub worst_std: f32,
     /// The same after adding `next` (a prediction with the current noise).
     pub worst_std_after_next: f32,
-}
-
-impl Guidance {
-    fn missing_face(next: CubeDirection) -> Self {
-        Self {
-            next,
-            basis: GuidanceBasis::MissingFace,
-            poorly_determined: [true; PARAM_COUNT],
-            worst_std: f32::INFINITY,
-            worst_std_after_next: f32::INFINITY,
-        }
-    }
 }
 
 /// The session's report after every sample.
@@ -381,7 +458,11 @@ pub struct Progress {
     pub sensor_errors: u32,
     /// What to do next.
     pub guidance: Guidance,
-    /// The done criterion is met: [`Session::finish`] is expected to pass the verdict.
+    /// How many of the six faces have a pose (the raw mean within 25 deg of the face).
+    pub faces_done: u8,
+    /// The done criterion is met: at least [`SessionConfig::min_poses`] poses and every predicted
+    /// standard deviation within its bound. A prediction: [`Session::finish`] judges the fit itself
+    /// (a misfit or a bad pose can still fail it, after which this is `false` until a new pose).
     pub ready: bool,
 }
 
@@ -389,7 +470,7 @@ pub struct Progress {
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SessionResult {
-    /// Parameters, coarse estimate, verdict, optimiser statistics.
+    /// Parameters, initial estimate, verdict, optimiser statistics.
     pub calibration: Calibration,
     /// [`crate::blob::encode`] of the parameters and the gravity: the bytes to store in flash.
     pub blob: [u8; BLOB_LEN],
@@ -409,11 +490,15 @@ pub struct RunLimits {
     /// Consecutive sensor errors after which the run gives up with [`RunError::Sensor`] (the poses
     /// are kept: [`Session::finish`] can still be called). Defaults to 10.
     pub max_consecutive_errors: u32,
+    /// Failed reads in all after which the run gives up with [`RunError::ReadErrorBudget`] (poses
+    /// kept). Defaults to 10 000. A single failed read is a skipped sample (the pose being held goes
+    /// on); two or more in a row are a gap ([`Session::sensor_error`]: an open pose is closed).
+    pub max_read_errors: u32,
 }
 
 impl RunLimits {
     /// The documented defaults.
-    pub const DEFAULT: Self = Self { max_samples: u32::MAX, max_consecutive_errors: 10 };
+    pub const DEFAULT: Self = Self { max_samples: u32::MAX, max_consecutive_errors: 10, max_read_errors: 10_000 };
 }
 
 impl Default for RunLimits {
@@ -428,6 +513,8 @@ impl Default for RunLimits {
 pub enum RunError<E> {
     /// More than [`RunLimits::max_consecutive_errors`] reads in a row failed; the last error.
     Sensor(E),
+    /// More than [`RunLimits::max_read_errors`] reads failed in all; the last error.
+    ReadErrorBudget(E),
     /// The session failed (e.g. the calibration).
     Session(SessionError),
 }
@@ -442,6 +529,7 @@ impl<E: core::fmt::Debug> core::fmt::Display for RunError<E> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
             Self::Sensor(e) => write!(f, "sensor error: {e:?}"),
+            Self::ReadErrorBudget(e) => write!(f, "too many failed sensor reads (last: {e:?})"),
             Self::Session(e) => write!(f, "{e}"),
         }
     }
@@ -467,6 +555,7 @@ pub struct Session<R: Reading, const POSES: usize, const BLOCK: usize, const POP
     ready: bool,
     duplicate_cos: f32,
     result: Option<SessionResult>,
+    last: Option<Calibration>,
 }
 
 impl<R: Reading, const POSES: usize, const BLOCK: usize, const POP: usize> Session<R, POSES, BLOCK, POP> {
@@ -487,18 +576,21 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize, const POP: usize> Sessi
         }
         let acc = Accumulator::new(config.accumulator)?;
         let duplicate_cos = libm::cosf(config.duplicate_angle_deg.to_radians());
-        Ok(Self {
+        let mut session = Self {
             config,
             acc,
             state: State::WaitingForStillness,
             pose_start: 0,
-            guidance: missing_face_guidance(&[], None),
+            guidance: guidance_for::<POSES>(&[], &config.calibration),
             duplicates: 0,
             sensor_errors: 0,
             ready: false,
             duplicate_cos,
             result: None,
-        })
+            last: None,
+        };
+        session.refresh_guidance();
+        Ok(session)
     }
 
     /// Feeds one sample (x, y, z, input unit). An `Err` leaves the session as it was except that a
@@ -535,9 +627,23 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize, const POP: usize> Sessi
         self.advance(event, true)
     }
 
-    /// Closes an open pose and calibrates with every pose captured ([`calibrate`]: coarse, then the
-    /// configured optimiser, TAGA + LM by default, then the verdict), seeded by `rng`. On success the
-    /// session is [`State::Done`]; on failure [`State::Failed`] with the poses kept.
+    /// A failed read in [`Session::run_with_sensor`], counted: the first of a run is a skipped sample,
+    /// the second in a row a gap (an open pose is closed, as by [`Session::sensor_error`]).
+    fn read_failed(&mut self, consecutive: u32) -> Result<Progress, SessionError> {
+        self.sensor_errors = self.sensor_errors.saturating_add(1);
+        if consecutive < 2 {
+            return Ok(self.progress());
+        }
+        let event = self.acc.interrupt();
+        self.advance(event, true)
+    }
+
+    /// Closes an open pose and calibrates with every pose captured ([`calibrate`]: initial estimate,
+    /// then the configured optimiser, TAGA + LM by default, then the verdict), seeded by `rng`. When
+    /// the verdict passes the session is [`State::Done`] with the blob; otherwise (no fit, or a fit
+    /// that failed its verdict: no blob) [`State::Failed`] with every pose kept: push more samples
+    /// (the guidance says which orientation helps), or [`Session::remove_pose`] a bad one, and finish
+    /// again.
     pub fn finish<G: Rng>(&mut self, rng: G) -> Result<SessionResult, SessionError> {
         if self.state == State::Done {
             return Err(SessionError::Finished);
@@ -548,30 +654,37 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize, const POP: usize> Sessi
         }
         #[cfg(feature = "defmt")]
         defmt::info!("session: solving with {} poses", self.acc.poses().len());
-        match calibrate::<G, POP, POSES>(self.acc.poses(), &self.config.calibration, rng) {
-            Ok(calibration) => {
-                let result = SessionResult {
-                    calibration,
-                    blob: encode(&calibration.params, self.config.calibration.gravity),
-                    poses: self.acc.poses().len(),
-                    duplicates: self.duplicates,
-                };
-                self.result = Some(result);
-                self.set_state(State::Done);
-                #[cfg(feature = "defmt")]
-                defmt::info!(
-                    "session: done, pass {}, RMSE {} mg",
-                    calibration.verdict.pass(),
-                    calibration.verdict.rmse_after_mg
-                );
-                Ok(result)
-            }
-            Err(e) => {
-                let error = SessionError::Calibration(e);
-                self.set_state(State::Failed(error));
-                Err(error)
-            }
+        let calibration = match calibrate::<G, POP, POSES>(self.acc.poses(), &self.config.calibration, rng) {
+            Ok(calibration) => calibration,
+            Err(e) => return Err(self.fail(SessionError::Calibration(e))),
+        };
+        self.last = Some(calibration);
+        #[cfg(feature = "defmt")]
+        defmt::info!("session: pass {}, RMSE {} mg", calibration.verdict.pass(), calibration.verdict.rmse_after_mg);
+        let verdict = &calibration.verdict;
+        if !verdict.pass() {
+            return Err(self.fail(SessionError::Verdict(verdict.failures)));
         }
+        // Left-out poses are named but accepted; held parameters only in the six-face mode.
+        if self.config.mode == Mode::Guided && verdict.warnings.held.iter().any(|&h| h) {
+            return Err(self.fail(SessionError::Incomplete(verdict.warnings)));
+        }
+        let result = SessionResult {
+            calibration,
+            blob: encode(&calibration.params, self.config.calibration.gravity),
+            poses: self.acc.poses().len(),
+            duplicates: self.duplicates,
+        };
+        self.result = Some(result);
+        self.set_state(State::Done);
+        Ok(result)
+    }
+
+    /// [`State::Failed`] with the poses kept; `ready` waits for a new pose.
+    fn fail(&mut self, error: SessionError) -> SessionError {
+        self.ready = false;
+        self.set_state(State::Failed(error));
+        error
     }
 
     /// The current report (as the last [`Session::push`] returned it).
@@ -583,6 +696,7 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize, const POP: usize> Sessi
             rejections: self.acc.rejections(),
             sensor_errors: self.sensor_errors,
             guidance: self.guidance,
+            faces_done: faces_done(self.acc.poses()).count_ones() as u8,
             ready: self.ready,
         }
     }
@@ -665,26 +779,11 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize, const POP: usize> Sessi
 
     /// Pose `index` was captured: duplicate check, new guidance, done criterion.
     fn captured(&mut self, index: usize) -> State {
-        let poses = self.acc.poses();
-        let mut means: heapless::Vec<[f32; 3], POSES> = heapless::Vec::new();
-        for p in poses {
-            // Same capacity as the accumulator's pose list.
-            let _ = means.push(p.mean);
-        }
-        let coarse = CoarseCalibration::from_means(&means, self.config.calibration.gravity);
-        let frame = coarse.as_ref().ok().map(|c| *c.frame());
-        let duplicate_of = find_duplicate(poses, index, frame.as_ref(), self.duplicate_cos);
-        self.guidance = match (frame, coarse) {
-            (Some(frame), _) => information_guidance(&frame, poses, &self.config.calibration.bounds),
-            (None, Err(e)) => missing_face_guidance(poses, Some(e)),
-            (None, Ok(_)) => missing_face_guidance(poses, None),
-        };
+        let duplicate_of = find_duplicate(self.acc.poses(), index, self.duplicate_cos);
         if duplicate_of.is_some() {
             self.duplicates = self.duplicates.saturating_add(1);
         }
-        self.ready = poses.len() >= self.config.min_poses
-            && self.guidance.basis == GuidanceBasis::Information
-            && self.guidance.worst_std <= 1.0;
+        self.refresh_guidance();
         #[cfg(feature = "defmt")]
         {
             defmt::info!(
@@ -697,6 +796,42 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize, const POP: usize> Sessi
             );
         }
         State::PoseCaptured { index, duplicate_of }
+    }
+
+    /// New guidance and done criterion for the poses as they are.
+    fn refresh_guidance(&mut self) {
+        let poses = self.acc.poses();
+        self.guidance = guidance_for::<POSES>(poses, &self.config.calibration);
+        let enough = poses.len() >= self.config.min_poses;
+        self.ready = match self.config.mode {
+            Mode::Guided => {
+                enough && self.guidance.basis == GuidanceBasis::Information && self.guidance.worst_std <= 1.0
+            }
+            Mode::SixFace => {
+                let done = faces_done(poses);
+                if let Some(next) = SIX_FACES.iter().enumerate().find(|(i, _)| done & (1 << i) == 0) {
+                    self.guidance.next = *next.1;
+                }
+                self.guidance.basis = GuidanceBasis::Faces;
+                enough && done == 0x3f
+            }
+        };
+    }
+
+    /// Removes pose `index` (a bad pose, or one to capture again: remove it, then hold the board in
+    /// that orientation once more); the later poses move down by one. The guidance is updated.
+    pub fn remove_pose(&mut self, index: usize) -> Result<Pose, SessionError> {
+        if self.state == State::Done {
+            return Err(SessionError::Finished);
+        }
+        let pose = self.acc.remove_pose(index).ok_or(SessionError::NoSuchPose)?;
+        self.refresh_guidance();
+        Ok(pose)
+    }
+
+    /// The last calibration [`Session::finish`] ran, passed or failed (a failed verdict says why).
+    pub fn last_calibration(&self) -> Option<&Calibration> {
+        self.last.as_ref()
     }
 }
 
@@ -728,9 +863,12 @@ impl<const POSES: usize, const BLOCK: usize, const POP: usize> Session<i16, POSE
                 }
                 Err(e) => {
                     consecutive_errors = consecutive_errors.saturating_add(1);
-                    let progress = self.sensor_error()?;
+                    let progress = self.read_failed(consecutive_errors)?;
                     if consecutive_errors > limits.max_consecutive_errors {
                         return Err(RunError::Sensor(e));
+                    }
+                    if self.sensor_errors > limits.max_read_errors {
+                        return Err(RunError::ReadErrorBudget(e));
                     }
                     progress
                 }
@@ -747,13 +885,6 @@ impl<const POSES: usize, const BLOCK: usize, const POP: usize> Session<i16, POSE
 // Guidance
 // ---------------------------------------------------------------------------------------------
 
-/// Fraction of a raw pose mean on its dominant axis for it to count as a face (cos 25 deg, as the
-/// coarse calibration uses).
-const FACE_DOMINANCE: f32 = 0.906;
-
-/// The order in which missing faces are asked for: `(axis, up)`, board flat first.
-const FACE_ORDER: [(u8, bool); 6] = [(2, true), (2, false), (0, true), (0, false), (1, true), (1, false)];
-
 /// Prior standard deviation of every deviation coordinate (bias 0.5 g, scale 50 %, non-orthogonality
 /// 0.5 rad): keeps the information matrix invertible before every term is determined.
 const PRIOR_STD: f64 = 0.5;
@@ -765,48 +896,58 @@ const NOISE_FLOOR: f64 = 1e-14;
 /// Relative tolerance under which two candidates' worst variances tie.
 const TIE: f64 = 1e-6;
 
-/// Before the six faces: the first face in [`FACE_ORDER`] no pose points along. Faces are recognised
-/// by the dominant axis of the raw mean, which assumes the zero-g offset is small compared with 1 g
-/// (true of signed outputs such as the MPU-6050's); if every face seems present the coarse error names
-/// the axis.
-fn missing_face_guidance(poses: &[Pose], error: Option<CoarseError>) -> Guidance {
-    let mut present = [[false; 2]; 3];
+/// The guidance for `poses`: in the frame of the initial estimate ([`Init::Auto`]: ellipsoid, or the
+/// six faces) when one can be made, else in a provisional frame (zero offset, the mean reading
+/// magnitude as 1 g on every axis), so that it works from the first pose, in any order.
+fn guidance_for<const POSES: usize>(poses: &[Pose], calibration: &CalibrationConfig) -> Guidance {
+    let g = calibration.gravity;
+    let fitted = NormalizedPoses::<POSES>::prepare(poses, Init::Auto, g, &calibration.outliers);
+    let (frame, basis) = match fitted {
+        Ok(n) => (*n.frame(), GuidanceBasis::Information),
+        Err(_) => (provisional_frame(poses, g), GuidanceBasis::Provisional),
+    };
+    Guidance { basis, ..information_guidance(&frame, poses, &calibration.bounds) }
+}
+
+/// Cosine of the largest angle between a raw pose mean and a face for the pose to count as that face
+/// (25 deg).
+const FACE_COS: f32 = 0.906;
+
+/// Bit `i` set when some pose lies within 25 deg of [`SIX_FACES`]`[i]` (raw means: the offsets are
+/// small against 1 g on the sensors the session serves).
+fn faces_done(poses: &[Pose]) -> u8 {
+    let mut done = 0u8;
     for p in poses {
-        let m = p.mean;
-        let norm = libm::sqrtf(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
-        for (a, seen) in present.iter_mut().enumerate() {
-            if norm > 0.0 && m[a].abs() >= FACE_DOMINANCE * norm {
-                seen[usize::from(m[a] < 0.0)] = true;
+        let norm = libm::sqrtf(dot3(p.mean, p.mean));
+        for (i, face) in SIX_FACES.iter().enumerate() {
+            if dot3(p.mean, face.unit()) >= FACE_COS * norm && norm > 0.0 {
+                done |= 1 << i;
             }
         }
     }
-    let missing = FACE_ORDER
-        .iter()
-        .copied()
-        .find(|&(axis, up)| !present[usize::from(axis)][usize::from(!up)])
-        .or(match error {
-            Some(CoarseError::MissingAxisPair { axis, up }) => Some((axis, up)),
-            _ => None,
-        })
-        .unwrap_or((2, true));
-    Guidance::missing_face(CubeDirection::face(missing.0, missing.1))
+    done
 }
 
-/// The earlier pose closest in direction to pose `index` within the duplicate angle. Directions are
-/// the normalised means when the coarse frame exists, else the raw means.
-fn find_duplicate(poses: &[Pose], index: usize, frame: Option<&Frame>, min_cos: f32) -> Option<usize> {
-    let direction = |p: &Pose| match frame {
-        Some(f) => f.normalize(p.mean).u,
-        None => p.mean,
-    };
-    let new = direction(poses.get(index)?);
+/// Zero offset and the mean reading magnitude (1 when there is none) as `g` on every axis.
+fn provisional_frame(poses: &[Pose], gravity: f32) -> Frame {
+    let sum: f32 = poses.iter().map(|p| libm::sqrtf(dot3(p.mean, p.mean))).sum();
+    let magnitude =
+        if poses.is_empty() || !(sum > 0.0 && sum.is_finite()) { gravity } else { sum / poses.len() as f32 };
+    let gain = magnitude / gravity;
+    Frame::new([0.0; 3], [gain; 3], gravity).unwrap_or(Frame { offset: [0.0; 3], gain: [1.0; 3], gravity: 1.0 })
+}
+
+/// The earlier pose closest in direction to pose `index` within the duplicate angle (raw means: the
+/// offsets are small against 1 g on the sensors the session serves).
+fn find_duplicate(poses: &[Pose], index: usize, min_cos: f32) -> Option<usize> {
+    let new = poses.get(index)?.mean;
     let new_norm = libm::sqrtf(dot3(new, new));
     let mut best: Option<(usize, f32)> = None;
     for (j, p) in poses.iter().enumerate() {
         if j == index {
             continue;
         }
-        let d = direction(p);
+        let d = p.mean;
         let cos = dot3(new, d) / (new_norm * libm::sqrtf(dot3(d, d)));
         if cos >= min_cos && best.is_none_or(|(_, c)| cos > c) {
             best = Some((j, cos));
@@ -870,13 +1011,10 @@ fn normalised_rows(frame: &Frame, bounds: &VerdictBounds) -> [SparseRow; PARAM_C
     let t = frame.params_jacobian();
     let params = frame.to_params(&x0);
     let g = frame.gravity;
+    let limits = crate::verdict::param_limits(&params, bounds, g);
     let mut rows = [SparseRow { index: [0; PARAM_COUNT], value: [0.0; PARAM_COUNT], len: 0 }; PARAM_COUNT];
     for (i, row) in rows.iter_mut().enumerate() {
-        let limit = match i {
-            0..=2 => bounds.max_bias_std_mg * g / 1000.0,
-            3..=5 => bounds.max_scale_std_rel * params.scale[i - 3].abs(),
-            _ => bounds.max_nonorth_std * params.scale[if i == 8 { 1 } else { 0 }].abs(),
-        };
+        let limit = limits[i];
         for j in 0..PARAM_COUNT {
             if t[i][j] == 0.0 {
                 continue;
@@ -894,15 +1032,14 @@ fn normalised_rows(frame: &Frame, bounds: &VerdictBounds) -> [SparseRow; PARAM_C
     rows
 }
 
-/// Scores the 26 cube directions by the predicted normalised parameter variances after adding each
-/// (rank-one update of the covariance) and returns the best with the current state.
-fn information_guidance(frame: &Frame, poses: &[Pose], bounds: &VerdictBounds) -> Guidance {
-    let mut scale_sq = [0.0f64; 3];
-    for a in 0..3 {
+/// The information matrix of the poses (with the prior; lower triangle, which is all
+/// `spd_inverse_f64` reads) and the noise to expect of one more pose (per axis, relative to
+/// `(k g)^2`, for the mean number of samples).
+fn pose_information(frame: &Frame, poses: &[Pose]) -> (Matrix64, [f64; 3]) {
+    let scale_sq: [f64; 3] = core::array::from_fn(|a| {
         let s = f64::from(frame.gain[a]) * f64::from(frame.gravity);
-        scale_sq[a] = s * s;
-    }
-    // Lower triangle only (all `spd_inverse_f64` reads).
+        s * s
+    });
     let mut info = [[0.0f64; PARAM_COUNT]; PARAM_COUNT];
     for (i, row) in info.iter_mut().enumerate() {
         row[i] = 1.0 / (PRIOR_STD * PRIOR_STD);
@@ -930,40 +1067,75 @@ fn information_guidance(frame: &Frame, poses: &[Pose], bounds: &VerdictBounds) -
     }
     let count = poses.len().max(1) as f64;
     let n_mean = (n_sum / count).max(1.0);
-    let candidate_noise = noise_sum.map(|v| (v / count).max(NOISE_FLOOR) / n_mean);
+    (info, noise_sum.map(|v| (v / count).max(NOISE_FLOOR) / n_mean))
+}
 
-    let Some(cov) = spd_inverse_f64(&info) else {
-        return missing_face_guidance(poses, None);
-    };
-    let rows = normalised_rows(frame, bounds);
-    let current = rows.map(|r| r.quadratic(&cov));
-    let mut best = (CubeDirection::face(2, true), f64::INFINITY, f64::INFINITY);
-    for d in CubeDirection::ALL {
-        let u = d.unit();
+/// A candidate orientation and what adding it would give.
+#[derive(Clone, Copy)]
+struct Candidate {
+    direction: CubeDirection,
+    /// What the choice minimises (see [`best_candidate`]).
+    key: f64,
+    /// Largest normalised variance after adding it.
+    worst: f64,
+    /// Sum of the normalised variances after adding it.
+    sum: f64,
+}
+
+/// The best of the 26 cube directions, by a rank-one update of the covariance. While some parameter
+/// is above its bound (`d_optimal`) the candidate adding the most information wins (D-optimal: the
+/// largest determinant growth, `1 + g^T C g / var`), which always prefers a new direction; near the
+/// bound, the one that minimises the worst normalised variance; ties by the sum.
+fn best_candidate(cov: &Matrix64, rows: &[SparseRow; PARAM_COUNT], noise: [f64; 3], d_optimal: bool) -> Candidate {
+    let current = rows.map(|r| r.quadratic(cov));
+    let infinite = f64::INFINITY;
+    let mut best = Candidate { direction: CubeDirection::face(2, true), key: infinite, worst: infinite, sum: infinite };
+    for direction in CubeDirection::ALL {
+        let u = direction.unit();
         let g = gradient(u);
-        let w = mat_vec(&cov, &g);
-        let denominator = error_variance(u, candidate_noise) + dot(&g, &w);
+        let w = mat_vec(cov, &g);
+        let pose_noise = error_variance(u, noise);
+        let denominator = pose_noise + dot(&g, &w);
         let (mut worst, mut sum) = (0.0f64, 0.0f64);
         for (row, now) in rows.iter().zip(current) {
             let tw = row.dot(&w);
             let v = now - tw * tw / denominator;
-            if v > worst {
-                worst = v;
-            }
+            worst = if v > worst { v } else { worst };
             sum += v;
         }
-        let (_, best_worst, best_sum) = best;
-        if worst < best_worst * (1.0 - TIE) || (worst <= best_worst * (1.0 + TIE) && sum < best_sum) {
-            best = (d, worst, sum);
+        let key = if d_optimal { -denominator / pose_noise } else { worst };
+        let tie = (key - best.key).abs() <= TIE * best.key.abs();
+        if (key < best.key && !tie) || (tie && sum < best.sum) {
+            best = Candidate { direction, key, worst, sum };
         }
     }
+    best
+}
+
+/// Scores the 26 cube directions by the predicted normalised parameter variances after adding each
+/// and returns the best with the current state.
+fn information_guidance(frame: &Frame, poses: &[Pose], bounds: &VerdictBounds) -> Guidance {
+    let (info, candidate_noise) = pose_information(frame, poses);
+    let Some(cov) = spd_inverse_f64(&info) else {
+        let unknown = f32::INFINITY;
+        return Guidance {
+            next: CubeDirection::face(2, true),
+            basis: GuidanceBasis::Provisional,
+            poorly_determined: [true; PARAM_COUNT],
+            worst_std: unknown,
+            worst_std_after_next: unknown,
+        };
+    };
+    let rows = normalised_rows(frame, bounds);
+    let current = rows.map(|r| r.quadratic(&cov));
     let worst_now = current.iter().fold(0.0f64, |m, &v| if v > m { v } else { m });
+    let best = best_candidate(&cov, &rows, candidate_noise, worst_now > 1.0);
     Guidance {
-        next: best.0,
+        next: best.direction,
         basis: GuidanceBasis::Information,
         poorly_determined: current.map(|v| !(v <= 1.0)),
         worst_std: libm::sqrt(worst_now) as f32,
-        worst_std_after_next: libm::sqrt(best.1) as f32,
+        worst_std_after_next: libm::sqrt(best.worst) as f32,
     }
 }
 
@@ -1113,6 +1285,19 @@ mod tests {
     }
 
     #[test]
+    fn configuration_in_seconds_at_a_sample_rate() {
+        let c = SessionConfig::at_rate(200.0, 5.0, 0.5);
+        assert_eq!((c.hold_samples, c.accumulator.min_pose_samples), (1000, 100));
+        assert_eq!(c, SessionConfig::DEFAULT);
+        let c = SessionConfig::at_rate(1000.0, 2.0, 0.25);
+        assert_eq!((c.hold_samples, c.accumulator.min_pose_samples), (2000, 250));
+        // Nonsense rounds to a valid count or is refused by `new`.
+        let c = SessionConfig::at_rate(f32::NAN, 2.0, 0.25);
+        assert_eq!((c.hold_samples, c.accumulator.min_pose_samples), (1, 1));
+        assert_eq!(TestSession::new(c).err(), Some(SessionError::InvalidConfig));
+    }
+
+    #[test]
     fn invalid_configurations_are_refused() {
         let bad = [
             SessionConfig { min_poses: 8, ..config() },
@@ -1133,35 +1318,120 @@ mod tests {
         assert_eq!(SessionError::InvalidConfig.to_string(), "session configuration out of range");
     }
 
+    /// Directions no cube face, edge or vertex is near: a free-hand start.
+    fn free_directions() -> [[f32; 3]; 9] {
+        let raw = [
+            [0.3, 0.9, 0.3],
+            [-0.8, 0.5, 0.33],
+            [0.1, -0.7, 0.7],
+            [0.6, 0.1, -0.8],
+            [-0.2, -0.3, -0.93],
+            [0.9, -0.4, 0.17],
+            [-0.5, -0.8, 0.33],
+            [0.05, 0.6, -0.8],
+            [-0.7, 0.15, -0.7],
+        ];
+        raw.map(|d| {
+            let n = libm::sqrtf(dot3(d, d));
+            d.map(|v| v / n)
+        })
+    }
+
     #[test]
-    fn asks_for_the_missing_faces_then_for_edges_or_vertices() {
+    fn guidance_works_from_any_start_and_order() {
         let mut session = TestSession::new(config()).unwrap();
         let mut stream = Stream { state: 1 };
-        assert_eq!(session.progress().guidance.next, CubeDirection::face(2, true));
-        let expected_next = ["face -z", "face +x", "face -x", "face +y", "face -y"];
-        for (i, d) in faces().into_iter().enumerate() {
+        assert_eq!(session.progress().guidance.basis, GuidanceBasis::Provisional);
+        let mut worst = f32::INFINITY;
+        for (i, d) in free_directions().into_iter().enumerate() {
             let p = pose(&mut session, &mut stream, d);
             assert_eq!(p.state, State::PoseCaptured { index: i, duplicate_of: None });
-            if i < 5 {
-                assert_eq!(p.guidance.basis, GuidanceBasis::MissingFace);
-                assert_eq!(p.guidance.next.to_string(), expected_next[i]);
-            }
+            let expected = if i + 1 < PARAM_COUNT { GuidanceBasis::Provisional } else { GuidanceBasis::Information };
+            assert_eq!(p.guidance.basis, expected, "after {} poses", i + 1);
+            assert!(p.guidance.worst_std_after_next <= p.guidance.worst_std, "{:?}", p.guidance);
+            worst = p.guidance.worst_std;
         }
+        // Nine free directions: every parameter is determined, the suggestion improves on it.
         let g = *session.guidance();
-        assert_eq!(g.basis, GuidanceBasis::Information);
-        assert_ne!(g.next.kind(), DirectionKind::Face, "{}", g.next);
-        // Six poses cannot determine nine parameters; the non-orthogonality is the part the faces do
-        // not see at all.
-        std::println!("after the faces: {g:?}");
-        assert_eq!(&g.poorly_determined[6..], &[true; 3]);
-        assert!(g.worst_std_after_next < g.worst_std);
-        // Capture the suggestion: the next one is another direction.
+        std::println!("after nine free poses: {g:?}");
+        assert!(worst.is_finite() && g.worst_std_after_next < g.worst_std);
         let p = pose(&mut session, &mut stream, g.next.unit());
-        assert_eq!(p.state, State::PoseCaptured { index: 6, duplicate_of: None });
-        std::println!("after {}: {:?}", g.next, p.guidance);
-        assert_ne!(p.guidance.next, g.next);
         assert!(p.guidance.worst_std < g.worst_std);
-        assert!(!p.ready);
+        assert!(!p.ready, "10 poses < min_poses");
+    }
+
+    #[test]
+    fn a_failed_verdict_keeps_the_session_then_more_poses_pass() {
+        // A strict bias bound nine poses cannot meet: the fit runs, fails its verdict, gives no blob.
+        let strict = VerdictBounds { max_bias_std_mg: 0.002, ..VerdictBounds::DEFAULT };
+        let cfg = SessionConfig {
+            calibration: CalibrationConfig { bounds: strict, ..CalibrationConfig::DEFAULT },
+            min_poses: 9,
+            ..config()
+        };
+        let mut session = TestSession::new(cfg).unwrap();
+        let mut stream = Stream { state: 11 };
+        for d in free_directions() {
+            pose(&mut session, &mut stream, d);
+        }
+        let e = session.finish(rand_xoshiro::Xoshiro128PlusPlus::seed_from_u64(1)).unwrap_err();
+        let SessionError::Verdict(failures) = e else { panic!("{e:?}") };
+        assert!(failures.undetermined[..3].iter().any(|&u| u), "{failures:?}");
+        assert_eq!((session.state(), session.result(), session.poses().len()), (State::Failed(e), None, 9));
+        assert!(!session.progress().ready);
+        assert!(!session.last_calibration().unwrap().verdict.pass());
+        // Follow the guidance until ready, then finish again: the same session passes.
+        let mut added = 0;
+        while !session.progress().ready {
+            let next = session.guidance().next;
+            pose(&mut session, &mut stream, next.unit());
+            added += 1;
+            assert!(added <= 23, "not ready: {:?}", session.guidance());
+        }
+        let result = session.finish(rand_xoshiro::Xoshiro128PlusPlus::seed_from_u64(1)).unwrap();
+        std::println!("passed after {added} more poses: {:?}", result.calibration.verdict);
+        assert!(result.calibration.verdict.pass() && session.state() == State::Done);
+        assert_eq!(result.poses, 9 + added);
+    }
+
+    #[test]
+    fn the_six_face_quick_mode_asks_for_the_faces_in_vehicle_terms() {
+        let mut session = TestSession::new(SessionConfig { hold_samples: 300, ..SessionConfig::SIX_FACE }).unwrap();
+        let mut stream = Stream { state: 19 };
+        let mut asked = heapless::Vec::<&str, 6>::new();
+        while !session.progress().ready {
+            let next = session.guidance().next;
+            assert_eq!(session.guidance().basis, GuidanceBasis::Faces);
+            let _ = asked.push(next.vehicle_name().unwrap());
+            let p = pose(&mut session, &mut stream, next.unit());
+            assert_eq!(usize::from(p.faces_done), asked.len());
+            assert!(asked.len() <= 6);
+        }
+        let expected = ["level", "upside down", "nose up", "nose down", "left side down", "right side down"];
+        assert_eq!(asked.as_slice(), &expected);
+        let result = session.finish(rand_xoshiro::Xoshiro128PlusPlus::seed_from_u64(1)).unwrap();
+        let v = result.calibration.verdict;
+        assert!(v.pass(), "{v:?}");
+        assert_eq!(v.warnings.held, [false, false, false, false, false, false, true, true, true]);
+        assert_eq!(result.calibration.params.nonorth, [0.0; 3]);
+    }
+
+    #[test]
+    fn a_bad_pose_can_be_removed() {
+        let mut session = TestSession::new(config()).unwrap();
+        let mut stream = Stream { state: 13 };
+        for d in free_directions() {
+            pose(&mut session, &mut stream, d);
+        }
+        let third = session.poses()[2];
+        assert_eq!(session.remove_pose(2), Ok(third));
+        assert_eq!(session.poses().len(), 8);
+        assert_eq!(session.progress().guidance.basis, GuidanceBasis::Provisional, "8 poses: no fit yet");
+        assert_eq!(session.remove_pose(8), Err(SessionError::NoSuchPose));
+        // Captured again: back to nine.
+        let p = pose(&mut session, &mut stream, free_directions()[2]);
+        assert_eq!(p.state, State::PoseCaptured { index: 8, duplicate_of: None });
+        assert_eq!(p.guidance.basis, GuidanceBasis::Information);
     }
 
     #[test]
@@ -1259,13 +1529,73 @@ mod tests {
         for d in faces() {
             pose(&mut session, &mut stream, d);
         }
+        // Six faces fit the biases and scale factors only: the guided mode wants them all.
         let e = session.finish(rand_xoshiro::Xoshiro128PlusPlus::seed_from_u64(1)).unwrap_err();
-        assert!(matches!(e, SessionError::Calibration(_)), "{e:?}");
+        let SessionError::Incomplete(warnings) = e else { panic!("{e:?}") };
+        assert_eq!(warnings.held, [false, false, false, false, false, false, true, true, true]);
+        assert_eq!(session.result(), None);
         assert_eq!(session.state(), State::Failed(e));
         assert_eq!(session.poses().len(), 6);
         // Capture resumes after a failed finish.
         let p = pose(&mut session, &mut stream, [0.577_350_27; 3]);
         assert_eq!(p.poses, 7);
+    }
+
+    #[test]
+    fn a_sensor_failing_one_read_in_100_still_completes() {
+        /// Free-hand poses in raw counts (16384 LSB/g), each 500 reads then 50 of motion; every 100th
+        /// read fails.
+        struct Flaky {
+            stream: Stream,
+            read: u32,
+        }
+        impl AccelSensor for Flaky {
+            type Error = u32;
+            fn read_raw(&mut self) -> Result<[i16; 3], u32> {
+                self.read += 1;
+                if self.read.is_multiple_of(100) {
+                    return Err(self.read);
+                }
+                let dirs = free_directions();
+                let (pose, at) = ((self.read / 550) as usize, self.read % 550);
+                let d = dirs[pose % dirs.len()];
+                let turn = if pose % 2 == 0 { 1.0 } else { -1.0 };
+                let d = if pose >= dirs.len() { [d[1], d[2] * turn, d[0]] } else { d };
+                let r = TRUTH.invert(d.map(|v| v * G)).unwrap_or([0.0; 3]);
+                let moving = if at >= 500 { (at - 500) as f32 * 60.0 } else { 0.0 };
+                let n = self.stream.noise() * 4.0;
+                Ok(core::array::from_fn(|a| (r[a] * 16384.0 / G + n + moving) as i16))
+            }
+        }
+        let mut sensor = Flaky { stream: Stream { state: 17 }, read: 0 };
+        let config = SessionConfig { min_poses: 14, hold_samples: 400, ..config() };
+        let mut session: Session<i16, 32, 32, 40> = Session::new(config).unwrap();
+        let limits = RunLimits { max_samples: 20 * 550, ..RunLimits::DEFAULT };
+        let rng = rand_xoshiro::Xoshiro128PlusPlus::seed_from_u64(2);
+        let result = session.run_with_sensor(&mut sensor, rng, &limits, |p| {
+            if p.ready { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+        });
+        let result = result.unwrap_or_else(|e| panic!("{e:?}: {:?}", session.progress()));
+        assert!(result.calibration.verdict.pass(), "{:?}", result.calibration.verdict);
+        assert!(result.poses >= 14, "{result:?}");
+        assert!(session.progress().sensor_errors >= 70, "{:?}", session.progress());
+    }
+
+    #[test]
+    fn run_with_sensor_gives_up_past_the_read_error_budget() {
+        struct Broken;
+        impl AccelSensor for Broken {
+            type Error = ();
+            fn read_raw(&mut self) -> Result<[i16; 3], ()> {
+                Err(())
+            }
+        }
+        let mut session: Session<i16, 16, 32, 8> = Session::new(config()).unwrap();
+        let limits = RunLimits { max_consecutive_errors: u32::MAX, max_read_errors: 50, ..RunLimits::DEFAULT };
+        let rng = rand_xoshiro::Xoshiro128PlusPlus::seed_from_u64(1);
+        let r = session.run_with_sensor(&mut Broken, rng, &limits, |_| ControlFlow::Continue(()));
+        assert_eq!(r.err(), Some(RunError::ReadErrorBudget(())));
+        assert_eq!(session.progress().sensor_errors, 51);
     }
 
     #[test]

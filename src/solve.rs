@@ -17,7 +17,7 @@
 //! ```
 
 use crate::frame::{Deviation, NormPose, modulus_error_gradient, objective, residual_jacobian};
-use crate::linalg::{Matrix, cholesky, cholesky_solve, solve_lu};
+use crate::linalg::{Matrix, ldlt_solve_in_place, solve_lu};
 use crate::model::PARAM_COUNT;
 
 /// Why a solve could not produce parameters.
@@ -122,8 +122,9 @@ impl Default for NewtonConfig {
     }
 }
 
-fn check_input(x: &Deviation, poses: &[NormPose]) -> Result<(), SolveError> {
-    if poses.len() < PARAM_COUNT {
+/// At least one pose per free parameter, everything finite.
+fn check_input(x: &Deviation, poses: &[NormPose], held: &[bool; PARAM_COUNT]) -> Result<(), SolveError> {
+    if poses.len() < held.iter().filter(|&&h| !h).count() || poses.is_empty() {
         return Err(SolveError::TooFewPoses { got: poses.len() });
     }
     let poses_finite = poses.iter().all(|p| p.q.is_finite() && p.u.iter().all(|v| v.is_finite()));
@@ -133,21 +134,39 @@ fn check_input(x: &Deviation, poses: &[NormPose]) -> Result<(), SolveError> {
     Ok(())
 }
 
-/// Gauss-Newton normal equations of the per-pose errors: `(J^T J, J^T e)`.
-fn normal_equations(x: &Deviation, poses: &[NormPose]) -> (Matrix<PARAM_COUNT>, Deviation) {
-    let mut jtj = [[0.0; PARAM_COUNT]; PARAM_COUNT];
-    let mut jte = [0.0; PARAM_COUNT];
+/// Gauss-Newton normal equations of the per-pose errors, `(J^T J, J^T e)`, built in place; only the lower
+/// triangle of `J^T J` is written (one row of `J` per pose: the gradient of its modulus error).
+/// `packed[k] += g[i] g[j]` for every `(k, i, j)` listed: straight-line code, one load, multiply-add and
+/// store per entry (a loop over the triangle costs twice as many cycles on a Cortex-M4F).
+macro_rules! add_outer_product {
+    ($packed:ident, $g:ident; $(($k:literal, $i:literal, $j:literal)),* $(,)?) => {
+        $( $packed[$k] += $g[$i] * $g[$j]; )*
+    };
+}
+
+fn normal_equations(x: &Deviation, poses: &[NormPose], jtj: &mut Matrix<PARAM_COUNT>, jte: &mut Deviation) {
+    // The lower triangle, packed row by row.
+    let mut packed = [0.0f32; PARAM_COUNT * (PARAM_COUNT + 1) / 2];
+    *jte = [0.0; PARAM_COUNT];
     for pose in poses {
         let (e, g) = modulus_error_gradient(x, pose);
-        for i in 0..PARAM_COUNT {
-            jte[i] += g[i] * e;
-            for j in 0..=i {
-                jtj[i][j] += g[i] * g[j];
-            }
+        for (sum, gi) in jte.iter_mut().zip(g) {
+            *sum += gi * e;
+        }
+        add_outer_product!(packed, g;
+        (0, 0, 0), (1, 1, 0), (2, 1, 1), (3, 2, 0), (4, 2, 1), (5, 2, 2), (6, 3, 0), (7, 3, 1), (8, 3, 2), (9, 3, 3),
+        (10, 4, 0), (11, 4, 1), (12, 4, 2), (13, 4, 3), (14, 4, 4), (15, 5, 0), (16, 5, 1), (17, 5, 2), (18, 5, 3),
+        (19, 5, 4), (20, 5, 5), (21, 6, 0), (22, 6, 1), (23, 6, 2), (24, 6, 3), (25, 6, 4), (26, 6, 5), (27, 6, 6),
+        (28, 7, 0), (29, 7, 1), (30, 7, 2), (31, 7, 3), (32, 7, 4), (33, 7, 5), (34, 7, 6), (35, 7, 7), (36, 8, 0),
+        (37, 8, 1), (38, 8, 2), (39, 8, 3), (40, 8, 4), (41, 8, 5), (42, 8, 6), (43, 8, 7), (44, 8, 8)
+        );
+    }
+    let mut sums = packed.iter();
+    for (i, row) in jtj.iter_mut().enumerate() {
+        for (entry, &sum) in row.iter_mut().take(i + 1).zip(sums.by_ref()) {
+            *entry = sum;
         }
     }
-    symmetrize(&mut jtj);
-    (jtj, jte)
 }
 
 fn symmetrize(m: &mut Matrix<PARAM_COUNT>) {
@@ -159,7 +178,7 @@ fn symmetrize(m: &mut Matrix<PARAM_COUNT>) {
 }
 
 fn max_abs(v: &Deviation) -> f32 {
-    v.iter().fold(0.0f32, |m, x| m.max(x.abs()))
+    v.iter().fold(0.0f32, |m, x| if x.abs() > m { x.abs() } else { m })
 }
 
 fn add(x: &Deviation, step: &Deviation) -> Deviation {
@@ -174,23 +193,52 @@ fn add(x: &Deviation, step: &Deviation) -> Deviation {
 ///
 /// Damped Gauss-Newton with Marquardt's diagonal scaling; the 9x9 system is solved by Cholesky on the
 /// stack. Stops on a small step, on no further decrease, or at `max_iterations`.
-#[inline(never)] // its frame need not merge with the caller's (peak stack on the device)
 pub fn levenberg_marquardt(x0: Deviation, poses: &[NormPose], config: &LmConfig) -> Result<SolveReport, SolveError> {
-    check_input(&x0, poses)?;
+    levenberg_marquardt_holding(x0, poses, config, &[false; PARAM_COUNT])
+}
+
+/// Holds the parameters flagged in `held` at their start values: their rows and columns of the
+/// normal equations become the identity and their right-hand side 0, so their step is 0.
+fn hold(jtj: &mut Matrix<PARAM_COUNT>, rhs: &mut Deviation, held: &[bool; PARAM_COUNT]) {
+    for i in 0..PARAM_COUNT {
+        for j in 0..PARAM_COUNT {
+            if held[i] || held[j] {
+                jtj[i][j] = if i == j { 1.0 } else { 0.0 };
+            }
+        }
+        if held[i] {
+            rhs[i] = 0.0;
+        }
+    }
+}
+
+/// [`levenberg_marquardt`] with the parameters flagged in `held` fixed at their values in `x0`.
+#[inline(never)] // its frame need not merge with the caller's (peak stack on the device)
+pub fn levenberg_marquardt_holding(
+    x0: Deviation,
+    poses: &[NormPose],
+    config: &LmConfig,
+    held: &[bool; PARAM_COUNT],
+) -> Result<SolveReport, SolveError> {
+    check_input(&x0, poses, held)?;
     let mut x = x0;
     let mut cost = objective(&x, poses);
     if !cost.is_finite() {
         return Err(SolveError::Diverged);
     }
     let mut lambda = config.initial_damping;
-    let (mut jtj, mut jte) = normal_equations(&x, poses);
+    let (mut jtj, mut jte) = ([[0.0; PARAM_COUNT]; PARAM_COUNT], [0.0; PARAM_COUNT]);
+    normal_equations(&x, poses, &mut jtj, &mut jte);
+    hold(&mut jtj, &mut jte, held);
     for iteration in 1..=config.max_iterations {
         let mut damped = jtj;
         for i in 0..PARAM_COUNT {
-            damped[i][i] += lambda * jtj[i][i].max(1e-12);
+            let d = jtj[i][i];
+            damped[i][i] += lambda * if d > 1e-12 { d } else { 1e-12 };
         }
-        let step = match cholesky(&damped) {
-            Ok(l) => cholesky_solve(&l, jte.map(|v| -v)),
+        let mut step = jte.map(|v| -v);
+        let step = match ldlt_solve_in_place(&mut damped, &mut step) {
+            Ok(()) => step,
             Err(_) if lambda < 1e10 => {
                 lambda *= 10.0;
                 continue;
@@ -202,11 +250,12 @@ pub fn levenberg_marquardt(x0: Deviation, poses: &[NormPose], config: &LmConfig)
         if candidate_cost.is_finite() && candidate_cost <= cost {
             x = candidate;
             cost = candidate_cost;
-            lambda = (lambda * 0.3).max(1e-9);
+            lambda = if lambda * 0.3 > 1e-9 { lambda * 0.3 } else { 1e-9 };
             if max_abs(&step) < config.step_tolerance {
                 return Ok(SolveReport { x, cost, iterations: iteration, termination: SolveTermination::Converged });
             }
-            (jtj, jte) = normal_equations(&x, poses);
+            normal_equations(&x, poses, &mut jtj, &mut jte);
+            hold(&mut jtj, &mut jte, held);
         } else {
             lambda *= 10.0;
             if lambda > 1e10 {
@@ -225,7 +274,17 @@ pub fn levenberg_marquardt(x0: Deviation, poses: &[NormPose], config: &LmConfig)
 /// The classical Newton iteration on `fE` (the paper's baseline): full Hessian
 /// `H = (2/N) sum(grad E grad E^T + 2 E Jr^T Jr)`, undamped step `H d = -grad fE`, no line search.
 pub fn newton(x0: Deviation, poses: &[NormPose], config: &NewtonConfig) -> Result<SolveReport, SolveError> {
-    check_input(&x0, poses)?;
+    newton_holding(x0, poses, config, &[false; PARAM_COUNT])
+}
+
+/// [`newton`] with the parameters flagged in `held` fixed at their values in `x0`.
+pub fn newton_holding(
+    x0: Deviation,
+    poses: &[NormPose],
+    config: &NewtonConfig,
+    held: &[bool; PARAM_COUNT],
+) -> Result<SolveReport, SolveError> {
+    check_input(&x0, poses, held)?;
     let mut x = x0;
     for iteration in 1..=config.max_iterations {
         let mut hessian = [[0.0; PARAM_COUNT]; PARAM_COUNT];
@@ -235,13 +294,14 @@ pub fn newton(x0: Deviation, poses: &[NormPose], config: &NewtonConfig) -> Resul
             let jr = residual_jacobian(pose.u);
             for i in 0..PARAM_COUNT {
                 gradient[i] += e * g[i];
-                for j in 0..=i {
+                for j in 0..i + 1 {
                     let second: f32 = (0..3).map(|r| jr[r][i] * jr[r][j]).sum();
                     hessian[i][j] += g[i] * g[j] + 2.0 * e * second;
                 }
             }
         }
         symmetrize(&mut hessian);
+        hold(&mut hessian, &mut gradient, held);
         // The common factor 2/N cancels in H d = -g.
         let step = solve_lu(hessian, gradient.map(|v| -v)).map_err(|_| SolveError::Singular)?;
         x = add(&x, &step);

@@ -8,9 +8,39 @@
 //! ```
 
 use crate::accumulator::Pose;
+use crate::ellipsoid::PoseList;
 use crate::frame::{Deviation, Frame, NormPose, modulus_error_gradient};
 use crate::linalg::{Matrix, spd_inverse};
 use crate::model::{PARAM_COUNT, Params};
+
+/// The poses of a calibration: the captured poses, the normalised poses the optimisers use, and for
+/// each normalised pose the index of the captured pose it came from (poses left out have none).
+#[derive(Debug, Clone, Copy)]
+pub struct PoseSet<'a> {
+    /// The captured poses.
+    pub poses: &'a [Pose],
+    /// The normalised poses used.
+    pub norm: &'a [NormPose],
+    /// `source[i]` is the index in `poses` of `norm[i]`.
+    pub source: &'a [u16],
+}
+
+impl PoseSet<'_> {
+    /// The pairs (captured, normalised) of the poses used.
+    pub fn pairs(&self) -> impl Iterator<Item = (&Pose, &NormPose)> + '_ {
+        self.norm.iter().zip(self.source).filter_map(|(n, &s)| self.poses.get(usize::from(s)).map(|p| (p, n)))
+    }
+
+    /// Number of poses used.
+    pub fn len(&self) -> usize {
+        self.norm.len().min(self.source.len())
+    }
+
+    /// `true` when no pose is used.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
 
 /// Limits a calibration must meet to pass. Every field can be set by the user.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -65,6 +95,25 @@ pub struct Failures {
     pub not_converged: bool,
 }
 
+/// What the calibration could not do but reports instead of failing.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Warnings {
+    /// Per parameter: the poses do not determine it (their directions leave it free, or its standard
+    /// deviation would exceed its bound), so it was held at its nominal value (non-orthogonality 0,
+    /// scale and bias at the initial estimate) while the others were fitted.
+    pub held: [bool; PARAM_COUNT],
+    /// Poses left out of the fit as far off the ellipsoid (indices into the poses given).
+    pub excluded: PoseList,
+}
+
+impl Warnings {
+    /// `true` when nothing was held or left out.
+    pub fn is_empty(&self) -> bool {
+        !self.held.iter().any(|&h| h) && self.excluded.is_empty()
+    }
+}
+
 /// The verdict on a calibration.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -80,6 +129,8 @@ pub struct Verdict {
     pub param_std: [f32; PARAM_COUNT],
     /// What failed.
     pub failures: Failures,
+    /// Parameters held at nominal and poses left out.
+    pub warnings: Warnings,
 }
 
 impl Verdict {
@@ -87,6 +138,11 @@ impl Verdict {
     pub fn pass(&self) -> bool {
         let f = &self.failures;
         !(f.rmse || f.model_misfit || f.implausible || f.not_converged || f.undetermined.iter().any(|&u| u))
+    }
+
+    /// `true` when the verdict passed with every parameter fitted and every pose used.
+    pub fn complete(&self) -> bool {
+        self.pass() && self.warnings.is_empty()
     }
 }
 
@@ -114,50 +170,137 @@ fn error_variance(x: &Deviation, frame: &Frame, pose: &Pose, norm: &NormPose) ->
     (var > 0.0 && var.is_finite()).then_some(var)
 }
 
-/// Covariance of the deviation vector: `(sum g g^T / var(E))^-1`, with each pose's noise from its
-/// variance, or (poses without variance) the residual variance `sum E^2 / (N - 9)` for all.
-/// This is the Cramer-Rao bound when `x` is the truth and the variances are the true noise.
-pub fn deviation_covariance(
+/// Information matrix `sum g g^T / var(E)` of the deviation vector, with each pose's noise from its
+/// variance, or (poses without variance) the residual variance `sum E^2 / (N - p)` for all, `p` the
+/// number of parameters not in `held`; with `inflate`, every variance is scaled up by the reduced
+/// chi-square when that exceeds 1 (the residuals are larger than the noise: the uncertainty of an
+/// estimate that is not yet the optimum). `None` with fewer poses than free parameters (or no more,
+/// when the residuals must give the noise).
+pub fn information_matrix(
     x: &Deviation,
     frame: &Frame,
-    poses: &[Pose],
-    norm: &[NormPose],
+    set: &PoseSet<'_>,
+    held: &[bool; PARAM_COUNT],
+    inflate: bool,
 ) -> Option<Matrix<PARAM_COUNT>> {
-    if poses.len() != norm.len() || poses.len() < PARAM_COUNT {
+    let n = set.len();
+    let free = held.iter().filter(|&&h| !h).count();
+    if n < free || n == 0 {
         return None;
     }
-    let residual_variance = if poses.iter().zip(norm).all(|(p, n)| error_variance(x, frame, p, n).is_some()) {
-        None
-    } else if poses.len() > PARAM_COUNT {
-        let sum: f32 = norm.iter().map(|n| crate::model::square(crate::frame::modulus_error(x, n))).sum();
-        Some((sum / (poses.len() - PARAM_COUNT) as f32).max(f32::MIN_POSITIVE))
+    let all_noisy = set.pairs().all(|(p, m)| error_variance(x, frame, p, m).is_some());
+    let dof = n.saturating_sub(free).max(1) as f32;
+    let scale = if !all_noisy {
+        if n == free {
+            return None;
+        }
+        let sum: f32 = set.norm.iter().map(|m| crate::model::square(crate::frame::modulus_error(x, m))).sum();
+        (sum / dof).max(f32::MIN_POSITIVE)
+    } else if inflate && n > free {
+        let chi2: f32 = set
+            .pairs()
+            .filter_map(|(p, m)| {
+                Some(crate::model::square(crate::frame::modulus_error(x, m)) / error_variance(x, frame, p, m)?)
+            })
+            .sum();
+        (chi2 / dof).max(1.0)
     } else {
-        return None;
+        1.0
     };
     let mut info = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
-    for (pose, n) in poses.iter().zip(norm) {
-        let var = match residual_variance {
-            Some(v) => v,
-            None => error_variance(x, frame, pose, n)?,
-        };
-        let (_, g) = modulus_error_gradient(x, n);
+    for (pose, m) in set.pairs() {
+        let var = if all_noisy { scale * error_variance(x, frame, pose, m)? } else { scale };
+        let (_, g) = modulus_error_gradient(x, m);
         for i in 0..PARAM_COUNT {
             for j in 0..PARAM_COUNT {
                 info[i][j] += g[i] * g[j] / var;
             }
         }
     }
-    spd_inverse(&info).ok()
+    Some(info)
 }
 
-/// Smallest share of a parameter's information not explained by the parameters before it (the pivot
-/// of the Jacobi-scaled Cholesky factorisation) for it to count as determined.
-const DETERMINED_PIVOT: f32 = 1e-5;
+/// Covariance of the deviation vector with the parameters in `held` fixed (their rows and columns 0):
+/// the inverse of the information matrix of the others ([`information_matrix`], not inflated). This is
+/// the Cramer-Rao bound when `x` is the truth and the variances are the true noise.
+pub fn deviation_covariance(
+    x: &Deviation,
+    frame: &Frame,
+    set: &PoseSet<'_>,
+    held: &[bool; PARAM_COUNT],
+) -> Option<Matrix<PARAM_COUNT>> {
+    covariance_holding(information_matrix(x, frame, set, held, false)?, held)
+}
+
+/// Inverse of `info` with the `held` rows and columns replaced by the identity, then zeroed.
+pub fn covariance_holding(mut info: Matrix<PARAM_COUNT>, held: &[bool; PARAM_COUNT]) -> Option<Matrix<PARAM_COUNT>> {
+    for i in 0..PARAM_COUNT {
+        for j in 0..PARAM_COUNT {
+            if held[i] || held[j] {
+                info[i][j] = if i == j { 1.0 } else { 0.0 };
+            }
+        }
+    }
+    let mut cov = spd_inverse(&info).ok()?;
+    for i in 0..PARAM_COUNT {
+        for j in 0..PARAM_COUNT {
+            if held[i] || held[j] {
+                cov[i][j] = 0.0;
+            }
+        }
+    }
+    Some(cov)
+}
+
+/// The largest standard deviation each parameter may have under `bounds` (paper convention,
+/// [`Params::to_array`] order).
+pub fn param_limits(params: &Params, bounds: &VerdictBounds, gravity: f32) -> [f32; PARAM_COUNT] {
+    core::array::from_fn(|i| match i {
+        0..=2 => bounds.max_bias_std_mg * gravity / 1000.0,
+        3..=5 => bounds.max_scale_std_rel * params.scale[i - 3].abs(),
+        _ => bounds.max_nonorth_std * params.scale[if i == 8 { 1 } else { 0 }].abs(),
+    })
+}
+
+/// Standard deviation (deviation units: bias in g, scale relative, non-orthogonality in rad) above
+/// which a parameter is held at nominal rather than fitted: the poses then say less about it than its
+/// typical size (50 mg, 2 %, 0.01 rad), and fitting it would add more error than holding it.
+pub const HOLD_STD: Deviation = [0.05, 0.05, 0.05, 0.02, 0.02, 0.02, 0.01, 0.01, 0.01];
+
+/// Which parameters to hold at nominal: those in `held` already, those the directions leave free
+/// ([`undetermined_parameters`]), then, one at a time, the one whose standard deviation (with the
+/// others held) exceeds [`HOLD_STD`] by the largest factor, until every free parameter is within it.
+/// The user's verdict bounds play no part: a parameter fitted but worse determined than they ask
+/// fails the verdict instead.
+#[inline(never)] // its matrices need not share a stack frame with the solvers'
+pub fn parameters_to_hold(
+    x: &Deviation,
+    frame: &Frame,
+    set: &PoseSet<'_>,
+    held: [bool; PARAM_COUNT],
+) -> [bool; PARAM_COUNT] {
+    let structural = undetermined_parameters(x, set.norm);
+    let mut held: [bool; PARAM_COUNT] = core::array::from_fn(|i| held[i] || structural[i]);
+    let Some(info) = information_matrix(x, frame, set, &held, false) else { return held };
+    while let Some(cov) = covariance_holding(info, &held) {
+        let worst = (0..PARAM_COUNT)
+            .filter(|&i| !held[i])
+            .map(|i| (i, libm::sqrtf(cov[i][i].max(0.0)) / HOLD_STD[i]))
+            .fold(None, |a: Option<(usize, f32)>, b| if a.is_none_or(|a| !(b.1 <= a.1)) { Some(b) } else { a });
+        match worst {
+            // (`i < PARAM_COUNT` always; said so the bounds check goes.)
+            Some((i, ratio)) if !(ratio <= 1.0) && i < PARAM_COUNT => held[i] = true,
+            _ => break,
+        }
+    }
+    held
+}
 
 /// Which parameters the poses cannot determine at `x`: a Cholesky factorisation, in parameter order, of
-/// the Jacobi-scaled information matrix `sum g g^T`; a parameter whose remaining pivot is below 1e-5
-/// is (to f32 precision) a combination of the ones before it and is flagged, then left out. With
-/// only axis-aligned poses, for example, the non-orthogonality terms are flagged.
+/// the Jacobi-scaled information matrix `sum g g^T` ([`crate::linalg::weak_pivots`]); a parameter whose
+/// remaining pivot is below [`crate::linalg::DETERMINED_PIVOT`] is (to f32 precision) a combination of
+/// the ones before it and is flagged, then left out. With only axis-aligned poses, for example, the
+/// non-orthogonality terms are flagged.
 pub fn undetermined_parameters(x: &Deviation, norm: &[NormPose]) -> [bool; PARAM_COUNT] {
     let mut info = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
     for n in norm {
@@ -168,38 +311,7 @@ pub fn undetermined_parameters(x: &Deviation, norm: &[NormPose]) -> [bool; PARAM
             }
         }
     }
-    let mut out = [false; PARAM_COUNT];
-    let mut l = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
-    for j in 0..PARAM_COUNT {
-        let diag = info[j][j];
-        if !(diag > 0.0 && diag.is_finite()) {
-            out[j] = true;
-            continue;
-        }
-        // Scaled entries: info[i][j] / sqrt(info[i][i] info[j][j]).
-        let scaled = |i: usize| info[j.max(i)][j.min(i)] / libm::sqrtf(info[i][i] * diag);
-        let mut pivot = 1.0;
-        for k in 0..j {
-            pivot -= l[j][k] * l[j][k];
-        }
-        if !(pivot > DETERMINED_PIVOT) {
-            out[j] = true;
-            continue;
-        }
-        let root = libm::sqrtf(pivot);
-        l[j][j] = root;
-        for i in j + 1..PARAM_COUNT {
-            if !(info[i][i] > 0.0) {
-                continue;
-            }
-            let mut s = scaled(i);
-            for k in 0..j {
-                s -= l[i][k] * l[j][k];
-            }
-            l[i][j] = s / root;
-        }
-    }
-    out
+    crate::linalg::weak_pivots(&info, &[0, 1, 2, 3, 4, 5, 6, 7, 8], crate::linalg::DETERMINED_PIVOT)
 }
 
 /// Standard deviations of the paper-convention parameters from a deviation covariance.
@@ -218,53 +330,58 @@ pub fn param_std(frame: &Frame, covariance: &Matrix<PARAM_COUNT>) -> [f32; PARAM
     out
 }
 
-/// RMSE (mg) expected at the optimum from the poses' own noise: `sqrt(mean(sigma_i^2) (N - 9) / N)`.
-pub fn noise_floor_mg(x: &Deviation, frame: &Frame, poses: &[Pose], norm: &[NormPose]) -> Option<f32> {
-    if poses.len() <= PARAM_COUNT || poses.len() != norm.len() {
+/// RMSE (mg) expected at the optimum from the poses' own noise: `sqrt(mean(sigma_i^2) (N - p) / N)` with
+/// `p` the parameters fitted.
+pub fn noise_floor_mg(x: &Deviation, frame: &Frame, set: &PoseSet<'_>, fitted: usize) -> Option<f32> {
+    if set.len() <= fitted {
         return None;
     }
     let mut sum = 0.0;
-    for (p, n) in poses.iter().zip(norm) {
+    for (p, n) in set.pairs() {
         // |f_b| / g = sqrt(1 + E): d|f_b|/g = dE / 2 near |f_b| = g.
         sum += error_variance(x, frame, p, n)? / 4.0;
     }
-    let n = poses.len() as f32;
-    Some(libm::sqrtf(sum / n * (n - PARAM_COUNT as f32) / n) * 1000.0)
+    let n = set.len() as f32;
+    Some(libm::sqrtf(sum / n * (n - fitted as f32) / n) * 1000.0)
 }
 
-/// Judges `x` (deviation in `frame`) on `poses` against `bounds`; `before` is the model the RMSE
-/// before calibration is computed with.
+/// Modulus RMSE (mg) of the normalised poses at `x`, free of the cancellation of raw counts.
+fn rmse_normalised_mg(x: &Deviation, norm: &[NormPose]) -> f32 {
+    let mut sum = 0.0;
+    for n in norm {
+        let m = libm::sqrtf((1.0 + crate::frame::modulus_error(x, n)).max(0.0));
+        sum += crate::model::square(m - 1.0);
+    }
+    if norm.is_empty() { f32::NAN } else { libm::sqrtf(sum / norm.len() as f32) * 1000.0 }
+}
+
+/// Modulus RMSE (mg) of the poses used under `p`.
+fn rmse_mg(p: &Params, set: &PoseSet<'_>, g: f32) -> f32 {
+    let mut sum = 0.0;
+    for (pose, _) in set.pairs() {
+        let m = libm::sqrtf(crate::model::norm_squared(p.apply(pose.mean)));
+        sum += crate::model::square(m - g);
+    }
+    if set.is_empty() { f32::NAN } else { libm::sqrtf(sum / set.len() as f32) / g * 1000.0 }
+}
+
+/// Judges `x` (deviation in `frame`) on the poses of `set` against `bounds`; `before` is the model the
+/// RMSE before calibration is computed with; `warnings` says what was held and left out.
 #[inline(never)] // its matrices need not share a stack frame with the solvers'
 pub fn judge(
     x: &Deviation,
     frame: &Frame,
-    poses: &[Pose],
-    norm: &[NormPose],
+    set: &PoseSet<'_>,
     before: &Params,
     bounds: &VerdictBounds,
+    warnings: Warnings,
 ) -> Verdict {
     let params = frame.to_params(x);
-    let g = frame.gravity;
-    let rmse = |p: &Params| {
-        let mut sum = 0.0;
-        for pose in poses {
-            let m = libm::sqrtf(crate::model::norm_squared(p.apply(pose.mean)));
-            sum += crate::model::square(m - g);
-        }
-        if poses.is_empty() { f32::NAN } else { libm::sqrtf(sum / poses.len() as f32) / g * 1000.0 }
-    };
-    let rmse_before_mg = rmse(before);
-    // After: from the normalised errors, free of the cancellation of raw counts.
-    let rmse_after_mg = {
-        let mut sum = 0.0;
-        for n in norm {
-            let m = libm::sqrtf((1.0 + crate::frame::modulus_error(x, n)).max(0.0));
-            sum += crate::model::square(m - 1.0);
-        }
-        if norm.is_empty() { f32::NAN } else { libm::sqrtf(sum / norm.len() as f32) * 1000.0 }
-    };
-    let noise_floor = noise_floor_mg(x, frame, poses, norm);
-    let std = match deviation_covariance(x, frame, poses, norm) {
+    let held = warnings.held;
+    let fitted = held.iter().filter(|&&h| !h).count();
+    let rmse_after_mg = rmse_normalised_mg(x, set.norm);
+    let noise_floor = noise_floor_mg(x, frame, set, fitted);
+    let mut std = match deviation_covariance(x, frame, set, &held) {
         Some(cov) => param_std(frame, &cov),
         None => [f32::INFINITY; PARAM_COUNT],
     };
@@ -276,14 +393,15 @@ pub fn judge(
             || x.iter().enumerate().any(|(i, v)| !(v.abs() <= PLAUSIBLE_DEVIATION[i])),
         ..Failures::default()
     };
-    let structurally_undetermined = undetermined_parameters(x, norm);
+    let structurally_undetermined = undetermined_parameters(x, set.norm);
+    let limits = param_limits(&params, bounds, frame.gravity);
     for i in 0..PARAM_COUNT {
-        let limit = match i {
-            0..=2 => bounds.max_bias_std_mg * g / 1000.0,
-            3..=5 => bounds.max_scale_std_rel * params.scale[i - 3].abs(),
-            _ => bounds.max_nonorth_std * params.scale[if i == 8 { 1 } else { 0 }].abs(),
-        };
-        failures.undetermined[i] = structurally_undetermined[i] || !(std[i] <= limit);
+        if held[i] {
+            std[i] = f32::INFINITY;
+            continue;
+        }
+        failures.undetermined[i] = structurally_undetermined[i] || !(std[i] <= limits[i]);
     }
-    Verdict { rmse_before_mg, rmse_after_mg, noise_floor_mg: noise_floor, param_std: std, failures }
+    let rmse_before_mg = rmse_mg(before, set, frame.gravity);
+    Verdict { rmse_before_mg, rmse_after_mg, noise_floor_mg: noise_floor, param_std: std, failures, warnings }
 }

@@ -213,3 +213,49 @@ fn micromath_vectors_feed_the_same_poses() {
     let v = p.apply_vector(F32x3 { x: 1.0, y: 1.0, z: 1.0 });
     assert_eq!([v.x, v.y, v.z], p.apply([1.0, 1.0, 1.0]));
 }
+
+#[test]
+fn block_sums_are_exact_at_full_scale() {
+    use accelcal::accumulator::Reading;
+    // Rail to rail: every deviation from the first sample is +-65535, its square just below 2^32.
+    let mut rng = Lcg(3);
+    let mut samples: Vec<[i16; 3]> = (0..4096)
+        .map(|i| if i % 2 == 0 { [i16::MIN, i16::MAX, i16::MIN] } else { [i16::MAX, i16::MIN, i16::MAX] })
+        .collect();
+    samples.extend((0..4096).map(|_| [rng.next(32767) as i16, rng.next(32767) as i16, i16::MIN]));
+    for len in [4, 32, 4096, samples.len()] {
+        let block = &samples[..len];
+        let sums = i16::block_sums(block, 40_000);
+        for a in 0..3 {
+            let r = i128::from(block[0][a]);
+            let sum: i128 = block.iter().map(|v| i128::from(v[a]) - r).sum();
+            let sum_sq: i128 = block.iter().map(|v| (i128::from(v[a]) - r).pow(2)).sum();
+            assert_eq!((i128::from(sums.sum[a]), i128::from(sums.sum_sq[a])), (sum, sum_sq), "len {len} axis {a}");
+        }
+        assert!(sums.saturated, "rails are saturated");
+    }
+    // Near full scale but inside a limit: not saturated, by the bound or by the check.
+    let inside: Vec<[i16; 3]> = (0..64).map(|i| [32_000 + (i % 7) as i16, -32_000, 0]).collect();
+    assert!(!i16::block_sums(&inside, 32_767).saturated);
+    assert!(i16::block_sums(&inside, 32_006).saturated);
+}
+
+#[test]
+fn pose_end_index_counts_skipped_samples() {
+    let mut acc: Accumulator<f32, 4, 16> = Accumulator::new(AccumulatorConfig::DEFAULT).unwrap();
+    let mut rng = Lcg(11);
+    let mut skipped = Vec::new();
+    for i in 0..1000 {
+        if i % 100 == 50 {
+            skipped.push(acc.samples_seen());
+            assert!(acc.push([f32::NAN, 0.0, 1.0]).is_err());
+        }
+        acc.push([rng.next(2) as f32 * 0.01, 0.0, 1.0]).unwrap();
+    }
+    acc.finish().unwrap();
+    assert_eq!(acc.samples_seen(), 1010);
+    let pose = acc.poses()[0];
+    let inside = skipped.iter().filter(|&&k| (pose.start_index..pose.end_index).contains(&k)).count() as u32;
+    assert!(inside >= 9, "{pose:?}");
+    assert_eq!(pose.end_index - pose.start_index, pose.n + inside, "{pose:?}");
+}

@@ -1,7 +1,7 @@
 //! End-to-end numerics of the library on synthetic poses with known parameters.
 
 use accelcal::accumulator::Pose;
-use accelcal::calibrate::{CalibrationConfig, Method, NormalizedPoses, calibrate};
+use accelcal::calibrate::{CalibrationConfig, Init, InitError, Method, NormalizedPoses, calibrate};
 use accelcal::frame::objective;
 use accelcal::model::{PARAM_COUNT, Params};
 use accelcal::solve::{LmConfig, NewtonConfig, levenberg_marquardt, newton};
@@ -122,7 +122,7 @@ fn lm_from_the_coarse_start_reaches_the_optimum_it_reaches_from_the_truth() {
         })
         .collect();
     let norm = NormalizedPoses::<32>::new(&poses, G as f32).unwrap();
-    let frame = norm.coarse().frame();
+    let frame = norm.frame();
     let truth = Params::from_array(PAPER_TRUTH.map(|v| v as f32));
     let from_coarse = levenberg_marquardt([0.0; PARAM_COUNT], norm.poses(), &LmConfig::DEFAULT).unwrap();
     let from_truth = levenberg_marquardt(frame.to_deviation(&truth), norm.poses(), &LmConfig::DEFAULT).unwrap();
@@ -141,20 +141,30 @@ fn lm_from_the_coarse_start_reaches_the_optimum_it_reaches_from_the_truth() {
 fn too_few_poses_and_missing_axes_are_typed_errors() {
     use accelcal::calibrate::CalibrationError;
     use accelcal::coarse::CoarseError;
-    use accelcal::solve::SolveError;
     let all = poses(&PAPER_TRUTH, &cube_directions(26), 1.0, 0.0);
     let rng = || Xoshiro128PlusPlus::seed_from_u64(1);
-    // Six faces only: coarse works, but 6 < 9 poses.
-    let r = calibrate::<_, 40, 32>(&all[..6], &config(Method::TagaLm), rng());
-    assert_eq!(r.err(), Some(CalibrationError::Solve(SolveError::TooFewPoses { got: 6 })));
-    // No pose with z down.
+    // Six faces only: six poses fit the biases and scale factors; the non-orthogonality is held.
+    let cal = calibrate::<_, 40, 32>(&all[..6], &config(Method::TagaLm), rng()).unwrap();
+    assert_eq!(cal.verdict.warnings.held, [false, false, false, false, false, false, true, true, true]);
+    // Five poses: too few for even that.
+    let r = calibrate::<_, 40, 32>(&all[..5], &config(Method::TagaLm), rng());
+    let too_few = accelcal::ellipsoid::EllipsoidError::TooFewPoses { got: 5 };
+    assert_eq!(r.err(), Some(CalibrationError::Init(InitError::Ellipsoid(too_few))));
+    // No pose with z down: the paper's six-position start refuses, the ellipsoid start needs no face.
     let no_z_down: Vec<Pose> = all.iter().copied().filter(|p| p.mean[2] > -9.0).collect();
-    let r = calibrate::<_, 40, 32>(&no_z_down, &config(Method::Lm), rng());
-    assert_eq!(r.err(), Some(CalibrationError::Coarse(CoarseError::MissingAxisPair { axis: 2, up: false })));
-    // x never points down (a hemisphere only): named as such, not as a missing "up".
+    let six = CalibrationConfig { init: Init::SixPosition, ..config(Method::Lm) };
+    let r = calibrate::<_, 40, 32>(&no_z_down, &six, rng());
+    let missing = CoarseError::MissingAxisPair { axis: 2, up: false };
+    assert_eq!(r.err(), Some(CalibrationError::Init(InitError::Coarse(missing))));
+    let cal = calibrate::<_, 40, 32>(&no_z_down, &config(Method::Lm), rng()).unwrap();
+    assert_eq!(cal.initial.kind, Init::Ellipsoid);
+    assert!(max_rel_err(&cal.params, &PAPER_TRUTH).0 < 1e-4, "{cal:?}");
+    // x never points down (a hemisphere only): named as such by the six-position start.
     let half: Vec<Pose> = all.iter().copied().filter(|p| p.mean[0] > -0.5).collect();
-    let r = calibrate::<_, 40, 32>(&half, &config(Method::Lm), rng());
-    assert!(matches!(r.err(), Some(CalibrationError::Coarse(CoarseError::NotReversed { axis: 0, .. }))), "{r:?}");
+    let r = calibrate::<_, 40, 32>(&half, &six, rng());
+    let not_reversed =
+        matches!(r.err(), Some(CalibrationError::Init(InitError::Coarse(CoarseError::NotReversed { axis: 0, .. }))));
+    assert!(not_reversed, "{r:?}");
     // More poses than the buffer.
     let r = calibrate::<_, 40, 8>(&all, &config(Method::Lm), rng());
     assert_eq!(r.err(), Some(CalibrationError::TooManyPoses { got: 26, capacity: 8 }));
@@ -185,29 +195,26 @@ fn verdict_reports_the_noise_floor_and_determined_parameters() {
 }
 
 #[test]
-fn axis_aligned_poses_name_the_parameters_they_cannot_determine() {
-    use accelcal::calibrate::CalibrationError;
+fn axis_aligned_poses_fit_what_they_determine_and_hold_the_rest() {
     // 24 poses but only the 6 exact face directions: the non-orthogonality terms are invisible.
     let faces = cube_directions(6);
     let dirs: Vec<[f64; 3]> = faces.iter().cycle().take(24).copied().collect();
     let poses = poses(&PAPER_TRUTH, &dirs, 1.0, 0.0);
-    let r = calibrate::<_, 40, 32>(&poses, &config(Method::TagaLm), Xoshiro128PlusPlus::seed_from_u64(1));
+    let cal = calibrate::<_, 40, 32>(&poses, &config(Method::TagaLm), Xoshiro128PlusPlus::seed_from_u64(1)).unwrap();
     let expected = [false, false, false, false, false, false, true, true, true];
-    assert_eq!(r.err(), Some(CalibrationError::Undetermined(expected)));
-    let message = CalibrationError::Undetermined(expected).to_string();
-    assert!(message.contains("Mxx Myy Mzz"), "{message}");
-    // One corner adds one combination of the three terms: two stay undetermined.
+    assert_eq!(cal.verdict.warnings.held, expected, "{:?}", cal.verdict);
+    assert_eq!(cal.params.nonorth, [0.0; 3], "held at nominal");
+    assert!(cal.verdict.pass() && !cal.verdict.complete(), "{:?}", cal.verdict);
+    // Biases and scale factors are still fitted: six directions, six parameters, an exact fit.
+    assert!(cal.verdict.rmse_after_mg < 1e-3, "{:?}", cal.verdict);
+    // One corner adds one combination of the three terms: two stay held.
     let corners = &cube_directions(9)[6..9];
     let mut dirs = dirs;
     dirs.push(corners[0]);
-    let r = calibrate::<_, 40, 32>(&poses_with(&dirs), &config(Method::Lm), Xoshiro128PlusPlus::seed_from_u64(1));
-    match r.err() {
-        Some(CalibrationError::Undetermined(which)) => {
-            assert_eq!(which[..6], [false; 6]);
-            assert_eq!(which[6..].iter().filter(|u| **u).count(), 2, "{which:?}");
-        }
-        other => panic!("expected Undetermined, got {other:?}"),
-    }
+    let cal = calibrate::<_, 40, 32>(&poses_with(&dirs), &config(Method::Lm), Xoshiro128PlusPlus::seed_from_u64(1));
+    let which = cal.unwrap().verdict.warnings.held;
+    assert_eq!(which[..6], [false; 6]);
+    assert_eq!(which[6..].iter().filter(|u| **u).count(), 2, "{which:?}");
     // Three corners with independent sign patterns: everything is determined and recovered.
     dirs.extend_from_slice(&corners[1..]);
     let cal = calibrate::<_, 40, 32>(&poses_with(&dirs), &config(Method::Lm), Xoshiro128PlusPlus::seed_from_u64(1));
@@ -223,11 +230,16 @@ fn poses_with(dirs: &[[f64; 3]]) -> Vec<Pose> {
 fn zero_negative_or_nan_gravity_is_a_typed_error() {
     use accelcal::calibrate::CalibrationError;
     use accelcal::coarse::CoarseError;
+    use accelcal::ellipsoid::EllipsoidError;
     let poses = poses(&PAPER_TRUTH, &cube_directions(14), 1.0, 0.0);
     for gravity in [0.0, -9.80665, f32::NAN, f32::INFINITY] {
         let config = CalibrationConfig { gravity, ..config(Method::TagaLm) };
         let r = calibrate::<_, 40, 32>(&poses, &config, Xoshiro128PlusPlus::seed_from_u64(1));
-        assert_eq!(r.err(), Some(CalibrationError::Coarse(CoarseError::InvalidGravity)), "gravity {gravity}");
+        let expected = CalibrationError::Init(InitError::Ellipsoid(EllipsoidError::InvalidGravity));
+        assert_eq!(r.err(), Some(expected), "gravity {gravity}");
+        let six = CalibrationConfig { init: Init::SixPosition, ..config };
+        let r = calibrate::<_, 40, 32>(&poses, &six, Xoshiro128PlusPlus::seed_from_u64(1));
+        assert_eq!(r.err(), Some(CalibrationError::Init(InitError::Coarse(CoarseError::InvalidGravity))));
     }
 }
 
@@ -244,9 +256,10 @@ fn a_solve_that_does_not_converge_or_lands_far_away_fails_its_verdict() {
     assert!(cal.verdict.failures.not_converged && !cal.verdict.pass(), "{:?}", cal.verdict);
     // A deviation far outside the plausible range is judged implausible, whatever its fit.
     let norm = NormalizedPoses::<32>::new(&poses, G as f32).unwrap();
-    let frame = norm.coarse().frame();
+    let frame = norm.frame();
     let far = [0.9; PARAM_COUNT];
-    let v = accelcal::verdict::judge(&far, frame, &poses, norm.poses(), &Params::IDENTITY, &Default::default());
+    let set = norm.pose_set(&poses);
+    let v = accelcal::verdict::judge(&far, frame, &set, &Params::IDENTITY, &Default::default(), Default::default());
     assert!(v.failures.implausible && !v.pass());
     // The converged solve passes.
     let cal = calibrate::<_, 40, 32>(&poses, &config(Method::Lm), Xoshiro128PlusPlus::seed_from_u64(1)).unwrap();

@@ -5,6 +5,8 @@
 //! The report is written to `$QEMU_PARITY_OUT` when set, else to `qemu_parity.txt` in Cargo's
 //! per-target temporary directory (under `target/`).
 
+#[path = "../examples/common/guided.rs"]
+mod guided;
 #[path = "../examples/common/pipeline.rs"]
 mod pipeline;
 #[path = "../examples/common/sim_sensor.rs"]
@@ -15,7 +17,10 @@ use std::fmt::Write as _;
 #[test]
 fn simulated_24_position_calibration_recovers_the_truth() {
     let mut report = String::new();
-    let pass = pipeline::run(&mut |line| {
+    let mut pass = pipeline::run(&mut |line| {
+        let _ = writeln!(report, "{line}");
+    });
+    pass &= guided::run(&mut |line| {
         let _ = writeln!(report, "{line}");
     });
     print!("{report}");
@@ -26,6 +31,7 @@ fn simulated_24_position_calibration_recovers_the_truth() {
     println!("report written to {}", path.display());
     assert!(pass, "the simulated calibration failed:\n{report}");
     assert!(report.contains("poses: 24 captured"), "{report}");
+    assert!(report.contains("guided: result PASS"), "{report}");
 }
 
 #[test]

@@ -40,12 +40,12 @@ pub fn run_with_loo(
 }
 
 fn loo_rmse_mg(poses: &[Pose], config: &CalibrationConfig, params: &Params) -> Option<f32> {
-    let norm = NormalizedPoses::<MAX_POSES>::new(poses, config.gravity).ok()?;
+    let norm = NormalizedPoses::<MAX_POSES>::prepare(poses, config.init, config.gravity, &config.outliers).ok()?;
     let all = norm.poses();
     if all.len() < accelcal::model::PARAM_COUNT + 2 {
         return None;
     }
-    let x0: Deviation = norm.coarse().frame().to_deviation(params);
+    let x0: Deviation = norm.frame().to_deviation(params);
     let mut sum = 0.0f64;
     let mut others = Vec::with_capacity(all.len());
     for i in 0..all.len() {
@@ -88,5 +88,32 @@ pub fn verdict_json(v: &accelcal::verdict::Verdict) -> serde_json::Value {
         "model_misfit": f.model_misfit,
         "implausible": f.implausible,
         "undetermined": undetermined,
+        "held_at_nominal": held_names(&v.warnings.held),
+        "poses_left_out": v.warnings.excluded.as_slice(),
     })
+}
+
+/// Names of the parameters flagged in `held`.
+pub fn held_names(held: &[bool; accelcal::model::PARAM_COUNT]) -> Vec<&'static str> {
+    accelcal::model::PARAM_NAMES.iter().zip(held).filter(|(_, h)| **h).map(|(n, _)| *n).collect()
+}
+
+/// One line of warnings for a verdict (empty when there are none): parameters held at nominal because
+/// the poses do not determine them, and poses left out as far off the ellipsoid.
+pub fn warnings_line(v: &accelcal::verdict::Verdict) -> String {
+    let mut parts = Vec::new();
+    let held = held_names(&v.warnings.held);
+    if !held.is_empty() {
+        parts.push(format!(
+            "the orientations do not determine {}: held at nominal (non-orthogonality 0, scale and bias at the \
+             initial estimate); capture more directions",
+            held.join(" ")
+        ));
+    }
+    let excluded = v.warnings.excluded.as_slice();
+    if !excluded.is_empty() {
+        let list: Vec<String> = excluded.iter().map(|i| format!("#{}", i + 1)).collect();
+        parts.push(format!("poses {} left out: far off the fitted ellipsoid (a shock or a glitch?)", list.join(", ")));
+    }
+    parts.join("; ")
 }

@@ -1,6 +1,7 @@
 //! Host side of accelcal: simulator, CLI support, paper reproduction, real-data calibration.
 
 pub mod calib;
+pub mod convergence;
 pub mod csvio;
 pub mod diagnose;
 pub mod effects;

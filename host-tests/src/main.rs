@@ -465,6 +465,10 @@ fn calibrate_file(
             v.noise_floor_mg.map_or("?".into(), |x| format_sig(f64::from(x)))
         );
         println!("verdict: {}", if v.pass() { "PASS".to_string() } else { format!("FAIL {}", verdict_json(v)) });
+        let warnings = calib::warnings_line(v);
+        if !warnings.is_empty() {
+            println!("warning: {warnings}");
+        }
     }
     if v.pass() { Ok(()) } else { Err(Failure::Verdict) }
 }

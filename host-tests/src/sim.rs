@@ -110,6 +110,10 @@ pub enum Plan {
     Cube26,
     /// `N >= 1` hand-placed orientations drawn uniformly on SO(3).
     Random(usize),
+    /// A free-hand session: `N >= 1` orientations drawn uniformly on SO(3), held by hand for a few
+    /// seconds each ([`SimConfig::for_plan`]: 4 s holds, 1.5 s rotations with the hand's shake, no long
+    /// initial rest). No face is ever aligned.
+    FreeHand(usize),
 }
 
 impl Plan {
@@ -118,7 +122,7 @@ impl Plan {
         match self {
             Self::Paper24 => 24,
             Self::Cube26 => 26,
-            Self::Random(n) => *n,
+            Self::Random(n) | Self::FreeHand(n) => *n,
         }
     }
 
@@ -127,6 +131,7 @@ impl Plan {
         match self {
             Self::Paper24 | Self::Cube26 => 0.0,
             Self::Random(_) => 10.0,
+            Self::FreeHand(_) => 0.0,
         }
     }
 }
@@ -137,6 +142,7 @@ impl fmt::Display for Plan {
             Self::Paper24 => f.write_str("paper24"),
             Self::Cube26 => f.write_str("cube26"),
             Self::Random(n) => write!(f, "random:{n}"),
+            Self::FreeHand(n) => write!(f, "freehand:{n}"),
         }
     }
 }
@@ -144,7 +150,7 @@ impl fmt::Display for Plan {
 /// Why a plan name did not parse.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum ParsePlanError {
-    /// Not `paper24`, `cube26` or `random:N`.
+    /// Not `paper24`, `cube26`, `random:N` or `freehand:N`.
     UnknownPlan(String),
     /// `random:N` with `N` not a whole number `>= 1`.
     InvalidCount(String),
@@ -153,7 +159,9 @@ pub enum ParsePlanError {
 impl fmt::Display for ParsePlanError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Self::UnknownPlan(s) => write!(f, "unknown plan `{s}` (expected paper24, cube26 or random:N)"),
+            Self::UnknownPlan(s) => {
+                write!(f, "unknown plan `{s}` (expected paper24, cube26, random:N or freehand:N)")
+            }
             Self::InvalidCount(s) => {
                 write!(f, "invalid pose count `{s}` in random:N (expected N >= 1)")
             }
@@ -173,11 +181,15 @@ impl FromStr for Plan {
             "paper24" => Ok(Self::Paper24),
             "cube26" => Ok(Self::Cube26),
             _ => {
-                let Some(count) = text.strip_prefix("random:") else {
+                let (make, count): (fn(usize) -> Self, _) = if let Some(c) = text.strip_prefix("random:") {
+                    (Self::Random, c)
+                } else if let Some(c) = text.strip_prefix("freehand:") {
+                    (Self::FreeHand, c)
+                } else {
                     return Err(ParsePlanError::UnknownPlan(s.to_string()));
                 };
                 match count.trim().parse::<usize>() {
-                    Ok(n) if n >= 1 => Ok(Self::Random(n)),
+                    Ok(n) if n >= 1 => Ok(make(n)),
                     _ => Err(ParsePlanError::InvalidCount(count.to_string())),
                 }
             }
@@ -235,7 +247,7 @@ fn placement_rotations(plan: &Plan, seed: u64, tilt_deg: f64, flip_deg: f64) -> 
                 mat_mul(&tilt, &placed)
             })
             .collect(),
-        Plan::Random(n) => (0..*n).map(|_| quat_to_mat(&random_quat(&mut rng))).collect(),
+        Plan::Random(n) | Plan::FreeHand(n) => (0..*n).map(|_| quat_to_mat(&random_quat(&mut rng))).collect(),
     }
 }
 
@@ -473,9 +485,14 @@ impl SimConfig {
         }
     }
 
-    /// The paper's setup with another plan (and that plan's default initial rest).
+    /// The paper's setup with another plan (and that plan's default initial rest); a free-hand plan
+    /// also gets 4 s holds and 1.5 s rotations.
     pub fn for_plan(plan: Plan, seed: u64) -> Self {
-        Self { plan, initial_rest_s: plan.default_initial_rest_s(), ..Self::paper(seed) }
+        let base = Self { plan, initial_rest_s: plan.default_initial_rest_s(), ..Self::paper(seed) };
+        match plan {
+            Plan::FreeHand(_) => Self { seconds_per_pose: 4.0, move_seconds: 1.5, ..base },
+            _ => base,
+        }
     }
 
     /// Checks every field: positive finite rate, gravity and pose time (at least one sample per

@@ -148,7 +148,9 @@ fn solve64(mut a: [[f64; PARAM_COUNT]; PARAM_COUNT], mut b: P64) -> Option<P64> 
 
 /// Levenberg-Marquardt with Marquardt's diagonal scaling (so the raw-count scale of the paper's
 /// parameters does not matter). Returns the parameters and their objective.
-fn reference_lm(start: P64, means: &[[f64; 3]], g: f64) -> (P64, f64) {
+/// With `held` parameters (paper convention) fixed at their start values: the library holds the
+/// non-orthogonality terms the poses cannot determine at 0, and the reference solves the same problem.
+fn reference_lm(start: P64, means: &[[f64; 3]], g: f64, held: &[bool; PARAM_COUNT]) -> (P64, f64) {
     let mut p = start;
     let mut cost = objective64(&p, means, g);
     let mut lambda = 1e-3;
@@ -171,7 +173,15 @@ fn reference_lm(start: P64, means: &[[f64; 3]], g: f64) -> (P64, f64) {
             for (a, row) in m.iter_mut().enumerate() {
                 row[a] += lambda * jtj[a][a].max(1e-300);
             }
-            let Some(step) = solve64(m, jtr.map(|v| -v)) else {
+            let mut rhs = jtr.map(|v| -v);
+            for a in (0..PARAM_COUNT).filter(|&a| held[a]) {
+                for b in 0..PARAM_COUNT {
+                    m[a][b] = f64::from(u8::from(a == b));
+                    m[b][a] = f64::from(u8::from(a == b));
+                }
+                rhs[a] = 0.0;
+            }
+            let Some(step) = solve64(m, rhs) else {
                 lambda *= 10.0;
                 continue;
             };
@@ -277,11 +287,18 @@ fn run(case: &Case) -> Option<Outcome> {
         .unwrap_or_else(|e| panic!("{}: calibration failed: {e}", case.name));
 
     let g = f64::from(gravity);
-    let means: Vec<[f64; 3]> = poses.iter().map(|p| p.mean.map(f64::from)).collect();
+    // The reference solves the library's problem: the poses it kept, the parameters it fitted.
+    let warnings = calibration.verdict.warnings;
+    assert!(warnings.held[..6].iter().all(|h| !h), "{}: only non-orthogonality is ever held here", case.name);
+    let left_out = warnings.excluded.as_slice();
+    let means: Vec<[f64; 3]> =
+        (0..poses.len()).filter(|i| !left_out.contains(&(*i as u16))).map(|i| poses[i].mean.map(f64::from)).collect();
     let library: P64 = calibration.params.to_array().map(f64::from);
     let library_objective64 = objective64(&library, &means, g);
-    let from_library = reference_lm(library, &means, g);
-    let from_extremes = reference_lm(extremes_start(&means, g), &means, g);
+    let from_library = reference_lm(library, &means, g, &warnings.held);
+    let mut extremes = extremes_start(&means, g);
+    (6..PARAM_COUNT).filter(|&i| warnings.held[i]).for_each(|i| extremes[i] = 0.0);
+    let from_extremes = reference_lm(extremes, &means, g, &warnings.held);
     let (reference_params, reference_objective) =
         if from_library.1 <= from_extremes.1 { from_library } else { from_extremes };
     Some(Outcome {
@@ -556,8 +573,8 @@ fn fastahrs_fxos8700_chunk_means() {
     }
 }
 
-/// The folders the survey found unusable for a 9-parameter fit still read cleanly, and the
-/// calibration refuses them with a clear error instead of producing numbers.
+/// The folders the survey found unusable for a full 9-parameter fit still read cleanly; the
+/// calibration fits what they determine and says what it could not, or refuses with a clear error.
 #[test]
 fn unusable_sets_read_and_are_refused() {
     let Some(path) = data_file("avrlabs_mpu6050/derived_notebook_26pos_means.csv") else { return };
@@ -568,7 +585,12 @@ fn unusable_sets_read_and_are_refused() {
     let config = CalibrationConfig { gravity: table.units.calibration_gravity(), ..CalibrationConfig::DEFAULT };
     let result = calibrate::<_, 40, 512>(&poses, &config, Xoshiro128PlusPlus::seed_from_u64(1));
     println!("avrlabs notebook (two quarter circles): {:?}", result.as_ref().map(|c| c.verdict));
-    assert!(result.is_err(), "a set without x-, y- and z+ poses cannot be coarse-calibrated");
+    // Two quarter circles (x+ to z-, y+ to z-): the cross term between the two planes is free.
+    let cal = result.expect("two quarter circles give a partial fit, not an error");
+    assert_eq!(cal.initial.kind, accelcal::calibrate::Init::Ellipsoid);
+    assert!(cal.verdict.warnings.held[6], "Mxx (the x-y cross term) is held: {:?}", cal.verdict);
+    assert!(cal.verdict.rmse_after_mg < 0.5 * cal.verdict.rmse_before_mg, "{:?}", cal.verdict);
+    assert!(!cal.verdict.pass(), "biases and scales this poorly determined fail the default bounds");
 
     let Some(path) = data_file("willward_mpu9250/final_trial__six_position_data.csv") else { return };
     let table = read_csv(&path, &means_options()).unwrap();
@@ -577,7 +599,11 @@ fn unusable_sets_read_and_are_refused() {
     assert_eq!(poses.len(), 6);
     let config = CalibrationConfig { gravity: 1.0, before: Some(Params::IDENTITY), ..CalibrationConfig::DEFAULT };
     let result = calibrate::<_, 40, 512>(&poses, &config, Xoshiro128PlusPlus::seed_from_u64(1));
-    assert!(result.is_err(), "6 poses cannot determine 9 parameters");
+    // Six faces: the biases and scale factors (as ArduPilot and PX4 fit them); the non-orthogonality
+    // is invisible to them and held at 0, said so.
+    let cal = result.expect("six faces fit six parameters");
+    assert_eq!(cal.verdict.warnings.held, [false, false, false, false, false, false, true, true, true]);
+    assert!(cal.verdict.rmse_after_mg < cal.verdict.rmse_before_mg, "{:?}", cal.verdict);
 
     // Raw z-up log: a title line, then a header with two names run together ("time (s)x (g)").
     // The title is skipped as a preamble; the columns must be given by index.

@@ -9,7 +9,6 @@
 use std::ops::ControlFlow;
 use std::time::{Duration, Instant};
 
-use accelcal::accumulator::Pose;
 use accelcal::blob;
 use accelcal::model::{PARAM_COUNT, PARAM_NAMES, Params, STANDARD_GRAVITY_MPS2};
 use accelcal::mpu6050::{AccelRange, Address, Mpu6050};
@@ -67,7 +66,8 @@ fn firmware_run(bus: SimMpu6050, injected: u32) -> (FirmwareSession, SessionResu
             if matches!(p.state, State::PoseCaptured { .. } | State::PoseRejected(_) | State::Interrupted) {
                 events.push(*p);
             }
-            if p.sensor_errors > injected { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+            // The end of the stream: the first failed read is skipped, the second closes the last pose.
+            if p.sensor_errors > injected + 1 { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
         })
         .unwrap();
     (session, result, events)
@@ -128,7 +128,7 @@ fn the_papers_24_positions_through_the_bus_calibrate_and_pass() {
 }
 
 #[test]
-fn an_i2c_error_in_the_middle_of_pose_10_keeps_the_poses_and_resumes() {
+fn an_i2c_error_in_the_middle_of_pose_10_is_a_skipped_sample() {
     let rec = paper_recording();
     let (clean, _, _) = firmware_run(SimMpu6050::from_recording(&rec).unwrap(), 0);
 
@@ -138,25 +138,20 @@ fn an_i2c_error_in_the_middle_of_pose_10_keeps_the_poses_and_resumes() {
     bus.fail_at(fail_at);
     let (session, result, events) = firmware_run(bus, 1);
 
-    // The error closed the first half of pose 10 as pose index 9 (the second turn of the third face:
-    // a repeat of pose 9, index 8); the nine before are untouched.
-    let at_error = events.iter().find(|p| p.sensor_errors == 1).unwrap();
-    assert_eq!(at_error.state, State::PoseCaptured { index: 9, duplicate_of: Some(8) });
-    assert_eq!(at_error.poses, 10);
+    // One failed read is one sample lost, not a gap: pose 10 is not split, nothing is lost.
+    let first_after = events.iter().find(|p| p.sensor_errors == 1).unwrap();
+    assert_eq!(first_after.state, State::PoseCaptured { index: 9, duplicate_of: Some(8) });
+    assert!(session.poses()[9].end_index as usize > fail_at, "the pose goes on past the failed read");
     assert_eq!(&session.poses()[..9], &clean.poses()[..9]);
-    let half: &Pose = &session.poses()[9];
-    assert!((half.end_index as usize) <= fail_at && half.n >= 400, "{half:?}");
-    // The capture resumed in the same orientation: the second half is a kept duplicate of the first.
-    let resumed = events.iter().find(|p| p.state == State::PoseCaptured { index: 10, duplicate_of: Some(9) });
-    assert!(resumed.is_some(), "{events:?}");
-    // (The accumulator counts samples pushed: the lost one shifts later indices by one.)
-    assert!(session.poses()[10].start_index as usize >= fail_at);
-    // After that, the same poses as the clean run (block boundaries shifted: means within 2 LSB).
-    for (p, c) in session.poses()[11..].iter().zip(&clean.poses()[10..]) {
+    assert_eq!(session.poses().len(), clean.poses().len());
+    let (p, c) = (&session.poses()[9], &clean.poses()[9]);
+    assert!(p.start_index == c.start_index && p.n + 32 >= c.n, "{p:?} vs {c:?}");
+    // After it, the same poses as the clean run (block boundaries shifted: means within 2 LSB).
+    for (p, c) in session.poses()[9..].iter().zip(&clean.poses()[9..]) {
         assert!((0..3).all(|a| (p.mean[a] - c.mean[a]).abs() < 2.0), "{p:?} vs {c:?}");
     }
-    assert_eq!((result.poses, result.duplicates), (25, 19));
-    assert_eq!(session.progress().sensor_errors, 2); // the injected one and the end of the stream
+    assert_eq!((result.poses, result.duplicates), (24, 18));
+    assert_eq!(session.progress().sensor_errors, 3); // the injected one and two at the end of the stream
     check_result("paper 24, I2C error in pose 10", &result, &truth_in_counts(&PAPER_TRUTH));
 }
 
@@ -243,10 +238,14 @@ fn guidance_asks_for_the_faces_then_off_axis_orientations_and_following_it_calib
     let mut times = PushTimes::default();
     let mut session = FirmwareSession::new(SessionConfig::DEFAULT).unwrap();
 
-    // The faces, in the order the session asks for them.
+    // From scratch the most informative orientations are the faces (provisional frame until there is
+    // an initial estimate).
     for i in 0..6 {
         let g = session.progress().guidance;
-        assert_eq!((g.basis, g.next.kind()), (GuidanceBasis::MissingFace, DirectionKind::Face), "pose {i}");
+        assert_eq!(g.next.kind(), DirectionKind::Face, "pose {i}");
+        if i < 5 {
+            assert_eq!(g.basis, GuidanceBasis::Provisional, "pose {i}");
+        }
         let p = hold(&mut session, &placement(&truth_counts, g.next.unit(), &mut noise), &mut times);
         assert_eq!(p.state, State::PoseCaptured { index: i, duplicate_of: None });
         println!(

@@ -1,0 +1,206 @@
+//! The initial estimate and the normalised problem built on it.
+//!
+//! Two initialisations: the paper's six-position coarse calibration ([`crate::coarse`]), which needs
+//! each axis pointed straight up and down, and the closed-form ellipsoid fit ([`crate::ellipsoid`]),
+//! which needs only a spread of directions and leaves out poses far off the ellipsoid. [`Init::Auto`]
+//! (the default) uses the ellipsoid fit and falls back to the six faces when the ellipsoid cannot be
+//! fitted. The initial model defines the [`Frame`] the optimisers work in (centre and per-axis gain)
+//! and their start (its non-orthogonality).
+//!
+//! ```
+//! use accelcal::accumulator::Pose;
+//! use accelcal::init::{Init, NormalizedPoses};
+//! use accelcal::model::Params;
+//! let truth = Params { bias: [0.1, 0.2, -0.1], scale: [0.99, 1.01, 1.0], nonorth: [0.01, 0.0, -0.01] };
+//! let dirs = [[0.3f32, 0.9, 0.3], [-0.8, 0.5, 0.33], [0.1, -0.7, 0.7], [0.6, 0.0, -0.8], [-0.2, -0.3, -0.93],
+//!     [0.9, -0.4, 0.17], [-0.5, -0.8, 0.33], [0.0, 0.6, -0.8], [-0.7, 0.1, -0.7], [0.57, 0.57, 0.57]];
+//! let poses = dirs.map(|d| {
+//!     let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+//!     Pose::from_mean(truth.invert(d.map(|v| v / n * 9.80665)).unwrap(), 500)
+//! });
+//! let norm = NormalizedPoses::<16>::prepare(&poses, Init::Auto, 9.80665, &Default::default()).unwrap();
+//! assert_eq!(norm.initial().kind, Init::Ellipsoid);
+//! assert_eq!(norm.poses().len(), 10);
+//! ```
+
+use crate::accumulator::Pose;
+use crate::coarse::{CoarseCalibration, CoarseError};
+use crate::ellipsoid::{EllipsoidError, OutlierRule, PoseList, fit_ellipsoid, held_parameters};
+use crate::frame::{Deviation, Frame, NormPose};
+use crate::model::{PARAM_COUNT, Params};
+use crate::verdict::PoseSet;
+
+/// Which initial estimate to start from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Init {
+    /// The ellipsoid fit; the six faces when no ellipsoid can be fitted.
+    #[default]
+    Auto,
+    /// The paper's six-position coarse calibration (each axis pointed up and down).
+    SixPosition,
+    /// The closed-form ellipsoid fit (any orientations with a spread of directions).
+    Ellipsoid,
+}
+
+/// Why no initial estimate could be made.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum InitError {
+    /// More poses than the buffer holds.
+    TooManyPoses {
+        /// Poses given.
+        got: usize,
+        /// Capacity.
+        capacity: usize,
+    },
+    /// The six-position coarse calibration failed.
+    Coarse(CoarseError),
+    /// The ellipsoid fit failed.
+    Ellipsoid(EllipsoidError),
+}
+
+impl core::fmt::Display for InitError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::TooManyPoses { got, capacity } => write!(f, "{got} poses given, capacity is {capacity}"),
+            Self::Coarse(e) => write!(f, "six-position coarse calibration: {e}"),
+            Self::Ellipsoid(e) => write!(f, "ellipsoid fit: {e}"),
+        }
+    }
+}
+
+impl core::error::Error for InitError {}
+
+/// The initial estimate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Initial {
+    /// Which initialisation made it ([`Init::SixPosition`] or [`Init::Ellipsoid`]).
+    pub kind: Init,
+    /// The initial model (paper convention).
+    pub params: Params,
+    /// Poses left out as far off the ellipsoid (indices into the poses given).
+    pub excluded: PoseList,
+    /// Parameters the initialisation could not determine ([`crate::model::PARAM_NAMES`] order).
+    pub held: [bool; PARAM_COUNT],
+}
+
+/// Poses normalised into the frame of the initial estimate, in a fixed buffer of `MAX_POSES`.
+pub struct NormalizedPoses<const MAX_POSES: usize> {
+    frame: Frame,
+    initial: Initial,
+    start: Deviation,
+    poses: heapless::Vec<NormPose, MAX_POSES>,
+    source: heapless::Vec<u16, MAX_POSES>,
+}
+
+impl<const MAX_POSES: usize> NormalizedPoses<MAX_POSES> {
+    /// The paper's path: six-position coarse calibration against `gravity`, every pose normalised.
+    pub fn new(poses: &[Pose], gravity: f32) -> Result<Self, InitError> {
+        Self::prepare(poses, Init::SixPosition, gravity, &OutlierRule::KEEP_ALL)
+    }
+
+    /// The initial estimate chosen by `init`, and the poses it keeps normalised in its frame. Out of
+    /// line: its temporaries (the means, the ellipsoid's matrices) need not share a frame with the GA.
+    #[inline(never)]
+    pub fn prepare(poses: &[Pose], init: Init, gravity: f32, rule: &OutlierRule) -> Result<Self, InitError> {
+        if poses.len() > MAX_POSES {
+            return Err(InitError::TooManyPoses { got: poses.len(), capacity: MAX_POSES });
+        }
+        let mut means: heapless::Vec<[f32; 3], MAX_POSES> = heapless::Vec::new();
+        let mut keep: heapless::Vec<bool, MAX_POSES> = heapless::Vec::new();
+        for p in poses {
+            // Capacity checked above (a `collect` would carry a panicking branch).
+            let _ = means.push(p.mean);
+            let _ = keep.push(true);
+        }
+        let initial = initial_estimate(&means, &mut keep, init, gravity, rule)?;
+        let frame = frame_of(&initial.params, gravity)?;
+        let mut start = frame.to_deviation(&initial.params);
+        for i in 0..PARAM_COUNT {
+            if initial.held[i] {
+                start[i] = 0.0;
+            }
+        }
+        let mut out = Self { frame, initial, start, poses: heapless::Vec::new(), source: heapless::Vec::new() };
+        for (i, (m, _)) in means.iter_mut().zip(&keep).enumerate().filter(|(_, (_, k))| **k) {
+            // Capacity checked above.
+            let _ = out.poses.push(frame.normalize(*m));
+            let _ = out.source.push(i as u16);
+        }
+        Ok(out)
+    }
+
+    /// The frame the deviation vectors live in.
+    pub fn frame(&self) -> &Frame {
+        &self.frame
+    }
+
+    /// The initial estimate.
+    pub fn initial(&self) -> &Initial {
+        &self.initial
+    }
+
+    /// The initial estimate as a deviation vector (held parameters at 0).
+    pub fn start(&self) -> Deviation {
+        self.start
+    }
+
+    /// The normalised poses kept.
+    pub fn poses(&self) -> &[NormPose] {
+        &self.poses
+    }
+
+    /// For each normalised pose, the index of the pose it came from.
+    pub fn source(&self) -> &[u16] {
+        &self.source
+    }
+
+    /// The poses used, with `poses` the poses this was prepared from.
+    pub fn pose_set<'a>(&'a self, poses: &'a [Pose]) -> PoseSet<'a> {
+        PoseSet { poses, norm: &self.poses, source: &self.source }
+    }
+}
+
+/// The estimate `init` asks for (see [`Init`]); `keep` marks the poses it uses.
+fn initial_estimate(
+    means: &[[f32; 3]],
+    keep: &mut [bool],
+    init: Init,
+    gravity: f32,
+    rule: &OutlierRule,
+) -> Result<Initial, InitError> {
+    let six = |means: &[[f32; 3]]| {
+        CoarseCalibration::from_means(means, gravity).map(|c| Initial {
+            kind: Init::SixPosition,
+            params: c.params(),
+            excluded: PoseList::default(),
+            held: [false; PARAM_COUNT],
+        })
+    };
+    match init {
+        Init::SixPosition => six(means).map_err(InitError::Coarse),
+        Init::Ellipsoid | Init::Auto => match fit_ellipsoid(means, keep, gravity, rule) {
+            Ok(fit) => Ok(Initial {
+                kind: Init::Ellipsoid,
+                params: fit.params,
+                excluded: fit.excluded,
+                held: held_parameters(&fit.held),
+            }),
+            Err(e) if init == Init::Auto => {
+                keep.iter_mut().for_each(|k| *k = true);
+                six(means).map_err(|_| InitError::Ellipsoid(e))
+            }
+            Err(e) => Err(InitError::Ellipsoid(e)),
+        },
+    }
+}
+
+/// The normalising frame of a model: its centre `Ka^-1 B` and gains `1 / S`.
+fn frame_of(params: &Params, gravity: f32) -> Result<Frame, InitError> {
+    let center = params.invert([0.0; 3]).unwrap_or([f32::NAN; 3]);
+    let gain = params.scale.map(|s| 1.0 / s);
+    Frame::new(center, gain, gravity).map_err(|e| InitError::Coarse(e.into()))
+}
