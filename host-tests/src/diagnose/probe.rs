@@ -54,9 +54,12 @@ fn rotation_direction(ctx: &Context<'_>) -> Vec<Variant> {
     vec![Variant { extra, params: 3, detail: "a bias following the direction of the last rotation".into() }]
 }
 
+/// A probe's parametrisations for the data.
+type MakeVariants = fn(&Context<'_>) -> Vec<Variant>;
+
 /// Every probe with its held-out gain.
 pub(crate) fn run(ctx: &Context<'_>) -> Vec<Probe> {
-    let probes: [(&'static str, fn(&Context<'_>) -> Vec<Variant>); 3] =
+    let probes: [(&'static str, MakeVariants); 3] =
         [("periodic", periodic), ("cross-axis", cross_axis), ("rotation-direction", rotation_direction)];
     probes
         .iter()
