@@ -591,6 +591,114 @@ pub fn generate_outside(kind: Outside, seed: u64) -> SimLog {
     SimLog { recording, temps_c }
 }
 
+/// Other shapes of the catalogue's effects than [`random_scenario`] injects (the diagnosis should
+/// still name the family).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Shape {
+    /// Drift: a warm-up with two time constants (fast and slow, opposite signs possible).
+    TwoStageDrift,
+    /// Drift: a slow smooth wander, quadratic in time.
+    CurvedDrift,
+    /// Temperature: bias linear in the temperature the sensor sees, which lags the thermometer
+    /// by a first-order lag of 60 to 300 s.
+    LaggedTemperature,
+    /// Scale non-linearity: an odd, cubic term per axis.
+    CubicNonlinearity,
+}
+
+impl Shape {
+    /// Every shape.
+    pub const ALL: [Self; 4] =
+        [Self::TwoStageDrift, Self::CurvedDrift, Self::LaggedTemperature, Self::CubicNonlinearity];
+
+    /// The family the diagnosis should name.
+    pub const fn family(self) -> EffectClass {
+        match self {
+            Self::TwoStageDrift | Self::CurvedDrift => EffectClass::Drift,
+            Self::LaggedTemperature => EffectClass::Temperature,
+            Self::CubicNonlinearity => EffectClass::ScaleNonlinearity,
+        }
+    }
+
+    /// A short name.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::TwoStageDrift => "two-stage-drift",
+            Self::CurvedDrift => "curved-drift",
+            Self::LaggedTemperature => "lagged-temperature",
+            Self::CubicNonlinearity => "cubic-nonlinearity",
+        }
+    }
+}
+
+/// A clean random scenario (as [`random_scenario`] with [`EffectClass::None`]) with one of the
+/// other shapes applied.
+pub fn generate_shape(shape: Shape, seed: u64) -> SimLog {
+    let scenario = random_scenario(EffectClass::None, seed);
+    let cfg = &scenario.sim;
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x05A4_E000);
+    let g = sim::STANDARD_GRAVITY_MPS2;
+    let mg = g * 1e-3;
+    let poses = match cfg.plan {
+        Plan::Random(n) => n,
+        _ => 24,
+    };
+    let duration = cfg.initial_rest_s + poses as f64 * (cfg.seconds_per_pose + cfg.move_seconds);
+    let amp = |rng: &mut Xoshiro256PlusPlus, lo: f64, hi: f64| -> [f64; 3] {
+        std::array::from_fn(|_| sign(rng) * uniform(rng, lo, hi) * mg)
+    };
+    let recording = match shape {
+        Shape::TwoStageDrift => {
+            let (a1, a2) = (amp(&mut rng, 1.5, 4.0), amp(&mut rng, 1.5, 4.0));
+            let (t1, t2) = (duration * uniform(&mut rng, 0.03, 0.1), duration * uniform(&mut rng, 0.4, 1.0));
+            sim::simulate_with(
+                cfg,
+                &mut [&mut |t: f64, _p: Option<usize>, r: &mut [f64; 3]| {
+                    let (k1, k2) = (1.0 - (-t / t1).exp(), 1.0 - (-t / t2).exp());
+                    (0..3).for_each(|a| r[a] += a1[a] * k1 + a2[a] * k2);
+                }],
+            )
+        }
+        Shape::CurvedDrift => {
+            let (a1, a2) = (amp(&mut rng, 0.0, 2.0), amp(&mut rng, 2.0, 5.0));
+            sim::simulate_with(
+                cfg,
+                &mut [&mut |t: f64, _p: Option<usize>, r: &mut [f64; 3]| {
+                    let x = t / duration;
+                    (0..3).for_each(|a| r[a] += a1[a] * x + a2[a] * x * x);
+                }],
+            )
+        }
+        Shape::LaggedTemperature => {
+            let bias = amp(&mut rng, 0.6, 1.5);
+            let lag = uniform(&mut rng, 60.0, 300.0);
+            let profile = scenario.temperature;
+            let (mut sensor_c, mut last_t) = (None::<f64>, 0.0);
+            sim::simulate_with(
+                cfg,
+                &mut [&mut |t: f64, _p: Option<usize>, r: &mut [f64; 3]| {
+                    let seen = sensor_c.get_or_insert(profile.at(t));
+                    *seen += (1.0 - (-(t - last_t).max(0.0) / lag).exp()) * (profile.at(t) - *seen);
+                    last_t = t;
+                    let dt = *seen - profile.base_c;
+                    (0..3).for_each(|a| r[a] += bias[a] * dt);
+                }],
+            )
+        }
+        Shape::CubicNonlinearity => {
+            let k3: [f64; 3] = std::array::from_fn(|_| sign(&mut rng) * uniform(&mut rng, 1.5, 5.0) * 1e-3);
+            sim::simulate_with(
+                cfg,
+                &mut [&mut |_t: f64, _p: Option<usize>, r: &mut [f64; 3]| {
+                    (0..3).for_each(|a| r[a] += k3[a] * g * (r[a] / g).powi(3));
+                }],
+            )
+        }
+    };
+    let temps_c = recording.times_s.iter().map(|&t| (scenario.temperature.at(t) * 100.0).round() / 100.0).collect();
+    SimLog { recording, temps_c }
+}
+
 /// The log as `t,ax,ay,az,temp` CSV text (counts as integers, other units with 10 significant
 /// digits, temperatures with 2 decimals).
 pub fn to_csv_string(log: &SimLog) -> String {
