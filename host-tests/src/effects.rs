@@ -193,8 +193,6 @@ fn covers_every_axis(directions: &[[f64; 3]]) -> bool {
 /// random magnitude of one to a few mg.
 pub fn random_scenario(class: EffectClass, seed: u64) -> Scenario {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x5EED_D1A6_0000_0000);
-    let g = sim::STANDARD_GRAVITY_MPS2;
-    let mg = g * 1e-3;
     let poses = 24 + (rng.next_u64() % 21) as usize;
     // Hand-placed orientations that point every axis up and down once (the coarse calibration needs
     // it): the geometry seed is advanced until they do.
@@ -228,35 +226,43 @@ pub fn random_scenario(class: EffectClass, seed: u64) -> Scenario {
             (uniform(&mut rng, 0.5, 1.5), duration * uniform(&mut rng, 0.1, 0.25), uniform(&mut rng, 0.0, 6.3)),
         ],
     };
-    let injected = match class {
+    let injected = random_injected(class, &mut rng, poses, duration);
+    Scenario { class, sim: cfg, temperature, injected }
+}
+
+/// The effect of `class` with random magnitudes for a log of `poses` poses lasting `duration` s.
+fn random_injected(class: EffectClass, rng: &mut Xoshiro256PlusPlus, poses: usize, duration: f64) -> Injected {
+    let g = sim::STANDARD_GRAVITY_MPS2;
+    let mg = g * 1e-3;
+    match class {
         EffectClass::None => Injected::None,
         EffectClass::Drift => Injected::Drift {
-            amplitude: std::array::from_fn(|_| sign(&mut rng) * uniform(&mut rng, 1.5, 5.0) * mg),
-            tau_s: duration * uniform(&mut rng, 0.15, 0.6),
+            amplitude: std::array::from_fn(|_| sign(rng) * uniform(rng, 1.5, 5.0) * mg),
+            tau_s: duration * uniform(rng, 0.15, 0.6),
         },
         EffectClass::Temperature => {
             let which = rng.next_u64() % 3; // bias, scale or both
             let bias = which != 1;
             let scale = which != 0;
             Injected::Temperature {
-                bias_per_c: std::array::from_fn(|_| {
-                    if bias { sign(&mut rng) * uniform(&mut rng, 0.4, 1.2) * mg } else { 0.0 }
-                }),
-                scale_per_c: std::array::from_fn(|_| {
-                    if scale { sign(&mut rng) * uniform(&mut rng, 300e-6, 1000e-6) } else { 0.0 }
-                }),
+                bias_per_c: std::array::from_fn(|_| if bias { sign(rng) * uniform(rng, 0.4, 1.2) * mg } else { 0.0 }),
+                scale_per_c: std::array::from_fn(
+                    |_| {
+                        if scale { sign(rng) * uniform(rng, 300e-6, 1000e-6) } else { 0.0 }
+                    },
+                ),
                 reference_c: 25.0,
             }
         }
-        EffectClass::ScaleNonlinearity => Injected::ScaleNonlinearity {
-            k2: std::array::from_fn(|_| sign(&mut rng) * uniform(&mut rng, 1.5, 5.0) * 1e-3 / g),
-        },
+        EffectClass::ScaleNonlinearity => {
+            Injected::ScaleNonlinearity { k2: std::array::from_fn(|_| sign(rng) * uniform(rng, 1.5, 5.0) * 1e-3 / g) }
+        }
         EffectClass::Settling => Injected::Settling {
-            lag: std::array::from_fn(|_| uniform(&mut rng, 0.002, 0.006)),
-            tau_s: uniform(&mut rng, 0.5, 2.0),
+            lag: std::array::from_fn(|_| uniform(rng, 0.002, 0.006)),
+            tau_s: uniform(rng, 0.5, 2.0),
         },
         EffectClass::Motion => {
-            let count = ((poses as f64 * uniform(&mut rng, 0.12, 0.3)).round() as usize).max(2);
+            let count = ((poses as f64 * uniform(rng, 0.12, 0.3)).round() as usize).max(2);
             let mut chosen: Vec<usize> = Vec::new();
             while chosen.len() < count {
                 let i = 1 + (rng.next_u64() % (poses as u64 - 1)) as usize;
@@ -266,22 +272,18 @@ pub fn random_scenario(class: EffectClass, seed: u64) -> Scenario {
             }
             chosen.sort_unstable();
             Injected::Motion {
-                poses: chosen
-                    .into_iter()
-                    .map(|i| (i, unit_vector(&mut rng), uniform(&mut rng, 3.0, 10.0) * mg))
-                    .collect(),
+                poses: chosen.into_iter().map(|i| (i, unit_vector(rng), uniform(rng, 3.0, 10.0) * mg)).collect(),
             }
         }
         EffectClass::ColoredNoise => {
             let kind = rng.next_u64() % 3; // random walk, bias instability or both
             Injected::ColoredNoise {
-                walk: std::array::from_fn(|_| if kind != 1 { uniform(&mut rng, 0.05, 0.2) * mg } else { 0.0 }),
-                instability: std::array::from_fn(|_| if kind != 0 { uniform(&mut rng, 0.5, 2.0) * mg } else { 0.0 }),
-                correlation_s: uniform(&mut rng, 20.0, 200.0),
+                walk: std::array::from_fn(|_| if kind != 1 { uniform(rng, 0.05, 0.2) * mg } else { 0.0 }),
+                instability: std::array::from_fn(|_| if kind != 0 { uniform(rng, 0.5, 2.0) * mg } else { 0.0 }),
+                correlation_s: uniform(rng, 20.0, 200.0),
             }
         }
-    };
-    Scenario { class, sim: cfg, temperature, injected }
+    }
 }
 
 /// Warm-up drift (see [`Injected::Drift`]).
