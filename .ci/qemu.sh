@@ -73,3 +73,11 @@ if ! diff -u "$OUT/host.report" "$OUT/qemu.report"; then
     exit 1
 fi
 echo "qemu.sh: QEMU and host reports are identical ($(wc -l <"$OUT/qemu.report") lines); firmware verdict PASS"
+
+echo "== the guided session in an Embassy task (feature async) on the emulated Cortex-M4F"
+cargo build -p accelcal --release --target "$TARGET" --features async --example embassy_session
+timeout "$TIMEOUT" qemu-system-arm -M netduinoplus2 -cpu cortex-m4 -nographic \
+    -semihosting-config enable=on,target=native -kernel "$CARGO_TARGET_DIR/$TARGET/release/examples/embassy_session" \
+    </dev/null | tee "$OUT/embassy.txt"
+grep -q "verdict pass true" "$OUT/embassy.txt"
+echo "qemu.sh: the Embassy session passed its verdict"

@@ -12,9 +12,9 @@
 //! |---|---|
 //! | `accumulate_sample` | `Accumulator<i16, 24, 32>::push` of one raw sample (called for every sample of the stream) |
 //! | `apply_sample` | `Params::apply` of a batch of `APPLY_BATCH` samples in place (the pose means; the report gives cycles per sample) |
-//! | `taga_generation` | one `Ga::step` on the normalised 24-pose problem, population 40 (called `GENERATIONS` = 10 times) |
+//! | `taga_generation` | one `Ga::step` on the normalised 24-pose problem, population `POP` (called `GENERATIONS` = 10 times) |
 //! | `lm` | `levenberg_marquardt` from the coarse start (deviation 0) |
-//! | `full_calibration` | `calibrate::<_, 40, 24>` with `CalibrationConfig::DEFAULT`: coarse, TAGA, LM, verdict |
+//! | `full_calibration` | `calibrate::<_, POP, 24>` with `CalibrationConfig::DEFAULT`: coarse, TAGA, LM, verdict |
 //!
 //! On the host this example is an empty stub, so that `cargo test` can build it.
 #![cfg_attr(target_os = "none", no_std, no_main)]
@@ -56,7 +56,9 @@ mod firmware {
     const POSES: usize = 24;
     /// Samples per static-detection block.
     const BLOCK: usize = 32;
-    /// GA population.
+    /// GA population of the device: 24 reaches the same optimum as the host's 40 (objective bit-identical
+    /// on this bench, measured with tools/cyclecount.py) at 1.24 M instead of 1.68 M cycles and a smaller
+    /// GA state (1976 B instead of 3192 B).
     const POP: usize = 24;
     /// Samples per `apply_sample` call (a stream is calibrated in batches: the parameters stay in
     /// registers).

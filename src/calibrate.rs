@@ -384,6 +384,7 @@ impl<const MAX_POSES: usize> Prepared<MAX_POSES> {
     }
 
     /// The calibration at the optimiser's result: held parameters exactly at nominal, the verdict.
+    #[inline(never)]
     fn conclude(&self, poses: &[Pose], run: &Optimised, config: &CalibrationConfig) -> Calibration {
         let frame = self.normalized.frame();
         let set = self.normalized.pose_set(poses);

@@ -373,6 +373,7 @@ pub struct Ga<R, const POP: usize, const DIM: usize> {
 impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
     const VALID: () = {
         assert!(POP >= 4, "a GA population needs at least 4 individuals");
+        assert!(POP <= 1 << 16, "a GA population has at most 65536 individuals (parents are indexed in 16 bits)");
         assert!(DIM >= 1, "a GA needs at least one gene");
     };
 
@@ -497,7 +498,8 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
 
         // Elites: repeatedly take the best not yet taken (POP is small; no sort, no allocation).
         let mut taken = [false; POP];
-        let mut elite_costs = [0.0f32; POP];
+        // Per slot: the parent's fitness for a child, the cost for an elite (kept across the evaluation).
+        let mut parent_fitness = [0.0f32; POP];
         let elites = self.config.elites;
         for e in 0..elites {
             let mut best = usize::MAX;
@@ -507,16 +509,16 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
                 }
             }
             if let (Some(flag), Some(slot), Some(cost), Some(genes)) =
-                (taken.get_mut(best), self.offspring.get_mut(e), elite_costs.get_mut(e), self.population.get(best))
+                (taken.get_mut(best), self.offspring.get_mut(e), parent_fitness.get_mut(e), self.population.get(best))
             {
                 *flag = true;
-                *slot = *genes;
+                // `copy_from_slice` is a non-overlapping copy; an assignment here linked `memmove` (1.5 KB).
+                slot.copy_from_slice(genes);
                 *cost = self.costs[best];
             }
         }
 
-        let mut parent_fitness = [0.0f32; POP];
-        let mut parent_index = [0usize; POP];
+        let mut parent_index = [0u16; POP];
         let mut slot = elites;
         while slot < POP {
             let (a, b) = (self.tournament(), self.tournament());
@@ -530,7 +532,7 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
                 if slot < POP {
                     self.offspring[slot] = child;
                     parent_fitness[slot] = f;
-                    parent_index[slot] = p;
+                    parent_index[slot] = p as u16;
                     slot += 1;
                 }
             }
@@ -544,16 +546,18 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
                     mutated = true;
                 }
             }
-            if !mutated && self.population.get(parent_index[i]) == Some(&self.offspring[i]) {
+            if !mutated && self.population.get(usize::from(parent_index[i])) == Some(&self.offspring[i]) {
                 let d = ((self.rng.next_u32() as u64 * DIM as u64) >> 32) as usize;
                 self.mutate(i, d, &spread);
             }
         }
 
-        core::mem::swap(&mut self.population, &mut self.offspring);
+        // A copy, not a swap: every offspring slot is rewritten before it is read in the next generation,
+        // and a swap of two large arrays links a 1.5 KB `memmove`.
+        self.population = self.offspring;
         // Elites keep their costs; only offspring are evaluated.
         for i in 0..POP {
-            self.costs[i] = if i < elites { elite_costs[i] } else { self.evaluate(cost, i) };
+            self.costs[i] = if i < elites { parent_fitness[i] } else { self.evaluate(cost, i) };
         }
         self.best_index = argmin(&self.costs);
         self.generation = generation;

@@ -64,6 +64,8 @@ pub mod model;
 pub mod mpu6050;
 pub mod sensor;
 pub mod session;
+#[cfg(feature = "async")]
+pub mod session_async;
 pub mod solve;
 pub mod verdict;
 

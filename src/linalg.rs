@@ -70,14 +70,11 @@ pub fn solve_lu<const N: usize>(mut a: Matrix<N>, mut b: [f32; N]) -> Result<[f3
 /// routine on targets without a stable square-root instruction in `core` (Cortex-M4F: ~100 cycles).
 /// NaN for negative or NaN input, 0 for 0 and subnormals, infinity for infinity.
 pub fn sqrt_f32(x: f32) -> f32 {
-    if !(x >= f32::MIN_POSITIVE) || x == f32::INFINITY {
-        return if (0.0..f32::MIN_POSITIVE).contains(&x) {
-            0.0
-        } else if x == f32::INFINITY {
-            x
-        } else {
-            f32::NAN
-        };
+    if x == f32::INFINITY {
+        return x;
+    }
+    if !(x >= f32::MIN_POSITIVE) {
+        return if x >= 0.0 { 0.0 } else { f32::NAN };
     }
     let mut y = f32::from_bits(0x5F37_59DF - (x.to_bits() >> 1));
     for _ in 0..3 {

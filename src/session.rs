@@ -80,7 +80,7 @@ use crate::accumulator::{
     Accumulator, AccumulatorConfig, AccumulatorError, Event, Pose, Reading, Rejection, Rejections,
 };
 use crate::blob::{BLOB_LEN, encode};
-use crate::calibrate::{Calibration, CalibrationConfig, CalibrationError, calibrate};
+use crate::calibrate::{Calibration, CalibrationConfig, CalibrationError, Calibrator, calibrate};
 use crate::frame::{Frame, NormPose, modulus_error_gradient};
 use crate::init::{Init, NormalizedPoses};
 use crate::model::PARAM_COUNT;
@@ -645,6 +645,40 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize, const POP: usize> Sessi
     /// (the guidance says which orientation helps), or [`Session::remove_pose`] a bad one, and finish
     /// again.
     pub fn finish<G: Rng>(&mut self, rng: G) -> Result<SessionResult, SessionError> {
+        self.close()?;
+        #[cfg(feature = "defmt")]
+        defmt::info!("session: solving with {} poses", self.acc.poses().len());
+        let calibration = calibrate::<G, POP, POSES>(self.acc.poses(), &self.config.calibration, rng);
+        self.conclude(calibration)
+    }
+
+    /// [`Session::finish`] in bounded steps: closes an open pose and returns a [`Calibrator`] over the
+    /// session's poses. Step it with [`Session::poses`] (one GA generation per step) between other
+    /// work, then hand its result to [`Session::conclude`].
+    ///
+    /// ```
+    /// # use accelcal::session::{Session, SessionConfig};
+    /// # use accelcal::calibrate::{DefaultRng, Step};
+    /// # use rand_core::SeedableRng;
+    /// # fn run(session: &mut Session<i16, 24, 32, 40>) -> Result<(), accelcal::session::SessionError> {
+    /// let mut calibrator = session.begin_finish(DefaultRng::seed_from_u64(1))?;
+    /// let calibration = loop {
+    ///     match calibrator.step(session.poses()) {
+    ///         Ok(accelcal::calibrate::Step::Running { .. }) => { /* run the control loop */ }
+    ///         Ok(accelcal::calibrate::Step::Finished(c)) => break Ok(c),
+    ///         Err(e) => break Err(e),
+    ///     }
+    /// };
+    /// let result = session.conclude(calibration)?; // Done with the blob, or Failed with the poses kept
+    /// # Ok(()) }
+    /// ```
+    pub fn begin_finish<G: Rng>(&mut self, rng: G) -> Result<Calibrator<G, POP, POSES>, SessionError> {
+        self.close()?;
+        Calibrator::new(self.acc.poses(), &self.config.calibration, rng).map_err(|e| self.fail(e.into()))
+    }
+
+    /// Closes an open pose before a solve; refuses a finished session.
+    fn close(&mut self) -> Result<(), SessionError> {
         if self.state == State::Done {
             return Err(SessionError::Finished);
         }
@@ -652,12 +686,20 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize, const POP: usize> Sessi
             let state = self.captured(index);
             self.set_state(state);
         }
-        #[cfg(feature = "defmt")]
-        defmt::info!("session: solving with {} poses", self.acc.poses().len());
-        let calibration = match calibrate::<G, POP, POSES>(self.acc.poses(), &self.config.calibration, rng) {
-            Ok(calibration) => calibration,
-            Err(e) => return Err(self.fail(SessionError::Calibration(e))),
-        };
+        Ok(())
+    }
+
+    /// Takes a calibration of the session's poses (from [`Session::begin_finish`]'s calibrator): when
+    /// its verdict passes (and, in [`Mode::Guided`], every parameter was fitted) the session is
+    /// [`State::Done`] with the blob; otherwise [`State::Failed`] with the poses kept.
+    pub fn conclude(
+        &mut self,
+        calibration: Result<Calibration, CalibrationError>,
+    ) -> Result<SessionResult, SessionError> {
+        if self.state == State::Done {
+            return Err(SessionError::Finished);
+        }
+        let calibration = calibration.map_err(|e| self.fail(SessionError::Calibration(e)))?;
         self.last = Some(calibration);
         #[cfg(feature = "defmt")]
         defmt::info!("session: pass {}, RMSE {} mg", calibration.verdict.pass(), calibration.verdict.rmse_after_mg);
@@ -852,32 +894,43 @@ impl<const POSES: usize, const BLOCK: usize, const POP: usize> Session<i16, POSE
     ) -> Result<SessionResult, RunError<S::Error>> {
         let mut consecutive_errors = 0u32;
         for _ in 0..limits.max_samples {
-            let progress = match sensor.read_raw() {
-                Ok(sample) => {
-                    consecutive_errors = 0;
-                    match self.push(sample) {
-                        Ok(progress) => progress,
-                        Err(SessionError::Accumulator(AccumulatorError::Full)) => break,
-                        Err(e) => return Err(e.into()),
-                    }
-                }
-                Err(e) => {
-                    consecutive_errors = consecutive_errors.saturating_add(1);
-                    let progress = self.read_failed(consecutive_errors)?;
-                    if consecutive_errors > limits.max_consecutive_errors {
-                        return Err(RunError::Sensor(e));
-                    }
-                    if self.sensor_errors > limits.max_read_errors {
-                        return Err(RunError::ReadErrorBudget(e));
-                    }
-                    progress
-                }
-            };
+            let Some(progress) = self.take_read(sensor.read_raw(), &mut consecutive_errors, limits)? else { break };
             if on_progress(&progress).is_break() {
                 break;
             }
         }
         Ok(self.finish(rng)?)
+    }
+
+    /// One read of a run: pushed (a failed read counted, see [`RunLimits`]); `None` when the pose
+    /// capacity is full (the run finishes).
+    pub(crate) fn take_read<E>(
+        &mut self,
+        read: Result<[i16; 3], E>,
+        consecutive_errors: &mut u32,
+        limits: &RunLimits,
+    ) -> Result<Option<Progress>, RunError<E>> {
+        match read {
+            Ok(sample) => {
+                *consecutive_errors = 0;
+                match self.push(sample) {
+                    Ok(progress) => Ok(Some(progress)),
+                    Err(SessionError::Accumulator(AccumulatorError::Full)) => Ok(None),
+                    Err(e) => Err(e.into()),
+                }
+            }
+            Err(e) => {
+                *consecutive_errors = consecutive_errors.saturating_add(1);
+                let progress = self.read_failed(*consecutive_errors)?;
+                if *consecutive_errors > limits.max_consecutive_errors {
+                    return Err(RunError::Sensor(e));
+                }
+                if self.sensor_errors > limits.max_read_errors {
+                    return Err(RunError::ReadErrorBudget(e));
+                }
+                Ok(Some(progress))
+            }
+        }
     }
 }
 
@@ -1414,6 +1467,36 @@ mod tests {
         assert!(v.pass(), "{v:?}");
         assert_eq!(v.warnings.held, [false, false, false, false, false, false, true, true, true]);
         assert_eq!(result.calibration.params.nonorth, [0.0; 3]);
+    }
+
+    #[test]
+    fn a_stepped_finish_equals_the_one_call_finish() {
+        let run = |stepped: bool| {
+            let mut session = TestSession::new(config()).unwrap();
+            let mut stream = Stream { state: 23 };
+            while !session.progress().ready {
+                let next = session.guidance().next;
+                pose(&mut session, &mut stream, next.unit());
+            }
+            let rng = rand_xoshiro::Xoshiro128PlusPlus::seed_from_u64(5);
+            if !stepped {
+                return (session.finish(rng).unwrap(), 0);
+            }
+            let mut calibrator = session.begin_finish(rng).unwrap();
+            let mut steps = 0;
+            let calibration = loop {
+                steps += 1;
+                match calibrator.step(session.poses()) {
+                    Ok(crate::calibrate::Step::Running { generation }) => assert_eq!(generation, steps),
+                    Ok(crate::calibrate::Step::Finished(c)) => break Ok(c),
+                    Err(e) => break Err(e),
+                }
+            };
+            (session.conclude(calibration).unwrap(), steps)
+        };
+        let ((at_once, _), (stepped, steps)) = (run(false), run(true));
+        assert_eq!(at_once, stepped);
+        assert_eq!(steps, stepped.calibration.generations + 1);
     }
 
     #[test]

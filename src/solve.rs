@@ -200,6 +200,9 @@ pub fn levenberg_marquardt(x0: Deviation, poses: &[NormPose], config: &LmConfig)
 /// Holds the parameters flagged in `held` at their start values: their rows and columns of the
 /// normal equations become the identity and their right-hand side 0, so their step is 0.
 fn hold(jtj: &mut Matrix<PARAM_COUNT>, rhs: &mut Deviation, held: &[bool; PARAM_COUNT]) {
+    if !held.iter().any(|&h| h) {
+        return;
+    }
     for i in 0..PARAM_COUNT {
         for j in 0..PARAM_COUNT {
             if held[i] || held[j] {

@@ -373,6 +373,49 @@ def profile(emu):
     return {fn: dict(sorted(rows.items(), key=lambda kv: -kv[1]["cycles"])) for fn, rows in out.items()}
 
 
+PC_RELATIVE_LOADS = {A.ARM_INS_LDR: 4, A.ARM_INS_VLDR: 4, A.ARM_INS_LDRD: 8}
+
+
+def literal_words(insns):
+    """Addresses of the literal-pool words that PC-relative loads read (`ldr rX, [pc, #imm]`, `vldr`,
+    `ldrd`): data in the code stream, not instructions."""
+    words = set()
+    for ins in insns:
+        size = PC_RELATIVE_LOADS.get(ins.id)
+        if size is None:
+            continue
+        for op in ins.operands:
+            if op.type == A.ARM_OP_MEM and op.mem.base == A.ARM_REG_PC:
+                target = ((ins.address + 4) & ~3) + op.mem.disp
+                if ins.id == A.ARM_INS_VLDR and ins.op_str.startswith("d"):
+                    size = 8
+                words.update(range(target, target + size, 2))
+    return words
+
+
+def code_instructions(cs, code, base):
+    """The instructions of one function, without its literal pools. A plain linear decode reads a float
+    constant as an instruction (a 32-bit literal can decode as a branch into core::fmt, which then
+    counted as linked code); here the halfwords that PC-relative loads read are skipped, and an
+    undecodable halfword is stepped over instead of ending the decode."""
+    def decode(skip):
+        out, at = [], 0
+        while at < len(code):
+            if base + at in skip:
+                at += 2
+                continue
+            ins = next(cs.disasm(code[at:at + 4], base + at, 1), None)
+            if ins is None:
+                at += 2
+                continue
+            out.append(ins)
+            at += ins.size
+        return out
+
+    # Two passes: the first finds the pools (its loads are real: pools follow the code that uses them).
+    return decode(literal_words(decode(set())))
+
+
 def static_code(image, roots):
     """Code bytes reachable from `roots` through direct calls and tail calls (B/BL/CBZ targets), by crate.
 
@@ -397,7 +440,7 @@ def static_code(image, roots):
         size, name = by_start[f]
         if "panicking" in name:
             continue
-        for ins in cs.disasm(image.code(f, size), f):
+        for ins in code_instructions(cs, image.code(f, size), f):
             if ins.id in (A.ARM_INS_B, A.ARM_INS_BL, A.ARM_INS_CBZ, A.ARM_INS_CBNZ):
                 ops = [op for op in ins.operands if op.type == A.ARM_OP_IMM]
                 if ops:
@@ -411,6 +454,7 @@ def static_code(image, roots):
         crate = crate_of(name)
         crates[crate] = crates.get(crate, 0) + size
         functions.append({"name": name, "size": size, "crate": crate})
+    functions.sort(key=lambda fn: -fn["size"])
     return {"roots": roots, "bytes": sum(crates.values()), "by_crate": crates, "functions": functions}
 
 

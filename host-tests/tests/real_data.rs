@@ -46,16 +46,18 @@ fn data_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/real")
 }
 
-/// The recording, or `None` (with a message) when the data folder is absent.
-fn data_file(relative: &str) -> Option<PathBuf> {
+/// The recording. Fails (never passes unchecked) when the data folder or the file is absent.
+fn data_file(relative: &str) -> PathBuf {
     let dir = data_dir();
-    if !dir.is_dir() {
-        println!("SKIP: real data folder {} is absent", dir.display());
-        return None;
-    }
+    assert!(
+        dir.is_dir(),
+        "the real recordings are missing: {} is not a folder. These tests need the workplace's shared/ folder \
+         beside the repository (../shared/data/real, see the README)",
+        dir.display()
+    );
     let path = dir.join(relative);
     assert!(path.is_file(), "{} is missing from the data folder", path.display());
-    Some(path)
+    path
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -258,8 +260,8 @@ struct Outcome {
     reference_params: P64,
 }
 
-fn run(case: &Case) -> Option<Outcome> {
-    let path = data_file(case.file)?;
+fn run(case: &Case) -> Outcome {
+    let path = data_file(case.file);
     let table = read_csv(&path, &case.read).unwrap_or_else(|e| panic!("{}: {e}", case.name));
     assert_eq!(table.units, case.expected_units, "{}: units {}", case.name, table.units_summary());
     for w in &table.warnings {
@@ -301,7 +303,7 @@ fn run(case: &Case) -> Option<Outcome> {
     let from_extremes = reference_lm(extremes, &means, g, &warnings.held);
     let (reference_params, reference_objective) =
         if from_library.1 <= from_extremes.1 { from_library } else { from_extremes };
-    Some(Outcome {
+    Outcome {
         table,
         accumulation,
         poses,
@@ -310,12 +312,12 @@ fn run(case: &Case) -> Option<Outcome> {
         library_objective64,
         reference_objective,
         reference_params,
-    })
+    }
 }
 
 /// Runs a case, prints its summary row and checks (a)-(c).
-fn check(case: &Case) -> Option<Outcome> {
-    let out = run(case)?;
+fn check(case: &Case) -> Outcome {
+    let out = run(case);
     let v = &out.calibration.verdict;
     let means: Vec<[f64; 3]> = out.poses.iter().map(|p| p.mean.map(f64::from)).collect();
     let ratio_reported = f64::from(out.calibration.objective) / out.reference_objective;
@@ -379,7 +381,7 @@ fn check(case: &Case) -> Option<Outcome> {
         out.calibration.objective,
         out.reference_objective
     );
-    Some(out)
+    out
 }
 
 fn raw(opts: AccumulateOptions) -> Source {
@@ -402,7 +404,7 @@ fn imu_tk_xsens_mti() {
         readme_positions: 38,
         poses: (35, 41),
     };
-    let Some(out) = check(&case) else { return };
+    let out = check(&case);
     assert_eq!(out.table.samples.len(), 51_175);
     let acc = out.accumulation.as_ref().unwrap();
     assert_eq!(acc.block_samples, 16);
@@ -577,7 +579,7 @@ fn fastahrs_fxos8700_chunk_means() {
 /// calibration fits what they determine and says what it could not, or refuses with a clear error.
 #[test]
 fn unusable_sets_read_and_are_refused() {
-    let Some(path) = data_file("avrlabs_mpu6050/derived_notebook_26pos_means.csv") else { return };
+    let path = data_file("avrlabs_mpu6050/derived_notebook_26pos_means.csv");
     let table = read_csv(&path, &means_options()).unwrap();
     assert_eq!(table.units, Units::Counts);
     let poses = to_poses_from_means(&table);
@@ -592,7 +594,7 @@ fn unusable_sets_read_and_are_refused() {
     assert!(cal.verdict.rmse_after_mg < 0.5 * cal.verdict.rmse_before_mg, "{:?}", cal.verdict);
     assert!(!cal.verdict.pass(), "biases and scales this poorly determined fail the default bounds");
 
-    let Some(path) = data_file("willward_mpu9250/final_trial__six_position_data.csv") else { return };
+    let path = data_file("willward_mpu9250/final_trial__six_position_data.csv");
     let table = read_csv(&path, &means_options()).unwrap();
     assert_eq!(table.units, Units::G);
     let poses = to_poses_from_means(&table);
@@ -607,7 +609,7 @@ fn unusable_sets_read_and_are_refused() {
 
     // Raw z-up log: a title line, then a header with two names run together ("time (s)x (g)").
     // The title is skipped as a preamble; the columns must be given by index.
-    let Some(path) = data_file("willward_mpu9250/final_trial__six_position_final_test_data.csv") else { return };
+    let path = data_file("willward_mpu9250/final_trial__six_position_final_test_data.csv");
     let err = read_csv(&path, &ReadOptions::default()).unwrap_err();
     assert!(err.to_string().contains("`time (s)x (g)`"), "{err}");
     let spec: ColumnSpec = "0,1,2,3".parse().unwrap();
@@ -617,7 +619,7 @@ fn unusable_sets_read_and_are_refused() {
     assert_eq!(acc.poses.len(), 1, "one 300 s z-up hold");
 
     // The avrlabs notebook raw file concatenates captures (time restarts per position).
-    let Some(path) = data_file("avrlabs_mpu6050/notebook_26pos_clean.csv") else { return };
+    let path = data_file("avrlabs_mpu6050/notebook_26pos_clean.csv");
     let err = read_csv(&path, &ReadOptions::default()).unwrap_err();
     assert!(err.to_string().contains("time goes backwards"), "{err}");
     let spec: ColumnSpec = "-,ax_raw,ay_raw,az_raw,temp_C".parse().unwrap();
