@@ -55,7 +55,11 @@ fn main() {
                 let effect = if r.explained {
                     format!("**{}**", r.verdict)
                 } else if r.gap.significant {
-                    format!("none (unexplained; best {})", best.map_or("-", |c| c.effect))
+                    format!(
+                        "unexplained: {} (best family {})",
+                        r.unexplained_where.as_deref().unwrap_or("-"),
+                        best.map_or("-", |c| c.effect)
+                    )
                 } else {
                     "none (no significant gap)".to_string()
                 };

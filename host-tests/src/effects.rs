@@ -193,8 +193,6 @@ fn covers_every_axis(directions: &[[f64; 3]]) -> bool {
 /// random magnitude of one to a few mg.
 pub fn random_scenario(class: EffectClass, seed: u64) -> Scenario {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x5EED_D1A6_0000_0000);
-    let g = sim::STANDARD_GRAVITY_MPS2;
-    let mg = g * 1e-3;
     let poses = 24 + (rng.next_u64() % 21) as usize;
     // Hand-placed orientations that point every axis up and down once (the coarse calibration needs
     // it): the geometry seed is advanced until they do.
@@ -228,35 +226,43 @@ pub fn random_scenario(class: EffectClass, seed: u64) -> Scenario {
             (uniform(&mut rng, 0.5, 1.5), duration * uniform(&mut rng, 0.1, 0.25), uniform(&mut rng, 0.0, 6.3)),
         ],
     };
-    let injected = match class {
+    let injected = random_injected(class, &mut rng, poses, duration);
+    Scenario { class, sim: cfg, temperature, injected }
+}
+
+/// The effect of `class` with random magnitudes for a log of `poses` poses lasting `duration` s.
+fn random_injected(class: EffectClass, rng: &mut Xoshiro256PlusPlus, poses: usize, duration: f64) -> Injected {
+    let g = sim::STANDARD_GRAVITY_MPS2;
+    let mg = g * 1e-3;
+    match class {
         EffectClass::None => Injected::None,
         EffectClass::Drift => Injected::Drift {
-            amplitude: std::array::from_fn(|_| sign(&mut rng) * uniform(&mut rng, 1.5, 5.0) * mg),
-            tau_s: duration * uniform(&mut rng, 0.15, 0.6),
+            amplitude: std::array::from_fn(|_| sign(rng) * uniform(rng, 1.5, 5.0) * mg),
+            tau_s: duration * uniform(rng, 0.15, 0.6),
         },
         EffectClass::Temperature => {
             let which = rng.next_u64() % 3; // bias, scale or both
             let bias = which != 1;
             let scale = which != 0;
             Injected::Temperature {
-                bias_per_c: std::array::from_fn(|_| {
-                    if bias { sign(&mut rng) * uniform(&mut rng, 0.4, 1.2) * mg } else { 0.0 }
-                }),
-                scale_per_c: std::array::from_fn(|_| {
-                    if scale { sign(&mut rng) * uniform(&mut rng, 300e-6, 1000e-6) } else { 0.0 }
-                }),
+                bias_per_c: std::array::from_fn(|_| if bias { sign(rng) * uniform(rng, 0.4, 1.2) * mg } else { 0.0 }),
+                scale_per_c: std::array::from_fn(
+                    |_| {
+                        if scale { sign(rng) * uniform(rng, 300e-6, 1000e-6) } else { 0.0 }
+                    },
+                ),
                 reference_c: 25.0,
             }
         }
-        EffectClass::ScaleNonlinearity => Injected::ScaleNonlinearity {
-            k2: std::array::from_fn(|_| sign(&mut rng) * uniform(&mut rng, 1.5, 5.0) * 1e-3 / g),
-        },
+        EffectClass::ScaleNonlinearity => {
+            Injected::ScaleNonlinearity { k2: std::array::from_fn(|_| sign(rng) * uniform(rng, 1.5, 5.0) * 1e-3 / g) }
+        }
         EffectClass::Settling => Injected::Settling {
-            lag: std::array::from_fn(|_| uniform(&mut rng, 0.002, 0.006)),
-            tau_s: uniform(&mut rng, 0.5, 2.0),
+            lag: std::array::from_fn(|_| uniform(rng, 0.002, 0.006)),
+            tau_s: uniform(rng, 0.5, 2.0),
         },
         EffectClass::Motion => {
-            let count = ((poses as f64 * uniform(&mut rng, 0.12, 0.3)).round() as usize).max(2);
+            let count = ((poses as f64 * uniform(rng, 0.12, 0.3)).round() as usize).max(2);
             let mut chosen: Vec<usize> = Vec::new();
             while chosen.len() < count {
                 let i = 1 + (rng.next_u64() % (poses as u64 - 1)) as usize;
@@ -266,22 +272,18 @@ pub fn random_scenario(class: EffectClass, seed: u64) -> Scenario {
             }
             chosen.sort_unstable();
             Injected::Motion {
-                poses: chosen
-                    .into_iter()
-                    .map(|i| (i, unit_vector(&mut rng), uniform(&mut rng, 3.0, 10.0) * mg))
-                    .collect(),
+                poses: chosen.into_iter().map(|i| (i, unit_vector(rng), uniform(rng, 3.0, 10.0) * mg)).collect(),
             }
         }
         EffectClass::ColoredNoise => {
             let kind = rng.next_u64() % 3; // random walk, bias instability or both
             Injected::ColoredNoise {
-                walk: std::array::from_fn(|_| if kind != 1 { uniform(&mut rng, 0.05, 0.2) * mg } else { 0.0 }),
-                instability: std::array::from_fn(|_| if kind != 0 { uniform(&mut rng, 0.5, 2.0) * mg } else { 0.0 }),
-                correlation_s: uniform(&mut rng, 20.0, 200.0),
+                walk: std::array::from_fn(|_| if kind != 1 { uniform(rng, 0.05, 0.2) * mg } else { 0.0 }),
+                instability: std::array::from_fn(|_| if kind != 0 { uniform(rng, 0.5, 2.0) * mg } else { 0.0 }),
+                correlation_s: uniform(rng, 20.0, 200.0),
             }
         }
-    };
-    Scenario { class, sim: cfg, temperature, injected }
+    }
 }
 
 /// Warm-up drift (see [`Injected::Drift`]).
@@ -485,6 +487,214 @@ pub fn generate(scenario: &Scenario) -> SimLog {
         }
         Injected::ColoredNoise { walk, instability, correlation_s } => {
             sim::simulate_with(cfg, &mut [&mut ColoredBias::new(*walk, *instability, *correlation_s, cfg.seed)])
+        }
+    };
+    let temps_c = recording.times_s.iter().map(|&t| (scenario.temperature.at(t) * 100.0).round() / 100.0).collect();
+    SimLog { recording, temps_c }
+}
+
+/// Effects outside the diagnosis catalogue (a diagnosis should answer `none` or `unexplained`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Outside {
+    /// One pose offset by 5 to 15 mg along a random direction (a bad pose).
+    OneBadPose,
+    /// Cross-axis coupling: `c a_b a_c / g` added to axis `a` (products of two other axes).
+    CrossAxis,
+    /// Hysteresis: a bias that follows the direction of the last rotation (the change from the
+    /// previous pose), not the orientation itself.
+    Hysteresis,
+    /// A slow periodic bias (a few periods over the log, e.g. pickup from a cyclic heater).
+    PeriodicBias,
+}
+
+impl Outside {
+    /// Every kind.
+    pub const ALL: [Self; 4] = [Self::OneBadPose, Self::CrossAxis, Self::Hysteresis, Self::PeriodicBias];
+
+    /// A short name.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::OneBadPose => "one-bad-pose",
+            Self::CrossAxis => "cross-axis",
+            Self::Hysteresis => "hysteresis",
+            Self::PeriodicBias => "periodic-bias",
+        }
+    }
+}
+
+/// A clean random scenario (as [`random_scenario`] with [`EffectClass::None`]) with an
+/// out-of-catalogue effect applied.
+pub fn generate_outside(kind: Outside, seed: u64) -> SimLog {
+    let scenario = random_scenario(EffectClass::None, seed);
+    let cfg = &scenario.sim;
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x0075_1DE0);
+    let mg = sim::STANDARD_GRAVITY_MPS2 * 1e-3;
+    let poses = match cfg.plan {
+        Plan::Random(n) => n,
+        _ => 24,
+    };
+    let recording = match kind {
+        Outside::OneBadPose => {
+            let bad = 1 + (rng.next_u64() % (poses as u64 - 1)) as usize;
+            let offset = unit_vector(&mut rng).map(|c| c * uniform(&mut rng, 5.0, 15.0) * mg);
+            sim::simulate_with(
+                cfg,
+                &mut [&mut |_t: f64, pose: Option<usize>, r: &mut [f64; 3]| {
+                    if pose == Some(bad) {
+                        (0..3).for_each(|a| r[a] += offset[a]);
+                    }
+                }],
+            )
+        }
+        Outside::CrossAxis => {
+            let c: [f64; 3] = std::array::from_fn(|_| sign(&mut rng) * uniform(&mut rng, 3.0, 8.0) * 1e-3);
+            let g = sim::STANDARD_GRAVITY_MPS2;
+            sim::simulate_with(
+                cfg,
+                &mut [&mut |_t: f64, _p: Option<usize>, r: &mut [f64; 3]| {
+                    let x = *r;
+                    r[0] += c[0] * x[1] * x[2] / g;
+                    r[1] += c[1] * x[0] * x[2] / g;
+                    r[2] += c[2] * x[0] * x[1] / g;
+                }],
+            )
+        }
+        Outside::Hysteresis => {
+            let h: [f64; 3] = std::array::from_fn(|_| uniform(&mut rng, 3.0, 8.0) * mg);
+            let (mut last, mut previous_pose, mut bias) = (None::<[f64; 3]>, None, [0.0; 3]);
+            sim::simulate_with(
+                cfg,
+                &mut [&mut |_t: f64, pose: Option<usize>, r: &mut [f64; 3]| {
+                    if pose.is_some() && pose != previous_pose {
+                        if let Some(l) = last {
+                            bias = std::array::from_fn(|a| h[a] * (r[a] - l[a]).signum());
+                        }
+                        last = Some(*r);
+                        previous_pose = pose;
+                    }
+                    (0..3).for_each(|a| r[a] += bias[a]);
+                }],
+            )
+        }
+        Outside::PeriodicBias => {
+            let amp: [f64; 3] = std::array::from_fn(|_| uniform(&mut rng, 2.0, 5.0) * mg);
+            let period = uniform(&mut rng, 40.0, 90.0);
+            let phase = uniform(&mut rng, 0.0, 6.3);
+            sim::simulate_with(
+                cfg,
+                &mut [&mut |t: f64, _p: Option<usize>, r: &mut [f64; 3]| {
+                    let k = (std::f64::consts::TAU * t / period + phase).sin();
+                    (0..3).for_each(|a| r[a] += amp[a] * k);
+                }],
+            )
+        }
+    };
+    let temps_c = recording.times_s.iter().map(|&t| (scenario.temperature.at(t) * 100.0).round() / 100.0).collect();
+    SimLog { recording, temps_c }
+}
+
+/// Other shapes of the catalogue's effects than [`random_scenario`] injects (the diagnosis should
+/// still name the family).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Shape {
+    /// Drift: a warm-up with two time constants (fast and slow, opposite signs possible).
+    TwoStageDrift,
+    /// Drift: a slow smooth wander, quadratic in time.
+    CurvedDrift,
+    /// Temperature: bias linear in the temperature the sensor sees, which lags the thermometer
+    /// by a first-order lag of 60 to 300 s.
+    LaggedTemperature,
+    /// Scale non-linearity: an odd, cubic term per axis.
+    CubicNonlinearity,
+}
+
+impl Shape {
+    /// Every shape.
+    pub const ALL: [Self; 4] =
+        [Self::TwoStageDrift, Self::CurvedDrift, Self::LaggedTemperature, Self::CubicNonlinearity];
+
+    /// The family the diagnosis should name.
+    pub const fn family(self) -> EffectClass {
+        match self {
+            Self::TwoStageDrift | Self::CurvedDrift => EffectClass::Drift,
+            Self::LaggedTemperature => EffectClass::Temperature,
+            Self::CubicNonlinearity => EffectClass::ScaleNonlinearity,
+        }
+    }
+
+    /// A short name.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::TwoStageDrift => "two-stage-drift",
+            Self::CurvedDrift => "curved-drift",
+            Self::LaggedTemperature => "lagged-temperature",
+            Self::CubicNonlinearity => "cubic-nonlinearity",
+        }
+    }
+}
+
+/// A clean random scenario (as [`random_scenario`] with [`EffectClass::None`]) with one of the
+/// other shapes applied.
+pub fn generate_shape(shape: Shape, seed: u64) -> SimLog {
+    let scenario = random_scenario(EffectClass::None, seed);
+    let cfg = &scenario.sim;
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x05A4_E000);
+    let g = sim::STANDARD_GRAVITY_MPS2;
+    let mg = g * 1e-3;
+    let poses = match cfg.plan {
+        Plan::Random(n) => n,
+        _ => 24,
+    };
+    let duration = cfg.initial_rest_s + poses as f64 * (cfg.seconds_per_pose + cfg.move_seconds);
+    let amp = |rng: &mut Xoshiro256PlusPlus, lo: f64, hi: f64| -> [f64; 3] {
+        std::array::from_fn(|_| sign(rng) * uniform(rng, lo, hi) * mg)
+    };
+    let recording = match shape {
+        Shape::TwoStageDrift => {
+            let (a1, a2) = (amp(&mut rng, 1.5, 4.0), amp(&mut rng, 1.5, 4.0));
+            let (t1, t2) = (duration * uniform(&mut rng, 0.03, 0.1), duration * uniform(&mut rng, 0.4, 1.0));
+            sim::simulate_with(
+                cfg,
+                &mut [&mut |t: f64, _p: Option<usize>, r: &mut [f64; 3]| {
+                    let (k1, k2) = (1.0 - (-t / t1).exp(), 1.0 - (-t / t2).exp());
+                    (0..3).for_each(|a| r[a] += a1[a] * k1 + a2[a] * k2);
+                }],
+            )
+        }
+        Shape::CurvedDrift => {
+            let (a1, a2) = (amp(&mut rng, 0.0, 2.0), amp(&mut rng, 2.0, 5.0));
+            sim::simulate_with(
+                cfg,
+                &mut [&mut |t: f64, _p: Option<usize>, r: &mut [f64; 3]| {
+                    let x = t / duration;
+                    (0..3).for_each(|a| r[a] += a1[a] * x + a2[a] * x * x);
+                }],
+            )
+        }
+        Shape::LaggedTemperature => {
+            let bias = amp(&mut rng, 0.6, 1.5);
+            let lag = uniform(&mut rng, 60.0, 300.0);
+            let profile = scenario.temperature;
+            let (mut sensor_c, mut last_t) = (None::<f64>, 0.0);
+            sim::simulate_with(
+                cfg,
+                &mut [&mut |t: f64, _p: Option<usize>, r: &mut [f64; 3]| {
+                    let seen = sensor_c.get_or_insert(profile.at(t));
+                    *seen += (1.0 - (-(t - last_t).max(0.0) / lag).exp()) * (profile.at(t) - *seen);
+                    last_t = t;
+                    let dt = *seen - profile.base_c;
+                    (0..3).for_each(|a| r[a] += bias[a] * dt);
+                }],
+            )
+        }
+        Shape::CubicNonlinearity => {
+            let k3: [f64; 3] = std::array::from_fn(|_| sign(&mut rng) * uniform(&mut rng, 1.5, 5.0) * 1e-3);
+            sim::simulate_with(
+                cfg,
+                &mut [&mut |_t: f64, _p: Option<usize>, r: &mut [f64; 3]| {
+                    (0..3).for_each(|a| r[a] += k3[a] * g * (r[a] / g).powi(3));
+                }],
+            )
         }
     };
     let temps_c = recording.times_s.iter().map(|&t| (scenario.temperature.at(t) * 100.0).round() / 100.0).collect();

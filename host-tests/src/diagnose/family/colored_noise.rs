@@ -1,0 +1,158 @@
+//! Colored noise: a bias random walk and/or a bias-instability floor, measured on the longest
+//! rest (a time segment, not the pose means it is judged on) and given to the simulator; judged by
+//! how well the noise model predicts the nominal model's held-out scatter.
+
+use super::{Candidate, Context, Evaluation, Family, Variant};
+use crate::csvio::Table;
+use crate::diagnose::gap::{Noise, expected_cv_ms, residual_noise_draws, row_time, simulate_gap};
+use crate::diagnose::math::{V3, lstsq, mean, predict};
+use crate::diagnose::{CV_NOISE_DRAWS, PARAMETER_PENALTY, WALK_EXCESS};
+
+pub(crate) struct ColoredNoise;
+
+impl Family for ColoredNoise {
+    fn name(&self) -> &'static str {
+        "colored-noise"
+    }
+
+    fn variants(&self, _ctx: &Context<'_>) -> Vec<Variant> {
+        Vec::new()
+    }
+
+    fn evaluate(&self, ctx: &Context<'_>) -> Evaluation {
+        let m = ctx.m;
+        let n = ctx.poses.len();
+        let longest = (0..n).max_by_key(|&i| ctx.poses[i].n).unwrap_or(0);
+        let rows = ctx.poses[longest].rows.clone();
+        let (walk, floor) = colored_noise_estimate(ctx.table, rows.start, rows.end, m.rate, m.white);
+        let noise = Noise { white: m.white, walk, floor };
+        let applicable = walk.iter().chain(&floor).any(|w| *w > 0.0);
+        let draws = residual_noise_draws(&m.model, &m.directions, &m.poses, &noise, CV_NOISE_DRAWS, ctx.opts.seed);
+        let e_col = expected_cv_ms(&ctx.base_rows, &draws, &ctx.fold, ctx.folds, &ctx.none_dropped);
+        let ms = (crate::diagnose::math::sum_sq(&ctx.nominal_cv).0 + PARAMETER_PENALTY * ctx.e_white) / n as f64;
+        let heldout_ratio = if applicable { (ms / e_col).sqrt() } else { ctx.heldout_ratio_nominal };
+        let sim_after = if applicable {
+            let sims =
+                simulate_gap(&m.model, &m.directions, &m.poses, &noise, m.gravity, ctx.opts.repeats, ctx.opts.seed);
+            mean(&sims)
+        } else {
+            m.gap.sim_rmse_mg
+        };
+        let scale: V3 = std::array::from_fn(|a| m.model.ka[a][a]);
+        let mg = |v: V3, a: usize| m.to_mg(v[a].sqrt() * scale[a]);
+        let candidate = Candidate {
+            effect: self.name(),
+            applicable,
+            heldout_ratio,
+            heldout_gain: if applicable { ctx.gain(heldout_ratio) } else { 0.0 },
+            ratio_after: m.gap.real_rmse_mg / sim_after,
+            extra_params: 1,
+            detail: format!(
+                "random walk {:.3}/{:.3}/{:.3} mg/sqrt(s), bias instability {:.3}/{:.3}/{:.3} mg",
+                mg(walk, 0),
+                mg(walk, 1),
+                mg(walk, 2),
+                mg(floor, 0),
+                mg(floor, 1),
+                mg(floor, 2)
+            ),
+        };
+        Evaluation { candidate, after: m.r.iter().map(|v| Some(*v)).collect() }
+    }
+}
+
+/// The noise beyond white per axis (input unit), measured on the longest rest (a time segment, not
+/// the pose means it is judged on): the rest is detrended (quadratic in time, linear in temperature
+/// when there is a temperature column, so warm-up and temperature are not taken for noise), then
+/// the excess of its overlapping Allan variance over white noise for `tau` from 1/50 to 1/5 of the
+/// rest is fitted as a random walk `K^2 tau / 3` plus a flat bias-instability floor (weighted
+/// least squares; when one term comes out negative, the better of the two alone). Returns
+/// `(K^2 per s, floor variance)`; both zero when the excess is not at
+/// least [`WALK_EXCESS`] times the white noise at the longest `tau`.
+pub(crate) fn colored_noise_estimate(table: &Table, first: usize, end: usize, rate: f64, white: V3) -> (V3, V3) {
+    let n = end - first;
+    let mut walk = [0.0; 3];
+    let mut floor = [0.0; 3];
+    if n < 200 {
+        return (walk, floor);
+    }
+    let rows = trend_design(table, first, end, rate);
+    let idx: Vec<usize> = (0..n).collect();
+    for a in 0..3 {
+        let y: Vec<f64> = table.samples[first..end].iter().map(|s| -s[a]).collect();
+        let Some(x) = lstsq(&rows, &y, &idx) else { continue };
+        let detrended: Vec<f64> = (0..n).map(|i| -predict(&rows, &y, &x, i)).collect();
+        let (points, last_excess) = allan_excess(&detrended, rate, white[a]);
+        if points.is_empty() || !(last_excess > WALK_EXCESS) {
+            continue;
+        }
+        (walk[a], floor[a]) = fit_walk_and_floor(&points);
+    }
+    (walk, floor)
+}
+
+/// The trend a rest is cleared of: quadratic in time, linear in temperature when it varies.
+fn trend_design(table: &Table, first: usize, end: usize, rate: f64) -> Vec<Vec<f64>> {
+    let t0 = row_time(table, first, rate);
+    let span = (row_time(table, end - 1, rate) - t0).max(1e-9);
+    let temps = table.temps_c.as_ref().map(|t| &t[first..end]);
+    let t_mean = temps.map_or(0.0, mean);
+    let has_temp = temps.is_some_and(|t| t.iter().any(|v| (v - t_mean).abs() > 1e-9));
+    (first..end)
+        .map(|i| {
+            let x = 2.0 * (row_time(table, i, rate) - t0) / span - 1.0;
+            let mut row = vec![1.0, x, x * x];
+            if let (true, Some(t)) = (has_temp, temps) {
+                row.push(t[i - first] - t_mean);
+            }
+            row
+        })
+        .collect()
+}
+
+/// Overlapping Allan variance in excess of white noise (`white` per sample) for `tau` from 1/50 to
+/// 1/5 of the record: `(tau s, excess, weight)` per `tau`, and the excess at the longest `tau` in
+/// units of the white Allan variance there.
+fn allan_excess(detrended: &[f64], rate: f64, white: f64) -> (Vec<(f64, f64, f64)>, f64) {
+    let n = detrended.len();
+    let mut prefix = vec![0.0; n + 1];
+    for i in 0..n {
+        prefix[i + 1] = prefix[i] + detrended[i];
+    }
+    let mut points = Vec::new();
+    let mut last_excess = 0.0;
+    let mut m = ((n as f64 / 50.0) as usize).max(1);
+    while 5 * m <= n {
+        let count = n - 2 * m + 1;
+        let sum: f64 = (0..count).map(|k| (prefix[k + 2 * m] - 2.0 * prefix[k + m] + prefix[k]).powi(2)).sum();
+        let avar = sum / (2.0 * count as f64 * (m * m) as f64);
+        let white_avar = white / m as f64;
+        let excess = avar - white_avar;
+        // Weighted by the number of independent clusters over the relative variance.
+        let w = (n as f64 / m as f64) / (avar * avar).max(1e-300);
+        points.push((m as f64 / rate, excess, w));
+        last_excess = excess / white_avar;
+        m *= 2;
+    }
+    (points, last_excess)
+}
+
+/// The excess fitted as a random walk `K^2 tau / 3` plus a flat floor (weighted least squares):
+/// both when both come out positive, else the better single term. Returns `(K^2, floor)`.
+fn fit_walk_and_floor(points: &[(f64, f64, f64)]) -> (f64, f64) {
+    let sum = |f: &dyn Fn(f64, f64) -> f64| points.iter().map(|&(t, e, w)| w * f(t, e)).sum::<f64>();
+    let k2 = (sum(&|t, e| e * t / 3.0) / sum(&|t, _| (t / 3.0).powi(2))).max(0.0);
+    let level = (sum(&|_, e| e) / sum(&|_, _| 1.0)).max(0.0);
+    let (saa, sab, sbb) = (sum(&|t, _| (t / 3.0).powi(2)), sum(&|t, _| t / 3.0), sum(&|_, _| 1.0));
+    let (sea, seb) = (sum(&|t, e| e * t / 3.0), sum(&|_, e| e));
+    let det = saa * sbb - sab * sab;
+    let joint = (det > 0.0).then(|| ((sea * sbb - seb * sab) / det, (saa * seb - sab * sea) / det));
+    match joint {
+        Some((k, c)) if k >= 0.0 && c >= 0.0 => (k, c),
+        _ => {
+            let misfit_walk = sum(&|t, e| (e - k2 * t / 3.0).powi(2));
+            let misfit_floor = sum(&|_, e| (e - level).powi(2));
+            if misfit_walk <= misfit_floor { (k2, 0.0) } else { (0.0, level) }
+        }
+    }
+}

@@ -1,0 +1,224 @@
+//! Step 3, the effect families. Each family is one file behind [`Family`]: it proposes its
+//! parametrisations as extra design columns (fitted on some poses, predicting the withheld ones by
+//! cross-validation) or, for noise, a noise model; the best parametrisation by the penalised
+//! held-out ratio represents the family. Adding a family is adding a file and a line in [`all`].
+
+mod colored_noise;
+mod drift;
+mod motion;
+mod nonlinearity;
+mod settling;
+mod temperature;
+
+use rand_core::SeedableRng;
+use rand_xoshiro::Xoshiro256PlusPlus;
+
+use super::gap::{Measured, Noise, PoseData, expected_cv_ms, expected_fit_rmse_mg, residual_noise_draws};
+use super::math::{V3, cv_residuals, fit_residuals, jacobian_row, rms, sum_sq};
+use super::report::Candidate;
+use super::{CV_NOISE_DRAWS, DiagnoseOptions, OVERSHOOT_WEIGHT, PARAMETER_PENALTY};
+use crate::csvio::Table;
+
+/// One parametrisation of a family: extra design columns per pose (the modulus residual's
+/// derivative in the effect's parameters), the parameters it costs and what it is.
+pub(crate) struct Variant {
+    pub(crate) extra: Vec<Vec<f64>>,
+    pub(crate) params: usize,
+    pub(crate) detail: String,
+}
+
+/// A design-type family's best parametrisation.
+pub(crate) struct Fitted {
+    pub(crate) rows: Vec<Vec<f64>>,
+    pub(crate) dropped: Vec<bool>,
+    pub(crate) score_ratio: f64,
+    pub(crate) params: usize,
+    pub(crate) detail: String,
+}
+
+/// A family's result: its candidate line and the pose residuals with it added (`None`: dropped).
+pub(crate) struct Evaluation {
+    pub(crate) candidate: Candidate,
+    pub(crate) after: Vec<Option<f64>>,
+}
+
+/// An effect family.
+pub(crate) trait Family {
+    /// The report name.
+    fn name(&self) -> &'static str;
+
+    /// The parametrisations the data can test (none: not testable).
+    fn variants(&self, ctx: &Context<'_>) -> Vec<Variant>;
+
+    /// The best parametrisation on withheld poses.
+    fn fit(&self, ctx: &Context<'_>) -> Option<Fitted> {
+        ctx.best_of(self.variants(ctx))
+    }
+
+    /// The candidate line: held-out evidence and the gap with the family added.
+    fn evaluate(&self, ctx: &Context<'_>) -> Evaluation {
+        match self.fit(ctx) {
+            Some(f) => ctx.evaluate_fitted(self.name(), f),
+            None => ctx.not_testable(self.name()),
+        }
+    }
+}
+
+/// Every family, in report order.
+pub(crate) fn all() -> Vec<Box<dyn Family>> {
+    vec![
+        Box::new(drift::Drift),
+        Box::new(temperature::Temperature),
+        Box::new(nonlinearity::ScaleNonlinearity),
+        Box::new(settling::Settling),
+        Box::new(motion::Motion),
+        Box::new(colored_noise::ColoredNoise),
+    ]
+}
+
+/// Everything a family may use: the data, the nominal fit and the cross-validation set-up.
+pub(crate) struct Context<'a> {
+    pub(crate) table: &'a Table,
+    pub(crate) m: &'a Measured,
+    pub(crate) opts: &'a DiagnoseOptions,
+    pub(crate) poses: &'a [PoseData],
+    pub(crate) base_rows: Vec<Vec<f64>>,
+    pub(crate) fold: Vec<usize>,
+    pub(crate) folds: usize,
+    pub(crate) white_draws: Vec<Vec<f64>>,
+    /// Expected mean-square held-out residual of white noise with the nominal model.
+    pub(crate) e_white: f64,
+    pub(crate) none_dropped: Vec<bool>,
+    pub(crate) nominal_cv: Vec<Option<f64>>,
+    pub(crate) heldout_ratio_nominal: f64,
+    base_fit_rmse_mg: f64,
+}
+
+/// Poses assigned to folds at random (seeded).
+fn assign_folds(n: usize, folds: usize, seed: u64) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..n).collect();
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0xF01D);
+    for i in (1..n).rev() {
+        let j = (rand_core::Rng::next_u64(&mut rng) % (i as u64 + 1)) as usize;
+        order.swap(i, j);
+    }
+    let mut fold = vec![0; n];
+    for (rank, &i) in order.iter().enumerate() {
+        fold[i] = rank % folds;
+    }
+    fold
+}
+
+impl<'a> Context<'a> {
+    /// The cross-validation set-up; `None` when a fold leaves too few poses.
+    pub(crate) fn new(table: &'a Table, m: &'a Measured, opts: &'a DiagnoseOptions) -> Option<Self> {
+        let n = m.poses.len();
+        let folds = opts.folds.min(n);
+        let fold = assign_folds(n, folds, opts.seed);
+        let base_rows: Vec<Vec<f64>> =
+            m.poses.iter().zip(&m.directions).map(|(p, u)| jacobian_row(p.mean, *u).to_vec()).collect();
+        let white_noise = Noise { white: m.white, walk: [0.0; 3], floor: [0.0; 3] };
+        let white_draws =
+            residual_noise_draws(&m.model, &m.directions, &m.poses, &white_noise, CV_NOISE_DRAWS, opts.seed);
+        let none_dropped = vec![false; n];
+        let e_white = expected_cv_ms(&base_rows, &white_draws, &fold, folds, &none_dropped);
+        let nominal_cv = cv_residuals(&base_rows, &m.r, &fold, folds, &none_dropped)?;
+        let heldout_ratio_nominal = ((sum_sq(&nominal_cv).0 / n as f64) / e_white).sqrt();
+        let base_fit_rmse_mg = expected_fit_rmse_mg(&base_rows, &white_draws, &none_dropped, m.gravity);
+        Some(Self {
+            table,
+            m,
+            opts,
+            poses: &m.poses,
+            base_rows,
+            fold,
+            folds,
+            white_draws,
+            e_white,
+            none_dropped,
+            nominal_cv,
+            heldout_ratio_nominal,
+            base_fit_rmse_mg,
+        })
+    }
+
+    pub(crate) fn directions(&self) -> &[V3] {
+        &self.m.directions
+    }
+
+    pub(crate) fn calibrated(&self) -> &[V3] {
+        &self.m.calibrated
+    }
+
+    fn rows_with(&self, extra: &[Vec<f64>]) -> Vec<Vec<f64>> {
+        self.base_rows.iter().zip(extra).map(|(b, e)| b.iter().chain(e).copied().collect()).collect()
+    }
+
+    /// Penalised held-out ratio of a design (`k` extra parameters, some poses dropped).
+    pub(crate) fn heldout_ratio(&self, rows: &[Vec<f64>], dropped: &[bool], k: usize) -> Option<f64> {
+        let n = self.m.r.len() as f64;
+        let cv = cv_residuals(rows, &self.m.r, &self.fold, self.folds, dropped)?;
+        let (ss, _) = sum_sq(&cv);
+        let n_dropped = dropped.iter().filter(|d| **d).count() as f64;
+        // Against the nominal model's expectation: a design that merely predicts noisily (and so
+        // expects more) must not look better for it; the penalty charges the extra parameters.
+        let ms = (ss + (n_dropped + PARAMETER_PENALTY * k as f64) * self.e_white) / n;
+        Some((ms / self.e_white).sqrt())
+    }
+
+    /// The variant with the smallest penalised held-out ratio.
+    pub(crate) fn best_of(&self, variants: Vec<Variant>) -> Option<Fitted> {
+        let mut best: Option<Fitted> = None;
+        for v in variants {
+            let rows = self.rows_with(&v.extra);
+            let dropped = self.none_dropped.clone();
+            if let Some(ratio) = self.heldout_ratio(&rows, &dropped, v.params)
+                && best.as_ref().is_none_or(|b| ratio < b.score_ratio)
+            {
+                best = Some(Fitted { rows, dropped, score_ratio: ratio, params: v.params, detail: v.detail });
+            }
+        }
+        best
+    }
+
+    /// `1 - ln(ratio) / ln(nominal ratio)`; predicting more scatter than there is counts
+    /// [`OVERSHOOT_WEIGHT`] times (it would "explain" any gap).
+    pub(crate) fn gain(&self, ratio: f64) -> f64 {
+        let before = self.heldout_ratio_nominal.ln().abs();
+        let miss = if ratio >= 1.0 { ratio.ln() } else { OVERSHOOT_WEIGHT * ratio.ln().abs() };
+        if before > 0.0 { 1.0 - miss / before } else { 0.0 }
+    }
+
+    fn evaluate_fitted(&self, name: &'static str, f: Fitted) -> Evaluation {
+        let n = self.m.r.len();
+        let after = fit_residuals(&f.rows, &self.m.r, &f.dropped).unwrap_or_else(|| vec![None; n]);
+        let kept: Vec<f64> = after.iter().flatten().copied().collect();
+        let real_after = self.m.to_mg(rms(&kept));
+        let sim_after = expected_fit_rmse_mg(&f.rows, &self.white_draws, &f.dropped, self.m.gravity);
+        // The linearised sims and the library's differ slightly: scale to the library's.
+        let sim_after = sim_after * self.m.gap.sim_rmse_mg / self.base_fit_rmse_mg;
+        let candidate = Candidate {
+            effect: name,
+            applicable: true,
+            heldout_ratio: f.score_ratio,
+            heldout_gain: self.gain(f.score_ratio),
+            ratio_after: real_after / sim_after,
+            extra_params: f.params,
+            detail: f.detail,
+        };
+        Evaluation { candidate, after }
+    }
+
+    pub(crate) fn not_testable(&self, name: &'static str) -> Evaluation {
+        let candidate = Candidate {
+            effect: name,
+            applicable: false,
+            heldout_ratio: self.heldout_ratio_nominal,
+            heldout_gain: 0.0,
+            ratio_after: self.m.gap.ratio_before,
+            extra_params: 0,
+            detail: "not testable on this data".into(),
+        };
+        Evaluation { candidate, after: self.m.r.iter().map(|v| Some(*v)).collect() }
+    }
+}

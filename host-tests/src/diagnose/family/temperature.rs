@@ -1,0 +1,74 @@
+//! Temperature: bias, relative scale, or both, linear in the temperature the sensor sees: the
+//! thermometer's reading, or that reading through a first-order lag (the sensor warms later than
+//! the thermometer), with the lag's time constant from a grid.
+
+use super::{Context, Family, Variant};
+use crate::diagnose::gap::row_time;
+use crate::diagnose::math::mean;
+
+/// Lag time constants tried, s (0 = no lag).
+const LAGS_S: [f64; 5] = [0.0, 30.0, 100.0, 300.0, 1000.0];
+
+pub(crate) struct Temperature;
+
+/// The temperature column through a first-order lag of `tau` seconds, averaged over each pose.
+fn lagged_pose_temps(ctx: &Context<'_>, tau: f64) -> Option<Vec<f64>> {
+    let temps = ctx.table.temps_c.as_ref()?;
+    let mut lagged = Vec::with_capacity(temps.len());
+    let mut state = *temps.first()?;
+    let mut last_t = row_time(ctx.table, 0, ctx.m.rate);
+    for (i, t_c) in temps.iter().enumerate() {
+        let t = row_time(ctx.table, i, ctx.m.rate);
+        let alpha = if tau > 0.0 { 1.0 - (-(t - last_t).max(0.0) / tau).exp() } else { 1.0 };
+        state += alpha * (t_c - state);
+        last_t = t;
+        lagged.push(state);
+    }
+    Some(ctx.poses.iter().map(|p| mean(&lagged[p.rows.clone()])).collect())
+}
+
+/// Bias and/or scale columns linear in the pose temperatures `temps`.
+fn design(ctx: &Context<'_>, temps: &[f64], bias: bool, scale: bool) -> Vec<Vec<f64>> {
+    let t0 = mean(temps);
+    temps
+        .iter()
+        .zip(ctx.directions())
+        .zip(ctx.calibrated())
+        .map(|((t, u), f)| {
+            let dt = t - t0;
+            let mut row = Vec::new();
+            if bias {
+                row.extend(u.iter().map(|c| c * dt));
+            }
+            if scale {
+                row.extend((0..3).map(|a| u[a] * f[a] * dt));
+            }
+            row
+        })
+        .collect()
+}
+
+impl Family for Temperature {
+    fn name(&self) -> &'static str {
+        "temperature"
+    }
+
+    fn variants(&self, ctx: &Context<'_>) -> Vec<Variant> {
+        let mut out = Vec::new();
+        for lag in LAGS_S {
+            let Some(temps) = lagged_pose_temps(ctx, lag) else { return out };
+            let t0 = mean(&temps);
+            if temps.iter().map(|t| (t - t0).abs()).fold(0.0, f64::max) < 0.05 {
+                continue;
+            }
+            let lag_params = usize::from(lag > 0.0);
+            let through = if lag > 0.0 { format!(" (thermometer lagged {lag:.0} s)") } else { String::new() };
+            for (bias, scale, what) in [(true, false, "bias"), (false, true, "scale"), (true, true, "bias and scale")] {
+                let params = 3 * (usize::from(bias) + usize::from(scale)) + lag_params;
+                let extra = design(ctx, &temps, bias, scale);
+                out.push(Variant { extra, params, detail: format!("{what} linear in temperature{through}") });
+            }
+        }
+        out
+    }
+}

@@ -1,0 +1,191 @@
+//! Small `f64` helpers: vector algebra, the 9-parameter model, least squares and cross-validation.
+
+use accelcal::model::{PARAM_COUNT, Params};
+
+pub(crate) type V3 = [f64; 3];
+
+pub(crate) fn dot(a: V3, b: V3) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+pub(crate) fn norm(a: V3) -> f64 {
+    dot(a, a).sqrt()
+}
+
+pub(crate) fn mean(v: &[f64]) -> f64 {
+    if v.is_empty() { f64::NAN } else { v.iter().sum::<f64>() / v.len() as f64 }
+}
+
+pub(crate) fn rms(v: &[f64]) -> f64 {
+    if v.is_empty() { f64::NAN } else { (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt() }
+}
+
+pub(crate) fn std_dev(v: &[f64]) -> f64 {
+    let m = mean(v);
+    if v.len() < 2 { 0.0 } else { (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64).sqrt() }
+}
+
+pub(crate) fn median(v: &[f64]) -> f64 {
+    let mut s: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+    if s.is_empty() {
+        return f64::NAN;
+    }
+    s.sort_by(f64::total_cmp);
+    let n = s.len();
+    if n % 2 == 1 { s[n / 2] } else { 0.5 * (s[n / 2 - 1] + s[n / 2]) }
+}
+
+pub(crate) fn correlation(x: &[f64], y: &[f64]) -> Option<f64> {
+    let (mx, my) = (mean(x), mean(y));
+    let sxy: f64 = x.iter().zip(y).map(|(a, b)| (a - mx) * (b - my)).sum();
+    let sxx: f64 = x.iter().map(|a| (a - mx).powi(2)).sum();
+    let syy: f64 = y.iter().map(|b| (b - my).powi(2)).sum();
+    (sxx > 0.0 && syy > 0.0).then(|| sxy / (sxx * syy).sqrt())
+}
+
+/// The 9-parameter model in `f64`: `f = Ka m - B`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Model {
+    pub(crate) ka: [[f64; 3]; 3],
+    pub(crate) bias: V3,
+}
+
+impl Model {
+    pub(crate) fn from_params(p: &Params) -> Self {
+        let (s, m) = (p.scale.map(f64::from), p.nonorth.map(f64::from));
+        Self { ka: [[s[0], 0.0, 0.0], [m[0], s[1], 0.0], [m[1], m[2], s[2]]], bias: p.bias.map(f64::from) }
+    }
+
+    pub(crate) fn apply(&self, m: V3) -> V3 {
+        std::array::from_fn(|i| (0..3).map(|j| self.ka[i][j] * m[j]).sum::<f64>() - self.bias[i])
+    }
+
+    /// The reading for calibrated `f`: `Ka^-1 (f + B)`.
+    pub(crate) fn invert(&self, f: V3) -> V3 {
+        let y = [f[0] + self.bias[0], f[1] + self.bias[1], f[2] + self.bias[2]];
+        let k = &self.ka;
+        let x0 = y[0] / k[0][0];
+        let x1 = (y[1] - k[1][0] * x0) / k[1][1];
+        let x2 = (y[2] - k[2][0] * x0 - k[2][1] * x1) / k[2][2];
+        [x0, x1, x2]
+    }
+
+    /// `Ka^T u`: how a reading error (input unit) moves the modulus along `u`.
+    pub(crate) fn kt_times(&self, u: V3) -> V3 {
+        std::array::from_fn(|j| (0..3).map(|i| self.ka[i][j] * u[i]).sum())
+    }
+}
+
+/// `d residual / d [B, S, M]` at reading `m` with calibrated direction `u`.
+pub(crate) fn jacobian_row(m: V3, u: V3) -> [f64; PARAM_COUNT] {
+    [-u[0], -u[1], -u[2], u[0] * m[0], u[1] * m[1], u[2] * m[2], u[1] * m[0], u[2] * m[0], u[2] * m[1]]
+}
+
+/// Least squares: the `x` minimising `sum over train of (r_i + rows_i . x)^2` (columns scaled, a tiny
+/// ridge keeps collinear columns finite).
+pub(crate) fn lstsq(rows: &[Vec<f64>], r: &[f64], train: &[usize]) -> Option<Vec<f64>> {
+    let p = rows.first()?.len();
+    if train.len() < p {
+        return None;
+    }
+    let scale: Vec<f64> = (0..p)
+        .map(|j| {
+            let s = (train.iter().map(|&i| rows[i][j] * rows[i][j]).sum::<f64>() / train.len() as f64).sqrt();
+            if s > 0.0 && s.is_finite() { s } else { 1.0 }
+        })
+        .collect();
+    let mut a = vec![vec![0.0; p]; p];
+    let mut b = vec![0.0; p];
+    for &i in train {
+        for j in 0..p {
+            let xj = rows[i][j] / scale[j];
+            b[j] -= xj * r[i];
+            for k in 0..=j {
+                a[j][k] += xj * rows[i][k] / scale[k];
+            }
+        }
+    }
+    let trace: f64 = (0..p).map(|j| a[j][j]).sum();
+    let mut ridge = 1e-11 * trace / p as f64;
+    for _ in 0..6 {
+        if let Some(y) = cholesky_solve(&a, &b, ridge) {
+            return Some(y.iter().zip(&scale).map(|(v, s)| v / s).collect());
+        }
+        ridge = ridge * 100.0 + 1e-300;
+    }
+    None
+}
+
+pub(crate) fn cholesky_solve(a: &[Vec<f64>], b: &[f64], ridge: f64) -> Option<Vec<f64>> {
+    let p = b.len();
+    let mut l = vec![vec![0.0; p]; p];
+    for i in 0..p {
+        for j in 0..=i {
+            let mut s = a[i][j] + if i == j { ridge } else { 0.0 };
+            for k in 0..j {
+                s -= l[i][k] * l[j][k];
+            }
+            if i == j {
+                if !(s > 0.0) {
+                    return None;
+                }
+                l[i][i] = s.sqrt();
+            } else {
+                l[i][j] = s / l[j][j];
+            }
+        }
+    }
+    let mut y = vec![0.0; p];
+    for i in 0..p {
+        y[i] = (b[i] - (0..i).map(|k| l[i][k] * y[k]).sum::<f64>()) / l[i][i];
+    }
+    let mut x = vec![0.0; p];
+    for i in (0..p).rev() {
+        x[i] = (y[i] - (i + 1..p).map(|k| l[k][i] * x[k]).sum::<f64>()) / l[i][i];
+    }
+    x.iter().all(|v| v.is_finite()).then_some(x)
+}
+
+pub(crate) fn predict(rows: &[Vec<f64>], r: &[f64], x: &[f64], i: usize) -> f64 {
+    r[i] + rows[i].iter().zip(x).map(|(a, b)| a * b).sum::<f64>()
+}
+
+/// Cross-validated residuals: pose `i` predicted by the fit on the other folds; `None` for dropped
+/// poses (and everywhere when a fold leaves too few poses).
+pub(crate) fn cv_residuals(
+    rows: &[Vec<f64>],
+    r: &[f64],
+    fold: &[usize],
+    folds: usize,
+    dropped: &[bool],
+) -> Option<Vec<Option<f64>>> {
+    let n = r.len();
+    let mut out = vec![None; n];
+    for f in 0..folds {
+        let train: Vec<usize> = (0..n).filter(|&i| fold[i] != f && !dropped[i]).collect();
+        if !(0..n).any(|i| fold[i] == f) {
+            continue;
+        }
+        let x = lstsq(rows, r, &train)?;
+        for i in (0..n).filter(|&i| fold[i] == f && !dropped[i]) {
+            out[i] = Some(predict(rows, r, &x, i));
+        }
+    }
+    Some(out)
+}
+
+/// In-sample residuals of the fit on the kept poses (`None` for dropped ones).
+pub(crate) fn fit_residuals(rows: &[Vec<f64>], r: &[f64], dropped: &[bool]) -> Option<Vec<Option<f64>>> {
+    let train: Vec<usize> = (0..r.len()).filter(|&i| !dropped[i]).collect();
+    let x = lstsq(rows, r, &train)?;
+    Some((0..r.len()).map(|i| (!dropped[i]).then(|| predict(rows, r, &x, i))).collect())
+}
+
+pub(crate) fn sum_sq(v: &[Option<f64>]) -> (f64, usize) {
+    v.iter().flatten().fold((0.0, 0), |(s, n), x| (s + x * x, n + 1))
+}
+
+/// The mean of segment means.
+pub(crate) fn mean_of(segs: &[V3]) -> V3 {
+    std::array::from_fn(|a| segs.iter().map(|s| s[a]).sum::<f64>() / segs.len() as f64)
+}

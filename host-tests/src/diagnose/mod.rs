@@ -1,0 +1,236 @@
+//! `accelcal diagnose`: why a calibration leaves more residual than the noise explains, and which
+//! physical effect the 9-parameter model leaves out.
+//!
+//! 1. **The gap.** The library fits the nominal 9-parameter model ([`calib::run`], TAGA+LM). The same
+//!    experiment (the fitted orientations, sample counts, durations and the white noise measured
+//!    within the poses) is simulated `repeats` times and refitted by the library (LM); the gap is
+//!    the real modulus RMSE over the mean simulated RMSE (1 = no gap), significant when the real RMSE
+//!    is at least [`SIGNIFICANT_Z`] simulated standard deviations above the simulated mean.
+//! 2. **Where it lies.** Residual per pose and per orientation, against time and temperature, within
+//!    each pose (first third against last third), and in the noise (Allan deviation of the longest
+//!    rest against white noise).
+//! 3. **Which effect.** Each candidate is a physical augmentation, fitted in `f64` by linear least
+//!    squares around the library's solution (the modulus residual linearised in the 9 parameters plus
+//!    the effect's parameters), or a noise model fitted on other data than the pose means. Each is
+//!    judged by `folds`-fold cross-validation over the poses: the mean-square residual of the
+//!    withheld poses, plus [`PARAMETER_PENALTY`] expected noise variances per extra parameter, over
+//!    what white noise predicts for the nominal model (the noise model's prediction for
+//!    `colored-noise`). `heldout_gain = 1 - ln(ratio) / ln(nominal ratio)` is the fraction of the
+//!    withheld gap (in log ratio) the candidate removes; a ratio below 1 (more scatter predicted
+//!    than seen) counts [`OVERSHOOT_WEIGHT`] times its `|ln ratio|`.
+//!    The verdict is the candidate with the largest gain, if the gap is significant and the gain is
+//!    at least [`MIN_GAIN`]; `unexplained` (with where the gap lies) when the gap is significant
+//!    and no family explains it; `none` when there is no significant gap.
+//! 4. **How far it shrinks.** The winner is added (to the model, or to the simulator for
+//!    `colored-noise`) and step 1 redone: `shrink = (before - after) / (before - 1)`, clipped to
+//!    `[0, 1]`.
+//!
+//! The families (one file each under `family/`, several parametrisations each):
+//! - `drift`: bias `c (1 - exp(-t / tau))` per axis (`tau` from a grid), two time constants, or
+//!   polynomial in time (degree 1 to 3);
+//! - `temperature`: bias, relative scale, or both, linear in the measured temperature, optionally
+//!   through a first-order lag of the thermometer;
+//! - `scale-nonlinearity`: `k2 a^2`, `k3 a^3` or both per axis;
+//! - `settling`: a transient proportional to the change from the previous pose, decaying over
+//!   `tau` from the start of each pose (only a `tau` that decays within the hold), or the transient measured in each pose (its mean minus the
+//!   mean of its last half) scaled per axis or by one factor;
+//! - `motion`: poses whose own samples move slowly (chi-square of segment means after the first,
+//!   above 6 times the median pose's and 40) are dropped, each at the cost of an expected noise
+//!   variance plus the penalty;
+//! - `colored-noise`: a bias random walk or a bias-instability floor (whichever fits the Allan
+//!   variance better) measured on the longest rest (detrended quadratically in time and linearly in
+//!   temperature, overlapping Allan variance in excess of white noise); the simulator gets it.
+//!
+//! ```
+//! use accelcal_host::diagnose::{diagnose, DiagnoseOptions};
+//! use accelcal_host::effects::{generate, random_scenario, to_table, EffectClass};
+//! let log = generate(&random_scenario(EffectClass::ScaleNonlinearity, 4));
+//! let table = to_table(&log, "sim").unwrap();
+//! let report = diagnose(&table, &DiagnoseOptions::DEFAULT).unwrap();
+//! assert!(report.gap.ratio_before > 1.0);
+//! ```
+
+mod family;
+mod gap;
+mod locate;
+mod math;
+mod probe;
+mod report;
+mod verdict;
+
+use std::fmt;
+
+pub use report::{Allan, Candidate, Diagnosis, Gap, PoseReport, Probe};
+
+use crate::csvio::Table;
+
+/// The candidate effects, in report order.
+pub const EFFECT_NAMES: [&str; 6] =
+    ["drift", "temperature", "scale-nonlinearity", "settling", "motion", "colored-noise"];
+
+/// A gap is significant when the real RMSE exceeds the simulated mean by this many simulated
+/// standard deviations (and by [`SIGNIFICANT_RATIO`]).
+pub const SIGNIFICANT_Z: f64 = 3.0;
+
+/// ... and when the ratio is at least this.
+pub const SIGNIFICANT_RATIO: f64 = 1.2;
+
+/// Expected noise variances charged per extra parameter in the held-out score (AIC-like).
+pub const PARAMETER_PENALTY: f64 = 2.0;
+
+/// Weight of a held-out ratio below 1 (the candidate predicts more scatter than the withheld poses
+/// show) relative to one above 1, in the gain.
+pub const OVERSHOOT_WEIGHT: f64 = 2.0;
+
+/// Smallest held-out gain for a candidate to be named.
+pub const MIN_GAIN: f64 = 0.3;
+
+/// Excess of the longest rest's Allan variance over white noise (at its longest `tau`, in units of
+/// the white variance) below which no random walk is fitted.
+pub const WALK_EXCESS: f64 = 1.0;
+
+/// Pure-noise draws averaged for the expected cross-validated residual.
+pub(crate) const CV_NOISE_DRAWS: usize = 20;
+
+/// Segments each pose is split into for the within-pose statistics.
+pub(crate) const SEGMENTS: usize = 6;
+
+/// Diagnosis settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DiagnoseOptions {
+    /// Local gravity, m/s^2 (the calibration's target). Defaults to 9.80665.
+    pub gravity: f64,
+    /// Seed of the GA and of every simulation. Defaults to 1.
+    pub seed: u64,
+    /// Simulated repeats of the experiment. Defaults to 30.
+    pub repeats: usize,
+    /// Cross-validation folds. Defaults to 5.
+    pub folds: usize,
+}
+
+impl DiagnoseOptions {
+    /// The documented defaults.
+    pub const DEFAULT: Self = Self { gravity: 9.806_65, seed: 1, repeats: 30, folds: 5 };
+}
+
+impl Default for DiagnoseOptions {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// Why a diagnosis could not run (bad input).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct DiagnoseError(pub String);
+
+impl fmt::Display for DiagnoseError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for DiagnoseError {}
+
+fn err(msg: impl Into<String>) -> DiagnoseError {
+    DiagnoseError(msg.into())
+}
+
+/// Runs the whole diagnosis on a table of raw samples.
+pub fn diagnose(table: &Table, opts: &DiagnoseOptions) -> Result<Diagnosis, DiagnoseError> {
+    let gravity = opts.gravity;
+    if !(gravity.is_finite() && gravity > 0.0) {
+        return Err(err(format!("gravity {gravity} must be a positive number of m/s^2")));
+    }
+    if opts.folds < 2 || opts.repeats < 2 {
+        return Err(err("diagnose needs at least 2 folds and 2 repeats"));
+    }
+    let m = gap::measure(table, opts)?;
+    let ctx = family::Context::new(table, &m, opts)
+        .ok_or_else(|| err(format!("{}: too few poses for cross-validation", table.file)))?;
+    let evaluations: Vec<family::Evaluation> = family::all().iter().map(|f| f.evaluate(&ctx)).collect();
+    let probes = probe::run(&ctx);
+    let decision = verdict::decide(&m, &evaluations, &probes);
+    let scale: [f64; 3] = std::array::from_fn(|a| m.model.ka[a][a]);
+    let mut d = Diagnosis {
+        file: table.file.clone(),
+        samples: table.samples.len(),
+        units: table.units.to_string(),
+        gravity,
+        seed: opts.seed,
+        repeats: m.sims.len(),
+        params: m.params,
+        white_mg: std::array::from_fn(|a| m.to_mg(m.white[a].sqrt() * scale[a])),
+        gap: decision.gap,
+        poses: locate::pose_reports(&m, &decision.after),
+        allan: locate::longest_rest_allan(table, &m),
+        candidates: evaluations.into_iter().map(|e| e.candidate).collect(),
+        heldout_ratio_nominal: ctx.heldout_ratio_nominal,
+        probes,
+        verdict: decision.verdict,
+        unexplained_where: None,
+        explained: decision.winner.is_some(),
+        shrink: decision.shrink,
+    };
+    if d.verdict == "unexplained" {
+        d.unexplained_where = Some(decision.probe_where.unwrap_or_else(|| locate::unexplained_location(&d)));
+    }
+    Ok(d)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::math::{Model, lstsq};
+    use super::*;
+    use accelcal::model::Params;
+
+    #[test]
+    fn lstsq_recovers_a_line() {
+        let rows: Vec<Vec<f64>> = (0..10).map(|i| vec![1.0, i as f64]).collect();
+        let r: Vec<f64> = (0..10).map(|i| -(2.0 + 0.5 * i as f64)).collect();
+        let idx: Vec<usize> = (0..10).collect();
+        let x = lstsq(&rows, &r, &idx).unwrap();
+        assert!((x[0] - 2.0).abs() < 1e-9 && (x[1] - 0.5).abs() < 1e-9, "{x:?}");
+    }
+
+    #[test]
+    fn a_clean_log_has_no_gap_and_the_report_has_the_documented_fields() {
+        use crate::effects::{EffectClass, generate, random_scenario, to_table};
+        let log = generate(&random_scenario(EffectClass::None, 5));
+        let table = to_table(&log, "clean").unwrap();
+        let report = diagnose(&table, &DiagnoseOptions::DEFAULT).unwrap();
+        assert!(!report.gap.significant, "{}", report.to_text());
+        assert_eq!(report.verdict, "none");
+        let json = report.to_json();
+        for key in ["real_rmse_mg", "sim_rmse_mg", "ratio_before", "ratio_after"] {
+            assert!(json["gap"][key].is_number(), "{key}");
+        }
+        assert!(json["poses"].as_u64().unwrap() >= 24);
+        assert!(json["where"].is_object());
+        let names: Vec<&str> =
+            json["candidates"].as_array().unwrap().iter().map(|c| c["effect"].as_str().unwrap()).collect();
+        assert_eq!(names, EFFECT_NAMES);
+        assert_eq!(json["verdict"]["effect"], "none");
+        assert!(json["verdict"]["shrink"].is_number());
+        assert!(report.to_text().contains("4. ratio"));
+    }
+
+    #[test]
+    fn too_few_poses_is_an_error_not_a_panic() {
+        let text: String = std::iter::once("t,ax,ay,az\n".to_string())
+            .chain((0..2000).map(|i| format!("{},0.0,0.0,1.0\n", i as f64 * 0.01)))
+            .collect();
+        let table = crate::csvio::read_csv_str("still", &text, &crate::csvio::ReadOptions::default()).unwrap();
+        let e = diagnose(&table, &DiagnoseOptions::DEFAULT).unwrap_err();
+        assert!(e.to_string().contains("static poses"), "{e}");
+        assert!(diagnose(&table, &DiagnoseOptions { gravity: f64::NAN, ..DiagnoseOptions::DEFAULT }).is_err());
+    }
+
+    #[test]
+    fn model_inverts() {
+        let p = Params { bias: [0.1, -0.2, 0.05], scale: [0.98, 1.01, 1.02], nonorth: [0.01, -0.02, 0.005] };
+        let m = Model::from_params(&p);
+        let f = [1.0, -9.0, 3.0];
+        let back = m.apply(m.invert(f));
+        assert!((0..3).all(|a| (back[a] - f[a]).abs() < 1e-12));
+    }
+}

@@ -1,0 +1,71 @@
+//! Probes for gaps outside the catalogue: shapes no physical family of the catalogue has (a
+//! periodic bias, cross-axis products, a bias following the direction of the last rotation),
+//! judged by the same held-out criterion. A probe never becomes a verdict: when one explains the
+//! withheld poses better than every family, the verdict is `unexplained` and the probe says where
+//! the gap lies.
+
+use super::family::{Context, Variant};
+use super::gap::PoseData;
+use super::report::Probe;
+
+/// Periodic bias `u . (s sin(2 pi t / P) + c cos(2 pi t / P))`, at least three periods in the log
+/// (the period's search charged as one parameter).
+fn periodic(ctx: &Context<'_>) -> Vec<Variant> {
+    let t_end = ctx.poses.last().map_or(1.0, PoseData::t_mid);
+    let mut out = Vec::new();
+    // Frequencies from 3 periods per log to one per 10 s, a fifth of a cycle over the log apart.
+    let step_hz = 0.2 / t_end.max(1e-9);
+    let mut f_hz = 3.0 / t_end.max(1e-9);
+    while f_hz <= 0.1 {
+        let (period, w) = (1.0 / f_hz, std::f64::consts::TAU * f_hz);
+        let extra = ctx
+            .poses
+            .iter()
+            .zip(ctx.directions())
+            .map(|(p, u)| {
+                let (s, c) = (w * p.t_mid()).sin_cos();
+                u.iter().map(|x| x * s).chain(u.iter().map(|x| x * c)).collect()
+            })
+            .collect();
+        out.push(Variant { extra, params: 7, detail: format!("a periodic bias, period {period:.0} s") });
+        f_hz += step_hz;
+    }
+    out
+}
+
+/// Cross-axis products `c_a f_b f_c / g` per axis.
+fn cross_axis(ctx: &Context<'_>) -> Vec<Variant> {
+    let g = ctx.m.gravity;
+    let extra = ctx
+        .directions()
+        .iter()
+        .zip(ctx.calibrated())
+        .map(|(u, f)| vec![u[0] * f[1] * f[2] / g, u[1] * f[0] * f[2] / g, u[2] * f[0] * f[1] / g])
+        .collect();
+    vec![Variant { extra, params: 3, detail: "cross-axis terms (products of the other two axes)".into() }]
+}
+
+/// A bias per axis following the sign of the change from the previous pose.
+fn rotation_direction(ctx: &Context<'_>) -> Vec<Variant> {
+    let (cal, dirs) = (ctx.calibrated(), ctx.directions());
+    let extra = (0..cal.len())
+        .map(|i| (0..3).map(|a| if i == 0 { 0.0 } else { dirs[i][a] * (cal[i][a] - cal[i - 1][a]).signum() }).collect())
+        .collect();
+    vec![Variant { extra, params: 3, detail: "a bias following the direction of the last rotation".into() }]
+}
+
+/// A probe's parametrisations for the data.
+type MakeVariants = fn(&Context<'_>) -> Vec<Variant>;
+
+/// Every probe with its held-out gain.
+pub(crate) fn run(ctx: &Context<'_>) -> Vec<Probe> {
+    let probes: [(&'static str, MakeVariants); 3] =
+        [("periodic", periodic), ("cross-axis", cross_axis), ("rotation-direction", rotation_direction)];
+    probes
+        .iter()
+        .filter_map(|(name, make)| {
+            let f = ctx.best_of(make(ctx))?;
+            Some(Probe { shape: name, heldout_gain: ctx.gain(f.score_ratio), detail: f.detail })
+        })
+        .collect()
+}

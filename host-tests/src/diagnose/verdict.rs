@@ -1,0 +1,62 @@
+//! Step 3's verdict and step 4's shrink: the family with the largest held-out gain, if the gap is
+//! significant and the gain at least [`MIN_GAIN`]; `unexplained` when the gap is significant but no
+//! family explains the withheld part; `none` when there is no significant gap.
+
+use super::MIN_GAIN;
+use super::family::Evaluation;
+use super::gap::Measured;
+use super::math::rms;
+use super::report::{Gap, Probe};
+
+/// The decision: the verdict, the winner's index, the gap after it and the residuals after it.
+pub(crate) struct Decision {
+    pub(crate) verdict: &'static str,
+    pub(crate) winner: Option<usize>,
+    pub(crate) gap: Gap,
+    pub(crate) shrink: f64,
+    pub(crate) after: Vec<Option<f64>>,
+    /// For `unexplained`: the probe that explains the withheld poses best, if one does.
+    pub(crate) probe_where: Option<String>,
+}
+
+/// Picks the verdict among the evaluated families and measures the shrink.
+pub(crate) fn decide(m: &Measured, evaluations: &[Evaluation], probes: &[Probe]) -> Decision {
+    let significant = m.gap.significant;
+    let best_probe = probes
+        .iter()
+        .filter(|p| p.heldout_gain.is_finite() && p.heldout_gain >= MIN_GAIN)
+        .max_by(|a, b| a.heldout_gain.total_cmp(&b.heldout_gain));
+    let best = evaluations
+        .iter()
+        .enumerate()
+        .filter(|(_, e)| e.candidate.applicable && e.candidate.heldout_gain.is_finite())
+        .max_by(|a, b| a.1.candidate.heldout_gain.total_cmp(&b.1.candidate.heldout_gain));
+    // A family wins only if no out-of-catalogue probe explains the withheld poses better.
+    let beaten = |gain: f64| best_probe.is_some_and(|p| p.heldout_gain > gain);
+    let winner = best
+        .filter(|(_, e)| significant && e.candidate.heldout_gain >= MIN_GAIN && !beaten(e.candidate.heldout_gain))
+        .map(|(i, _)| i);
+    let mut gap = m.gap.clone();
+    let (verdict, after) = match winner {
+        Some(i) => {
+            let e = &evaluations[i];
+            gap.ratio_after = e.candidate.ratio_after;
+            if e.candidate.effect != "colored-noise" {
+                gap.real_rmse_after_mg = m.to_mg(rms(&e.after.iter().flatten().copied().collect::<Vec<_>>()));
+            }
+            (e.candidate.effect, e.after.clone())
+        }
+        None => {
+            let verdict = if significant { "unexplained" } else { "none" };
+            (verdict, m.r.iter().map(|v| Some(*v)).collect())
+        }
+    };
+    gap.sim_rmse_after_mg = if gap.ratio_after > 0.0 { gap.real_rmse_after_mg / gap.ratio_after } else { f64::NAN };
+    let shrink = if significant && gap.ratio_before > 1.0 {
+        ((gap.ratio_before - gap.ratio_after) / (gap.ratio_before - 1.0)).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let probe_where = best_probe.map(|p| format!("{} (held-out gain {:.2})", p.detail, p.heldout_gain));
+    Decision { verdict, winner, gap, shrink, after, probe_where }
+}
