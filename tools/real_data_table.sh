@@ -20,15 +20,15 @@ sets=(
   "tomisuarez_mpu6050_10pos/derived_static_intervals.csv|--means"
   "avrlabs_mpu6050/derived_notebook_26pos_means.csv|--means"
 )
-echo "| set (file) | options | units | poses | RMSE before (mg) | after | leave-one-out | noise floor | verdict |"
-echo "|---|---|---|---|---|---|---|---|---|"
+echo "| set (file) | options | units | poses | RMSE before (mg) | after | leave-one-out | noise floor | verdict | held at nominal / poses left out |"
+echo "|---|---|---|---|---|---|---|---|---|---|"
 for s in "${sets[@]}"; do
   file="${s%%|*}"; opts="${s#*|}"
   # shellcheck disable=SC2086
   out=$("$BIN" calibrate "$D/$file" $opts --json 2>/tmp/real_data_table.err)
   code=$?
   if [ -z "$out" ]; then
-    echo "| \`$file\` | \`${opts:-(none)}\` | | | | | | | exit $code: $(head -c 160 /tmp/real_data_table.err | tr '\n|' '  ' | sed "s#$D/##") |"
+    echo "| \`$file\` | \`${opts:-(none)}\` | | | | | | | | exit $code: $(head -c 160 /tmp/real_data_table.err | tr '\n|' '  ' | sed "s#$D/##") |"
     continue
   fi
   python3 - "$file" "${opts:-(none)}" "$code" "$out" <<'PY'
@@ -42,6 +42,8 @@ reasons = [k.replace("_", " ") for k in ["rmse_over_limit", "model_misfit", "imp
 if v["undetermined"]:
     reasons.append("poorly determined " + " ".join(v["undetermined"]))
 verdict = "pass" if v["pass"] else "fail: " + "; ".join(reasons)
-print(f"| `{file}` | `{opts}` | {out['units']} | {len(out['poses'])} | {f(r['before'])} | {f(r['after'])} | {f(r['loo'])} | {f(out['noise_floor_mg'])} | {verdict} |")
+held = " ".join(v.get("held_at_nominal", [])) or "-"
+left = " ".join(f"#{i + 1}" for i in v.get("poses_left_out", [])) or "-"
+print(f"| `{file}` | `{opts}` | {out['units']} | {len(out['poses'])} | {f(r['before'])} | {f(r['after'])} | {f(r['loo'])} | {f(out['noise_floor_mg'])} | {verdict} | {held} / {left} |")
 PY
 done
