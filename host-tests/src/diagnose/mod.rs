@@ -145,10 +145,14 @@ pub fn diagnose(table: &Table, opts: &DiagnoseOptions) -> Result<Diagnosis, Diag
         return Err(err("diagnose needs at least 2 folds and 2 repeats"));
     }
     let m = gap::measure(table, opts)?;
-    let ctx = family::Context::new(table, &m, opts)
-        .ok_or_else(|| err(format!("{}: too few poses for cross-validation", table.file)))?;
-    let evaluations: Vec<family::Evaluation> = family::all().iter().map(|f| f.evaluate(&ctx)).collect();
-    let probes = probe::run(&ctx);
+    // Too few poses to withhold some (a short log that calibrate still accepts): the gap is measured and
+    // answered (`none` or `unexplained`), with no catalogue candidate tested.
+    let ctx = family::Context::new(table, &m, opts);
+    let evaluations: Vec<family::Evaluation> = match &ctx {
+        Some(ctx) => family::all().iter().map(|f| f.evaluate(ctx)).collect(),
+        None => Vec::new(),
+    };
+    let probes = ctx.as_ref().map(probe::run).unwrap_or_default();
     let decision = verdict::decide(&m, &evaluations, &probes);
     let scale: [f64; 3] = std::array::from_fn(|a| m.model.ka[a][a]);
     let mut d = Diagnosis {
@@ -164,7 +168,7 @@ pub fn diagnose(table: &Table, opts: &DiagnoseOptions) -> Result<Diagnosis, Diag
         poses: locate::pose_reports(&m, &decision.after),
         allan: locate::longest_rest_allan(table, &m),
         candidates: evaluations.into_iter().map(|e| e.candidate).collect(),
-        heldout_ratio_nominal: ctx.heldout_ratio_nominal,
+        heldout_ratio_nominal: ctx.as_ref().map_or(f64::NAN, |c| c.heldout_ratio_nominal),
         probes,
         verdict: decision.verdict,
         unexplained_where: None,
@@ -173,6 +177,10 @@ pub fn diagnose(table: &Table, opts: &DiagnoseOptions) -> Result<Diagnosis, Diag
     };
     if d.verdict == "unexplained" {
         d.unexplained_where = Some(decision.probe_where.unwrap_or_else(|| locate::unexplained_location(&d)));
+        if ctx.is_none() {
+            let place = d.unexplained_where.take().unwrap_or_default();
+            d.unexplained_where = Some(format!("{place}; too few poses to test the catalogue on withheld poses"));
+        }
     }
     Ok(d)
 }
