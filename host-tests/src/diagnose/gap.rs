@@ -3,7 +3,7 @@
 
 use accelcal::accumulator::Pose;
 use accelcal::calibrate::{CalibrationConfig, Method};
-use accelcal::model::{PARAM_COUNT, Params};
+use accelcal::model::Params;
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
 
