@@ -116,8 +116,7 @@ impl<const MAX_POSES: usize> NormalizedPoses<MAX_POSES> {
             let _ = means.push(p.mean);
             let _ = keep.push(true);
         }
-        let initial = initial_estimate(&means, &mut keep, init, gravity, rule)?;
-        let frame = frame_of(&initial.params, gravity)?;
+        let (initial, frame) = initial_estimate(&means, &mut keep, init, gravity, rule)?;
         let mut start = frame.to_deviation(&initial.params);
         for i in 0..PARAM_COUNT {
             if initial.held[i] {
@@ -164,31 +163,30 @@ impl<const MAX_POSES: usize> NormalizedPoses<MAX_POSES> {
     }
 }
 
-/// The estimate `init` asks for (see [`Init`]); `keep` marks the poses it uses.
+/// The estimate `init` asks for (see [`Init`]) and its frame; `keep` marks the poses it uses.
 fn initial_estimate(
     means: &[[f32; 3]],
     keep: &mut [bool],
     init: Init,
     gravity: f32,
     rule: &OutlierRule,
-) -> Result<Initial, InitError> {
+) -> Result<(Initial, Frame), InitError> {
+    // The six faces' own frame, exactly (the paper's path).
     let six = |means: &[[f32; 3]]| {
-        CoarseCalibration::from_means(means, gravity).map(|c| Initial {
-            kind: Init::SixPosition,
-            params: c.params(),
-            excluded: PoseList::default(),
-            held: [false; PARAM_COUNT],
+        CoarseCalibration::from_means(means, gravity).map(|c| {
+            let held = [false; PARAM_COUNT];
+            let initial = Initial { kind: Init::SixPosition, params: c.params(), excluded: PoseList::default(), held };
+            (initial, *c.frame())
         })
     };
     match init {
         Init::SixPosition => six(means).map_err(InitError::Coarse),
         Init::Ellipsoid | Init::Auto => match fit_ellipsoid(means, keep, gravity, rule) {
-            Ok(fit) => Ok(Initial {
-                kind: Init::Ellipsoid,
-                params: fit.params,
-                excluded: fit.excluded,
-                held: held_parameters(&fit.held),
-            }),
+            Ok(fit) => {
+                let held = held_parameters(&fit.held);
+                let initial = Initial { kind: Init::Ellipsoid, params: fit.params, excluded: fit.excluded, held };
+                Ok((initial, frame_of(&fit.params, gravity)?))
+            }
             Err(e) if init == Init::Auto => {
                 keep.iter_mut().for_each(|k| *k = true);
                 six(means).map_err(|_| InitError::Ellipsoid(e))

@@ -57,7 +57,7 @@ pub const BUDGETS: [Budget; 6] = [
         enforced: true,
         ceiling: 2_000_000,
     },
-    Budget { key: "lm_cycles", what: "LM alone", limit: 100_000, unit: "cycles", enforced: false, ceiling: 126_000 },
+    Budget { key: "lm_cycles", what: "LM alone", limit: 100_000, unit: "cycles", enforced: true, ceiling: 100_000 },
     Budget {
         key: "accumulate_cycles_per_sample",
         what: "accumulate one sample",
