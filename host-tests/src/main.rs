@@ -147,6 +147,28 @@ struct InputArgs {
     /// Local gravity, m/s^2.
     #[arg(long, default_value_t = 9.80665)]
     gravity: f64,
+    /// Initial estimate: auto (ellipsoid fit of the pose means, any orientations; the six faces when no
+    /// ellipsoid fits), ellipsoid, or six-position (the paper's: each axis pointed up and down).
+    #[arg(long, value_enum, default_value_t = InitArg::Auto)]
+    init: InitArg,
+}
+
+/// `--init`: the library's [`accelcal::calibrate::Init`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum InitArg {
+    Auto,
+    Ellipsoid,
+    SixPosition,
+}
+
+impl From<InitArg> for accelcal::calibrate::Init {
+    fn from(a: InitArg) -> Self {
+        match a {
+            InitArg::Auto => Self::Auto,
+            InitArg::Ellipsoid => Self::Ellipsoid,
+            InitArg::SixPosition => Self::SixPosition,
+        }
+    }
 }
 
 /// A failure of a command: bad input (exit 2) or a failed verdict (exit 1).
@@ -353,9 +375,11 @@ fn load_and_calibrate(input: &InputArgs, method: Method, seed: u64, warn: bool) 
         (acc.poses, Some(acc.spans))
     };
     let file = input.file.display();
-    if poses.len() < PARAM_COUNT {
+    // Six faces fit biases and scales (the non-orthogonality held); nine directions or more fit all nine.
+    if poses.len() < 6 {
         return Err(format!(
-            "{file}: {} static poses found, at least {PARAM_COUNT} are needed (hold the sensor still in more orientations)",
+            "{file}: {} static poses found, at least 6 are needed ({PARAM_COUNT} or more in different directions fit \
+             all {PARAM_COUNT} parameters; hold the sensor still in more orientations)",
             poses.len()
         )
         .into());
@@ -367,7 +391,7 @@ fn load_and_calibrate(input: &InputArgs, method: Method, seed: u64, warn: bool) 
         Units::Mps2 => Some(Params::IDENTITY),
         _ => None,
     };
-    let config = CalibrationConfig { gravity, method, before, ..CalibrationConfig::DEFAULT };
+    let config = CalibrationConfig { gravity, method, before, init: input.init.into(), ..CalibrationConfig::DEFAULT };
     let host = calib::run_with_loo(&poses, &config, seed).map_err(|e| format!("{file}: {e}"))?;
     Ok(Loaded { table, poses, spans, host })
 }
