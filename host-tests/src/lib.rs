@@ -6,6 +6,7 @@ pub mod csvio;
 pub mod diagnose;
 pub mod effects;
 pub mod i2c_sim;
+pub mod labelled;
 pub mod paper;
 pub mod plots;
 pub mod report;

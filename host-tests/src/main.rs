@@ -151,6 +151,10 @@ struct InputArgs {
     /// ellipsoid fits), ellipsoid, or six-position (the paper's: each axis pointed up and down).
     #[arg(long, value_enum, default_value_t = InitArg::Auto)]
     init: InitArg,
+    /// Segment the raw log by this label column (one pose per contiguous run of a label) instead of
+    /// detecting still intervals.
+    #[arg(long, value_name = "NAME", conflicts_with = "means")]
+    pose_column: Option<String>,
 }
 
 /// `--init`: the library's [`accelcal::calibrate::Init`].
@@ -369,6 +373,8 @@ fn load_and_calibrate(input: &InputArgs, method: Method, seed: u64, warn: bool) 
     }
     let (poses, spans) = if input.means {
         (csvio::to_poses_from_means(&table), None)
+    } else if let Some(column) = &input.pose_column {
+        (accelcal_host::labelled::poses_by_label(&table, &input.file, column)?, None)
     } else {
         let acc = csvio::accumulate(&table, &AccumulateOptions::default())
             .map_err(|e| format!("{}: {e}", input.file.display()))?;

@@ -626,3 +626,22 @@ fn unusable_sets_read_and_are_refused() {
     let table = read_csv(&path, &ReadOptions { columns: Some(spec), ..ReadOptions::default() }).unwrap();
     assert_eq!(table.temps_c.as_ref().map(Vec::len), Some(table.samples.len()));
 }
+
+/// `--pose-column`: the avrlabs notebook log names its hold on every row; segmenting by that label gives
+/// the 26 holds of the authors' means file (same counts, same means) and the same partial fit.
+#[test]
+fn avrlabs_notebook_segmented_by_its_position_column() {
+    let path = data_file("avrlabs_mpu6050/notebook_26pos_clean.csv");
+    let spec: ColumnSpec = "-,ax_raw,ay_raw,az_raw,temp_C".parse().unwrap();
+    let table = read_csv(&path, &ReadOptions { columns: Some(spec), ..ReadOptions::default() }).unwrap();
+    let poses = accelcal_host::labelled::poses_by_label(&table, &path, "position").unwrap();
+    let means = read_csv(&data_file("avrlabs_mpu6050/derived_notebook_26pos_means.csv"), &means_options()).unwrap();
+    let reference = to_poses_from_means(&means);
+    assert_eq!(poses.len(), 26);
+    for (p, r) in poses.iter().zip(&reference) {
+        assert!((87..=259).contains(&p.n), "{p:?}");
+        assert!((0..3).all(|a| (p.mean[a] - r.mean[a]).abs() < 0.01), "{p:?} vs {r:?}");
+    }
+    let err = accelcal_host::labelled::poses_by_label(&table, &path, "label").unwrap_err();
+    assert!(err.contains("no such column") && err.contains("position"), "{err}");
+}
