@@ -99,6 +99,16 @@ mod firmware {
         levenberg_marquardt([0.0; PARAM_COUNT], norm, &LmConfig::DEFAULT)
     }
 
+    /// The any-orientation initial estimate: the ellipsoid fit of the pose means (robust), and the
+    /// poses normalised in its frame.
+    #[unsafe(no_mangle)]
+    #[inline(never)]
+    pub fn initial_estimate(poses: &[Pose]) -> bool {
+        let rule = accelcal::ellipsoid::OutlierRule::DEFAULT;
+        let init = accelcal::calibrate::Init::Ellipsoid;
+        NormalizedPoses::<POSES>::prepare(poses, init, CalibrationConfig::DEFAULT.gravity, &rule).is_ok()
+    }
+
     /// The whole calibration as firmware runs it.
     #[unsafe(no_mangle)]
     #[inline(never)]
@@ -164,6 +174,9 @@ mod firmware {
         match lm(norm) {
             Ok(r) => hprintln!("bench: lm iterations {}", r.iterations),
             Err(_) => fail("lm"),
+        }
+        if !initial_estimate(poses) {
+            fail("initial estimate");
         }
 
         let rng = Xoshiro128PlusPlus::seed_from_u64(GA_SEED);

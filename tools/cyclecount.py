@@ -479,7 +479,7 @@ def crate_of(symbol):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("elf", help="the bench firmware ELF (thumbv7em-none-eabihf)")
-    ap.add_argument("--functions", default="accumulate_sample,apply_sample,taga_generation,full_calibration,lm")
+    ap.add_argument("--functions", default="accumulate_sample,apply_sample,taga_generation,full_calibration,lm,initial_estimate")
     ap.add_argument("--branch-penalty", type=int, default=1, help="extra cycles of a taken branch (P, 1..3)")
     ap.add_argument("--timeout", type=float, default=600.0, help="seconds")
     ap.add_argument("--profile", action="store_true",

@@ -24,7 +24,8 @@ pub const TARGET: &str = "thumbv7em-none-eabihf";
 /// The cargo profile measured.
 pub const PROFILE: &str = "release";
 /// The bench image's measured functions (examples/bench.rs), in report order.
-pub const FUNCTIONS: [&str; 5] = ["accumulate_sample", "apply_sample", "taga_generation", "lm", "full_calibration"];
+pub const FUNCTIONS: [&str; 6] =
+    ["accumulate_sample", "apply_sample", "taga_generation", "lm", "initial_estimate", "full_calibration"];
 /// How the cycles are obtained, and their error.
 pub const METHOD: &str = "unicorn + Cortex-M4 timing table (+-10-30 % vs silicon)";
 
@@ -361,6 +362,7 @@ fn markdown(j: &Value, measured: &[u64; 6], within: &std::collections::BTreeMap<
         ("apply_sample", apply.as_str(), Some("apply_cycles_per_sample")),
         ("taga_generation", generation.as_str(), None),
         ("lm", "LM alone from the coarse start", Some("lm_cycles")),
+        ("initial_estimate", "initial estimate: robust ellipsoid fit, 24 poses", None),
         ("full_calibration", "full calibration: coarse + TAGA + LM + verdict", Some("full_calibration_cycles")),
     ];
     for (k, what, budget) in rows {
@@ -390,6 +392,11 @@ fn markdown(j: &Value, measured: &[u64; 6], within: &std::collections::BTreeMap<
         s,
         "| RAM: peak stack of full_calibration (the GA state, {} B, lives in it) | | | {} B | | |",
         ram["ga_state"], ram["peak_stack"]
+    );
+    let _ = writeln!(
+        s,
+        "| RAM: peak stack of the initial estimate (ellipsoid fit; inside the solve's) | | | {} B | | |",
+        ram["peak_stack_by_function"]["initial_estimate"]
     );
     let _ = writeln!(
         s,
