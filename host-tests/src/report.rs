@@ -325,6 +325,18 @@ fn status(measured: u64, b: &Budget, ok: bool) -> String {
     }
 }
 
+/// The largest functions of the library calibration path, as a Markdown table.
+fn top_functions_table(s: &mut String, flash: &Value) {
+    use std::fmt::Write;
+    let _ = writeln!(s, "\nlargest functions of the library calibration path (flash):\n");
+    let _ = writeln!(s, "| bytes | crate | function |");
+    let _ = writeln!(s, "|---:|---|---|");
+    for f in flash["library_top_functions"].as_array().map(Vec::as_slice).unwrap_or_default() {
+        let name = f["name"].as_str().unwrap_or("");
+        let _ = writeln!(s, "| {} | {} | {} |", f["size"], f["crate"].as_str().unwrap_or(""), demangled(name));
+    }
+}
+
 fn markdown(j: &Value, measured: &[u64; 6], within: &std::collections::BTreeMap<&'static str, bool>) -> String {
     use std::fmt::Write;
     let mut s = String::new();
@@ -409,13 +421,7 @@ fn markdown(j: &Value, measured: &[u64; 6], within: &std::collections::BTreeMap<
         "| RAM: the caller's Accumulator<i16, 24, 32> (holds the poses; not in the budget) | | | {} B | | |",
         ram["accumulator"]
     );
-    let _ = writeln!(s, "\nlargest functions of the library calibration path (flash):\n");
-    let _ = writeln!(s, "| bytes | crate | function |");
-    let _ = writeln!(s, "|---:|---|---|");
-    for f in flash["library_top_functions"].as_array().map(Vec::as_slice).unwrap_or_default() {
-        let name = f["name"].as_str().unwrap_or("");
-        let _ = writeln!(s, "| {} | {} | {} |", f["size"], f["crate"].as_str().unwrap_or(""), demangled(name));
-    }
+    top_functions_table(&mut s, flash);
     let _ = writeln!(
         s,
         "\nother targets: {} and {} build the library (CI); their flash and cycles are not measured here: the \
