@@ -20,3 +20,24 @@ fn a_ten_pose_free_hand_log_is_answered() {
         assert!(report.candidates.is_empty(), "no catalogue candidate can be tested on ten poses");
     }
 }
+
+/// Six faces (what `calibrate` accepts at the least): answered `none`, not refused.
+#[test]
+fn six_faces_are_answered() {
+    let g = 9.80665;
+    let faces = [[0.0, 0.0, g], [0.0, 0.0, -g], [g, 0.0, 0.0], [-g, 0.0, 0.0], [0.0, g, 0.0], [0.0, -g, 0.0]];
+    let mut csv = String::from("t,ax,ay,az\n");
+    let (mut t, mut state) = (0.0, 7u64);
+    for f in faces {
+        for i in 0..600 {
+            state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+            let n = ((state >> 33) as f64 / 2f64.powi(31) - 0.5) * 0.01;
+            let moving = if i >= 500 { (i - 500) as f64 * 0.05 } else { 0.0 };
+            csv.push_str(&format!("{t:.3},{},{},{}\n", f[0] * 0.99 + 0.1 + n + moving, f[1] + n, f[2] * 1.01 - n));
+            t += 0.005;
+        }
+    }
+    let table = csvio::read_csv_bytes("six faces", csv.as_bytes(), &ReadOptions::default()).unwrap();
+    let report = diagnose(&table, &DiagnoseOptions::DEFAULT).unwrap();
+    assert_eq!((report.poses.len(), report.verdict), (6, "none"), "{:?}", report.gap);
+}

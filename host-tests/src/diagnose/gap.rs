@@ -230,9 +230,9 @@ fn read_poses(table: &Table) -> Result<(Vec<Pose>, Vec<PoseData>, f64), Diagnose
     let acc =
         csvio::accumulate(table, &AccumulateOptions::default()).map_err(|e| err(format!("{}: {e}", table.file)))?;
     let rate = acc.sample_rate_hz.or_else(|| table.sample_rate_hz()).filter(|r| *r > 0.0).unwrap_or(1.0);
-    // The fewest a calibration needs with one degree of freedom left for a gap (six faces fit six
-    // parameters, so seven poses at least).
-    let min_poses = 7;
+    // The fewest `calibrate` accepts: six faces fit six parameters (with no degree of freedom left, the
+    // gap is not significant and the answer is `none`).
+    let min_poses = 6;
     if acc.poses.len() < min_poses {
         return Err(err(format!(
             "{}: {} static poses found, diagnose needs at least {min_poses}",
