@@ -117,11 +117,12 @@ struct OutlierInjector<'a> {
 
 impl Injector for OutlierInjector<'_> {
     fn advance(&mut self, ctx: &Ctx) {
-        if let Outlier::Hysteresis { h_mps2, width_g } = *self.effect {
-            if ctx.in_hold && ctx.pose > 0 {
-                self.hysteresis =
-                    core::array::from_fn(|k| h_mps2[k] * ((ctx.up_body[k] - ctx.prev_up_body[k]) / width_g).tanh());
-            }
+        if let Outlier::Hysteresis { h_mps2, width_g } = *self.effect
+            && ctx.in_hold
+            && ctx.pose > 0
+        {
+            self.hysteresis =
+                core::array::from_fn(|k| h_mps2[k] * ((ctx.up_body[k] - ctx.prev_up_body[k]) / width_g).tanh());
         }
     }
 
