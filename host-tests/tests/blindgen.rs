@@ -447,3 +447,35 @@ fn cross_axis_error_is_the_product_of_the_other_axes() {
         assert!(norm(sub(scale(*d, 1.0 / G_MPS2), expected)) < 2e-5, "hold {i}: {d:?} vs {expected:?} g");
     }
 }
+
+#[test]
+fn a_lagged_sensor_temperature_trails_the_thermometer() {
+    let (rate, tau_s) = (0.05, 60.0);
+    let profile = TempProfile::Ramp { start_c: 20.0, rate_c_per_s: rate };
+    let b = [2.0 * MG, 0.0, -1.0 * MG];
+    let spec = temp_spec(43, profile, temp_effect(b, [0.0; 3], Some(tau_s)));
+    let log = generate(&spec);
+    let res = residuals(&spec, &log, 0.0);
+    for (i, r) in res.iter().enumerate() {
+        let h = log.holds[i];
+        // A first-order lag behind a ramp from equilibrium: rate (t - tau (1 - exp(-t / tau))).
+        let lagged = average(|t| [rate * (t - tau_s * (1.0 - (-t / tau_s).exp())); 3], h.start_s, h.end_s)[0];
+        assert!(norm(sub(*r, scale(b, lagged))) < 0.3 * MG, "hold {i}: {r:?} vs {:?}", scale(b, lagged));
+    }
+    let last = log.holds.len() - 1;
+    let unlagged = rate * mid(&log, last);
+    assert!(norm(sub(res[last], scale(b, unlagged))) > 2.0 * MG, "the lag should show by the last hold");
+}
+
+#[test]
+fn hand_rotations_are_smooth_with_no_jump_at_either_end() {
+    let mut spec = small(Family::Clean, 111);
+    spec.session.rate_hz = 1000.0;
+    spec.session.poses.truncate(6);
+    spec.noise_mg = 0.0;
+    let log = generate(&spec);
+    let worst = (1..log.samples.len())
+        .map(|i| norm(sub(spec.truth.apply(log.accel_mps2(i)), spec.truth.apply(log.accel_mps2(i - 1)))))
+        .fold(0.0, f64::max);
+    assert!(worst < 30.0 * MG, "largest step between 1 ms samples: {} mg", worst / MG);
+}
