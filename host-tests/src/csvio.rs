@@ -59,6 +59,9 @@ pub const PREAMBLE_SEARCH_LINES: usize = 1000;
 /// rejected instead of warned about.
 pub const MAX_SKIPPED_FRACTION: f64 = 0.1;
 
+/// Most characters of input text (a cell, a line, a header) an error message quotes.
+pub const MAX_QUOTED_CHARS: usize = 80;
+
 /// Units of the acceleration columns.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Units {
@@ -550,9 +553,15 @@ pub enum CsvError {
     },
 }
 
+/// The cells quoted and joined, clipped to about [`MAX_QUOTED_CHARS`] characters.
 fn list(cells: &[String]) -> String {
     let quoted: Vec<String> = cells.iter().map(|c| format!("`{c}`")).collect();
-    quoted.join(", ")
+    let joined = quoted.join(", ");
+    if joined.chars().count() > MAX_QUOTED_CHARS {
+        format!("{} ({} cells)", clip(&joined), cells.len())
+    } else {
+        joined
+    }
 }
 
 impl fmt::Display for CsvError {
@@ -566,7 +575,8 @@ impl fmt::Display for CsvError {
             }
             Self::NoHeader { file, line, text } => write!(
                 f,
-                "{file}:{line}: expected a header row naming the columns (e.g. `t,ax,ay,az`), found data: `{text}`"
+                "{file}:{line}: expected a header row naming the columns (e.g. `t,ax,ay,az`), found data: `{}`",
+                clip(text)
             ),
             Self::HeaderOnly { file, line } => write!(f, "{file}:{line}: the header is the only row; there is no data"),
             Self::MissingColumns { file, line, missing, header } => write!(
@@ -577,7 +587,7 @@ impl fmt::Display for CsvError {
                 list(header)
             ),
             Self::UnknownColumn { file, line, requested, header } => {
-                write!(f, "{file}:{line}: column {requested} is not in the header [{}]", list(header))
+                write!(f, "{file}:{line}: column {} is not in the header [{}]", clip(requested), list(header))
             }
             Self::AmbiguousColumn { file, line, role, candidates } => write!(
                 f,
@@ -588,11 +598,14 @@ impl fmt::Display for CsvError {
                 write!(f, "{file}:{line}: {cells} cells, the header has {expected}")
             }
             Self::NonNumeric { file, line, column, text } => {
-                write!(f, "{file}:{line}: column `{column}`: `{text}` is not a number")
+                write!(f, "{file}:{line}: column `{}`: `{}` is not a number", clip(column), clip(text))
             }
-            Self::BadCount { file, line, column, text } => {
-                write!(f, "{file}:{line}: column `{column}`: `{text}` is not a sample count (a non-negative integer)")
-            }
+            Self::BadCount { file, line, column, text } => write!(
+                f,
+                "{file}:{line}: column `{}`: `{}` is not a sample count (a non-negative integer)",
+                clip(column),
+                clip(text)
+            ),
             Self::DuplicateTime { file, line, previous_line, time_s } => write!(
                 f,
                 "{file}:{line}: time {time_s} s repeats line {previous_line}: time stamps must increase \
@@ -626,8 +639,9 @@ impl fmt::Display for CsvError {
             ),
             Self::Gigantic { file, line, column, value, units } => write!(
                 f,
-                "{file}:{line}: column `{column}`: {value:e} {units} is not a physical accelerometer reading \
+                "{file}:{line}: column `{}`: {value:e} {units} is not a physical accelerometer reading \
                  (limit {:e} {units}); corrupt line?",
+                clip(column),
                 units.non_physical_limit()
             ),
             Self::TooManyNonFinite { file, skipped, rows, first_line } => write!(
@@ -912,6 +926,27 @@ fn parse_number(cell: &str, delimiter: Delimiter) -> Result<Option<f64>, ()> {
     }
 }
 
+/// Lines ended by LF, CR LF or a lone CR (old Mac OS); a line number counts each of them once.
+fn split_lines(text: &str) -> Vec<&str> {
+    let mut lines = Vec::new();
+    let mut rest = text;
+    while let Some(end) = rest.find(['\n', '\r']) {
+        lines.push(&rest[..end]);
+        let width = if rest[end..].starts_with("\r\n") { 2 } else { 1 };
+        rest = &rest[end + width..];
+    }
+    lines.push(rest);
+    lines
+}
+
+/// At most [`MAX_QUOTED_CHARS`] characters of `text` for a message, with `...` when cut.
+fn clip(text: &str) -> String {
+    match text.char_indices().nth(MAX_QUOTED_CHARS) {
+        Some((cut, _)) => format!("{}...", &text[..cut]),
+        None => text.to_string(),
+    }
+}
+
 fn is_blank_or_comment(line: &str) -> bool {
     let t = line.trim();
     t.is_empty() || t.starts_with('#')
@@ -952,7 +987,7 @@ fn units_plausible(units: Units, median_magnitude: f64) -> bool {
 impl Parser<'_> {
     fn parse(&self, text: &str) -> Result<Table, CsvError> {
         let file = &self.file;
-        let lines: Vec<&str> = text.split('\n').map(|l| l.strip_suffix('\r').unwrap_or(l)).collect();
+        let lines = split_lines(text);
         let Some(first_index) = lines.iter().position(|l| !is_blank_or_comment(l)) else {
             return Err(CsvError::Empty { file: file.clone() });
         };
@@ -1049,7 +1084,7 @@ impl Parser<'_> {
                 std: columns.std.map(|s| s.map(name_of)),
             },
         };
-        let ends_with_newline = text.ends_with('\n');
+        let ends_with_newline = text.ends_with(['\n', '\r']);
         let mut skipped_lines: Vec<usize> = Vec::new();
         let last = data_lines.len() - 1;
         for (k, &(line, row_text)) in data_lines.iter().enumerate() {

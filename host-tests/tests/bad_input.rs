@@ -1,0 +1,108 @@
+//! Bad input the CLI used to handle badly (issue 15, item 5): each gets a short, clear error that
+//! names the file (and line), or an honest warning, never silence and never a page of quoted input.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// The longest stderr line an error may print (the file name, the message, 80 quoted characters).
+const MAX_ERROR_LINE_CHARS: usize = 400;
+
+fn dir() -> PathBuf {
+    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("bad_input");
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn write(name: &str, content: &[u8]) -> PathBuf {
+    let p = dir().join(name);
+    std::fs::write(&p, content).unwrap();
+    p
+}
+
+fn calibrate(path: &Path, extra: &[&str]) -> Output {
+    let mut args = vec!["calibrate", path.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    Command::new(env!("CARGO_BIN_EXE_accelcal")).args(&args).env("RUST_BACKTRACE", "1").output().unwrap()
+}
+
+fn stdout(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// Exit code 2, one short stderr error line naming the file and containing every `needles`.
+fn assert_short_error(out: &Output, file: &str, needles: &[&str]) {
+    let err = stderr(out);
+    assert_eq!(out.status.code(), Some(2), "stderr: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+    let lines: Vec<&str> = err.lines().filter(|l| !l.starts_with("warning")).collect();
+    assert_eq!(lines.len(), 1, "one line expected: {err}");
+    assert!(lines[0].len() <= MAX_ERROR_LINE_CHARS, "{} chars: {}", lines[0].len(), lines[0]);
+    assert!(lines[0].contains(file), "file not named: {err}");
+    for n in needles {
+        assert!(lines[0].to_lowercase().contains(&n.to_lowercase()), "'{n}' missing: {err}");
+    }
+}
+
+/// Six still faces of `rows` rows each (in g, with a little deterministic noise), a move after each,
+/// 100 Hz, as CSV rows `t,ax,ay,az` without line ends.
+fn six_face_rows(rows: usize) -> Vec<String> {
+    let faces =
+        [[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]];
+    let mut out = Vec::new();
+    let mut t = 0.0;
+    for v in faces {
+        for i in 0..rows {
+            let e = ((i * 7919) % 13) as f64 * 1e-4 - 6e-4;
+            out.push(format!("{t:.3},{:.5},{:.5},{:.5}", v[0] + e, v[1] - e, v[2] + e));
+            t += 0.01;
+        }
+        for i in 0..100 {
+            let w = (i as f64 * 0.3).sin();
+            out.push(format!("{t:.3},{:.5},{:.5},{:.5}", v[0] + w, v[1] + 0.5 * w, v[2] - w));
+            t += 0.01;
+        }
+    }
+    out
+}
+
+/// The calibration's output with the file name taken out (to compare two files' results).
+fn without_name(text: &str, name: &str) -> String {
+    text.replace(name, "FILE")
+}
+
+#[test]
+fn cr_only_line_ends_read_as_the_same_poses_as_lf() {
+    let rows = six_face_rows(300);
+    let lf = write("lf.csv", format!("t,ax,ay,az\n{}\n", rows.join("\n")).as_bytes());
+    let cr = write("cr.csv", format!("t,ax,ay,az\r{}\r", rows.join("\r")).as_bytes());
+    let (lf_out, cr_out) = (calibrate(&lf, &[]), calibrate(&cr, &[]));
+    assert_eq!(cr_out.status.code(), Some(0), "{}", stderr(&cr_out));
+    assert!(stdout(&cr_out).contains("2400 rows") && stdout(&cr_out).contains("6 poses"), "{}", stdout(&cr_out));
+    assert_eq!(without_name(&stdout(&cr_out), "cr.csv"), without_name(&stdout(&lf_out), "lf.csv"));
+}
+
+#[test]
+fn cr_only_line_numbers_count_each_line() {
+    let text = "t,ax,ay,az\r0,0,0,1\r0.01,0,zero,1\r0.02,0,0,1\r";
+    let out = calibrate(&write("cr_text.csv", text.as_bytes()), &[]);
+    assert_short_error(&out, "cr_text.csv", &["cr_text.csv:3:", "zero"]);
+}
+
+#[test]
+fn errors_quote_at_most_80_characters_of_input() {
+    let long_cell = "x".repeat(5000);
+    let text = format!("t,ax,ay,az\n0,0,0,1\n0.01,0,{long_cell},1\n");
+    let out = calibrate(&write("long_cell.csv", text.as_bytes()), &[]);
+    assert_short_error(&out, "long_cell.csv", &["long_cell.csv:3:", "not a number"]);
+    let wide_header: Vec<String> = (0..2000).map(|i| format!("col{i}")).collect();
+    let text = format!("{}\n{}\n", wide_header.join(","), vec!["1"; 2000].join(","));
+    let out = calibrate(&write("wide_header.csv", text.as_bytes()), &[]);
+    assert_short_error(&out, "wide_header.csv", &["no column for ax", "2000 cells"]);
+    let numbers: Vec<String> = (0..3000).map(|i| format!("{i}.5")).collect();
+    let out = calibrate(&write("no_header.csv", format!("{}\n", numbers.join(",")).as_bytes()), &[]);
+    assert_short_error(&out, "no_header.csv", &["header"]);
+}
