@@ -36,7 +36,7 @@ use accelcal::accumulator::{Accumulator, AccumulatorConfig, AccumulatorError, Po
 use accelcal::model::{Params, STANDARD_GRAVITY_MPS2};
 
 /// Pose capacity of the accumulator used by [`accumulate`].
-pub const MAX_POSES: usize = 512;
+pub const MAX_POSES: usize = crate::calib::MAX_POSES;
 
 /// Block lengths (samples) [`accumulate`] can use; the block length is a const generic of the
 /// library's accumulator, so only these are compiled in.

@@ -20,7 +20,11 @@ fn write(name: &str, content: &[u8]) -> PathBuf {
 }
 
 fn calibrate(path: &Path, extra: &[&str]) -> Output {
-    let mut args = vec!["calibrate", path.to_str().unwrap()];
+    command("calibrate", path, extra)
+}
+
+fn command(name: &str, path: &Path, extra: &[&str]) -> Output {
+    let mut args = vec![name, path.to_str().unwrap()];
     args.extend_from_slice(extra);
     Command::new(env!("CARGO_BIN_EXE_accelcal")).args(&args).env("RUST_BACKTRACE", "1").output().unwrap()
 }
@@ -105,4 +109,54 @@ fn errors_quote_at_most_80_characters_of_input() {
     let numbers: Vec<String> = (0..3000).map(|i| format!("{i}.5")).collect();
     let out = calibrate(&write("no_header.csv", format!("{}\n", numbers.join(",")).as_bytes()), &[]);
     assert_short_error(&out, "no_header.csv", &["header"]);
+}
+
+/// `n` directions spread over the sphere (a Fibonacci spiral).
+fn spiral(n: usize) -> Vec<[f64; 3]> {
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    (0..n)
+        .map(|k| {
+            let z = 1.0 - 2.0 * (k as f64 + 0.5) / n as f64;
+            let r = (1.0 - z * z).sqrt();
+            let phi = golden * k as f64;
+            [r * phi.cos(), r * phi.sin(), z]
+        })
+        .collect()
+}
+
+/// A raw log at 100 Hz holding still for `still` rows in each of `dirs`, moving 30 rows between.
+fn raw_log(dirs: &[[f64; 3]], still: usize) -> String {
+    let mut text = String::from("t,ax,ay,az\n");
+    let mut t = 0.0;
+    for v in dirs {
+        for i in 0..still {
+            let e = ((i * 7919) % 13) as f64 * 1e-4 - 6e-4;
+            text.push_str(&format!("{t:.2},{:.5},{:.5},{:.5}\n", v[0] + e, v[1] - e, v[2] + e));
+            t += 0.01;
+        }
+        for i in 0..30 {
+            let w = (i as f64 * 0.3).sin();
+            text.push_str(&format!("{t:.2},{:.5},{:.5},{:.5}\n", v[0] + w, v[1] + 0.5 * w, v[2] - w));
+            t += 0.01;
+        }
+    }
+    text
+}
+
+#[test]
+fn more_poses_than_the_limit_is_an_error_naming_both() {
+    let out = calibrate(&write("520_poses.csv", raw_log(&spiral(520), 150).as_bytes()), &[]);
+    assert_short_error(&out, "520_poses.csv", &["520 poses found", "at most 512", "split", "ends at line"]);
+    let out = command("diagnose", &dir().join("520_poses.csv"), &[]);
+    assert_short_error(&out, "520_poses.csv", &["520 poses found", "at most 512"]);
+    let mut means = String::from("ax,ay,az\n");
+    for v in spiral(600) {
+        means.push_str(&format!("{:.5},{:.5},{:.5}\n", v[0], v[1], v[2]));
+    }
+    let out = calibrate(&write("600_means.csv", means.as_bytes()), &["--means"]);
+    assert_short_error(&out, "600_means.csv", &["600 poses found", "at most 512"]);
+    // At the limit itself the log calibrates.
+    let out = calibrate(&write("512_poses.csv", raw_log(&spiral(512), 150).as_bytes()), &[]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(stdout(&out).contains("512 poses"), "{}", stdout(&out));
 }
