@@ -1029,10 +1029,11 @@ impl Parser<'_> {
             .filter(|(_, l)| !is_blank_or_comment(l))
             .map(|(i, l)| (i + 1, *l))
             .collect();
-        let columns = match &self.opts.columns {
+        let mut columns = match &self.opts.columns {
             Some(spec) => self.columns_from_spec(spec, &header, header_line)?,
             None => self.detect_columns(&header, header_line)?,
         };
+        self.drop_empty_temperature(&mut columns, &header, &data_lines, delimiter, &mut notes);
         if data_lines.is_empty() {
             return Err(CsvError::HeaderOnly { file: file.clone(), line: header_line });
         }
@@ -1236,6 +1237,32 @@ impl Parser<'_> {
             ));
         }
         Ok(())
+    }
+
+    /// Drops the temperature column when it is empty, NaN or infinite in too many rows to skip them
+    /// (a logger without a sensor writes `nan`): a warning names it and the data is read without it.
+    fn drop_empty_temperature(
+        &self,
+        columns: &mut Columns,
+        header: &[String],
+        data_lines: &[(usize, &str)],
+        delimiter: Delimiter,
+        notes: &mut Vec<String>,
+    ) {
+        let Some(i) = columns.temp else { return };
+        let missing = data_lines
+            .iter()
+            .filter(|(_, l)| split_cells(l, delimiter).get(i).is_some_and(|c| parse_number(c, delimiter) == Ok(None)))
+            .count();
+        if missing > 1 && missing as f64 > MAX_SKIPPED_FRACTION * data_lines.len() as f64 {
+            let name = header.get(i).map_or_else(|| format!("#{i}"), |h| clip(h));
+            notes.push(format!(
+                "{}: temperature column `{name}` is empty or NaN in {missing} of {} rows: ignored (no temperature)",
+                self.file,
+                data_lines.len()
+            ));
+            columns.temp = None;
+        }
     }
 
     /// `true` for a line whose cells are all numbers (or empty), at least one of them a number.

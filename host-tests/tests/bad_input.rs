@@ -160,3 +160,29 @@ fn more_poses_than_the_limit_is_an_error_naming_both() {
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     assert!(stdout(&out).contains("512 poses"), "{}", stdout(&out));
 }
+
+#[test]
+fn an_all_nan_or_empty_temperature_column_is_dropped_with_a_warning_naming_it() {
+    let rows = six_face_rows(300);
+    let plain = calibrate(&write("no_temp.csv", format!("t,ax,ay,az\n{}\n", rows.join("\n")).as_bytes()), &[]);
+    assert_eq!(plain.status.code(), Some(0), "{}", stderr(&plain));
+    for (name, cell) in [("nan_temp.csv", "nan"), ("empty_temp.csv", ""), ("inf_temp.csv", "inf")] {
+        let text: Vec<String> = rows.iter().map(|r| format!("{r},{cell}")).collect();
+        let out = calibrate(&write(name, format!("t,ax,ay,az,temp_C\n{}\n", text.join("\n")).as_bytes()), &[]);
+        assert_eq!(out.status.code(), Some(0), "{name}: {}", stderr(&out));
+        let warning = stderr(&out);
+        assert!(warning.contains("warning") && warning.contains("`temp_C`"), "{name}: {warning}");
+        assert!(warning.contains("2400 of 2400 rows"), "{name}: {warning}");
+        assert_eq!(without_name(&stdout(&out), name), without_name(&stdout(&plain), "no_temp.csv"));
+    }
+}
+
+#[test]
+fn a_temperature_column_with_one_nan_skips_that_row_only() {
+    let mut text: Vec<String> = six_face_rows(300).iter().map(|r| format!("{r},25.0")).collect();
+    text[10] = text[10].replace(",25.0", ",nan");
+    let out = calibrate(&write("one_nan_temp.csv", format!("t,ax,ay,az,temp\n{}\n", text.join("\n")).as_bytes()), &[]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(stderr(&out).contains("1 of 2400 rows skipped"), "{}", stderr(&out));
+    assert!(!stderr(&out).contains("temperature column"), "{}", stderr(&out));
+}
