@@ -361,11 +361,11 @@ struct Loaded {
 
 /// The whole `calibrate` pipeline: read, find poses (or take the means), calibrate, leave-one-out.
 fn load_and_calibrate(input: &InputArgs, method: Method, seed: u64, warn: bool) -> Result<Loaded, Failure> {
-    if !(input.gravity.is_finite() && input.gravity > 0.0) {
-        return Err(format!("--gravity {} must be a positive number of m/s^2", input.gravity).into());
-    }
+    calib::check_gravity_positive(input.gravity)?;
     let opts = ReadOptions { columns: input.columns.clone(), units: input.units, means: input.means, delimiter: None };
     let table = csvio::read_csv(&input.file, &opts).map_err(|e| e.to_string())?;
+    calib::check_gravity(input.gravity, table.units, table.median_magnitude)
+        .map_err(|e| format!("{}: {e}", input.file.display()))?;
     if warn {
         for w in &table.warnings {
             eprintln!("accelcal: warning: {w}");
@@ -538,6 +538,8 @@ fn diagnose_file(input: &InputArgs, as_json: bool, plots: Option<&std::path::Pat
     for w in &table.warnings {
         eprintln!("accelcal: warning: {w}");
     }
+    calib::check_gravity(input.gravity, table.units, table.median_magnitude)
+        .map_err(|e| format!("{}: {e}", input.file.display()))?;
     // The diagnosis calibrates the same poses: refuse a log with more than one calibration takes.
     accumulate_all(&table, &input.file)?;
     let options = diagnose::DiagnoseOptions { gravity: input.gravity, seed, ..diagnose::DiagnoseOptions::DEFAULT };

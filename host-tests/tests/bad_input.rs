@@ -186,3 +186,34 @@ fn a_temperature_column_with_one_nan_skips_that_row_only() {
     assert!(stderr(&out).contains("1 of 2400 rows skipped"), "{}", stderr(&out));
     assert!(!stderr(&out).contains("temperature column"), "{}", stderr(&out));
 }
+
+#[test]
+fn an_implausible_gravity_is_refused_saying_what_was_measured() {
+    let rows = six_face_rows(300);
+    let g_file = write("gravity_g.csv", format!("t,ax,ay,az\n{}\n", rows.join("\n")).as_bytes());
+    for gravity in ["1e-30", "1", "30", "9.8e6"] {
+        let out = calibrate(&g_file, &["--gravity", gravity]);
+        assert_short_error(&out, "gravity_g.csv", &["--gravity", "implausible", "measure |a| = 9.80", "m/s^2"]);
+    }
+    for gravity in ["0", "-9.8", "nan", "inf"] {
+        let out = calibrate(&g_file, &[&format!("--gravity={gravity}")]);
+        assert_eq!(out.status.code(), Some(2), "{gravity}: {}", stderr(&out));
+        assert!(stderr(&out).contains("must be a positive number"), "{gravity}: {}", stderr(&out));
+    }
+    let out = command("diagnose", &g_file, &["--gravity", "1e-30"]);
+    assert_short_error(&out, "gravity_g.csv", &["implausible"]);
+    // Local gravity (here Quito's) is accepted.
+    let out = calibrate(&g_file, &["--gravity", "9.7803"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    // The same poses in m/s^2 measure the same.
+    let mps2: Vec<String> = rows
+        .iter()
+        .map(|r| {
+            let c: Vec<f64> = r.split(',').map(|v| v.parse().unwrap()).collect();
+            format!("{},{:.5},{:.5},{:.5}", c[0], c[1] * 9.80665, c[2] * 9.80665, c[3] * 9.80665)
+        })
+        .collect();
+    let mps2_file = write("gravity_mps2.csv", format!("t,ax,ay,az\n{}\n", mps2.join("\n")).as_bytes());
+    let out = calibrate(&mps2_file, &["--gravity", "1"]);
+    assert_short_error(&out, "gravity_mps2.csv", &["implausible", "measure |a| = 9.80"]);
+}
