@@ -218,7 +218,8 @@ impl fmt::Display for ColumnSpecError {
             f,
             "bad column spec `{}`: {} (expected `ax,ay,az`, `t,ax,ay,az`, `t,ax,ay,az,temp` or \
              `t,ax,ay,az,temp,n`; names or 0-based indices; `-` for none)",
-            self.spec, self.reason
+            clip(&self.spec),
+            self.reason
         )
     }
 }
@@ -463,6 +464,20 @@ pub enum CsvError {
         /// Cells expected (from the header).
         expected: usize,
     },
+    /// `--columns` names a column index past the last column.
+    ColumnIndexOutOfRange {
+        /// File.
+        file: String,
+        /// Line that sets the column count (the header, or the first data row when every column is
+        /// given by index).
+        line: usize,
+        /// The largest index asked for (0-based).
+        index: usize,
+        /// Columns that line has.
+        columns: usize,
+        /// `true` when `line` is the header.
+        from_header: bool,
+    },
     /// A cell that should be a number is not.
     NonNumeric {
         /// File.
@@ -597,6 +612,13 @@ impl fmt::Display for CsvError {
             Self::RaggedRow { file, line, cells, expected } => {
                 write!(f, "{file}:{line}: {cells} cells, the header has {expected}")
             }
+            Self::ColumnIndexOutOfRange { file, line, index, columns, from_header } => write!(
+                f,
+                "{file}:{line}: --columns asks for column index {index}, but the {} has {columns} columns (indices \
+                 0-{}); indices count from 0",
+                if *from_header { "header" } else { "first data row" },
+                columns.saturating_sub(1)
+            ),
             Self::NonNumeric { file, line, column, text } => {
                 write!(f, "{file}:{line}: column `{}`: `{}` is not a number", clip(column), clip(text))
             }
@@ -1054,11 +1076,12 @@ impl Parser<'_> {
         });
         let expected_cells = if all_by_index { split_cells(data_lines[0].1, delimiter).len() } else { header.len() };
         if columns.max_index() >= expected_cells {
-            return Err(CsvError::RaggedRow {
+            return Err(CsvError::ColumnIndexOutOfRange {
                 file: file.clone(),
-                line: data_lines[0].0,
-                cells: expected_cells,
-                expected: columns.max_index() + 1,
+                line: if all_by_index { data_lines[0].0 } else { header_line },
+                index: columns.max_index(),
+                columns: expected_cells,
+                from_header: !all_by_index,
             });
         }
         let name_of = |i: usize| header.get(i).cloned().unwrap_or_else(|| format!("#{i}"));
@@ -1863,7 +1886,15 @@ mod tests {
         assert!(message(&e).contains("`bz`"));
         let e = read_with("ax,ay,az\n1,2,3\n", &ReadOptions { columns: Some("0,1,7".parse().unwrap()), ..opts })
             .unwrap_err();
-        assert!(matches!(e, CsvError::RaggedRow { .. }), "{e:?}");
+        let expected = CsvError::ColumnIndexOutOfRange {
+            file: "test.csv".into(),
+            line: 2,
+            index: 7,
+            columns: 3,
+            from_header: false,
+        };
+        assert_eq!(e, expected);
+        assert!(message(&e).contains("column index 7, but the first data row has 3 columns (indices 0-2)"));
     }
 
     #[test]

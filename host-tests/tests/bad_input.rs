@@ -217,3 +217,14 @@ fn an_implausible_gravity_is_refused_saying_what_was_measured() {
     let out = calibrate(&mps2_file, &["--gravity", "1"]);
     assert_short_error(&out, "gravity_mps2.csv", &["implausible", "measure |a| = 9.80"]);
 }
+
+#[test]
+fn a_columns_index_past_the_last_column_counts_the_columns_right() {
+    let path = write("four_columns.csv", b"t,ax,ay,az\n0,0,0,1\n0.01,0,0,1\n");
+    let out = calibrate(&path, &["--columns", "t,ax,ay,9"]);
+    assert_short_error(&out, "four_columns.csv:1:", &["column index 9", "the header has 4 columns (indices 0-3)"]);
+    let out = calibrate(&path, &["--columns", "0,1,7"]);
+    assert_short_error(&out, "four_columns.csv:2:", &["column index 7", "first data row has 4 columns (indices 0-3)"]);
+    let out = calibrate(&path, &["--columns", "t,ax,ay,nope"]);
+    assert_short_error(&out, "four_columns.csv:1:", &["`nope` is not in the header [`t`, `ax`, `ay`, `az`]"]);
+}
