@@ -344,6 +344,9 @@ pub struct Table {
     pub units: Units,
     /// `true` when the units were detected, not declared.
     pub units_detected: bool,
+    /// The unit the column names declare (`ax_mg`, `ax (g)`, ...), when they did and `--units` did
+    /// not override it; the values were scaled by its factor.
+    pub units_header: Option<HeaderUnit>,
     /// Median of |a| over the rows, in [`Table::units`].
     pub median_magnitude: f64,
     /// 1-based file line of each row.
@@ -358,10 +361,41 @@ pub struct Table {
     pub columns: ColumnsUsed,
 }
 
+/// A unit named in an acceleration column's header, e.g. `mg` in `ax_mg`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeaderUnit {
+    /// The column whose name says it.
+    pub column: String,
+    /// The unit as named (`g`, `mg`, `m/s^2`, `counts`).
+    pub label: &'static str,
+    /// The working unit the values are read in.
+    pub units: Units,
+    /// Factor from the named unit to the working unit (`mg` to `g`: 0.001).
+    pub factor: f64,
+}
+
+/// The unit a column name declares: its last unit token (`ax_mg`, `acc_x_mps2`, `ax[m/s^2]`, `ax (g)`).
+fn header_unit(name: &str) -> Option<HeaderUnit> {
+    let (label, units, factor) = tokens(name).iter().rev().find_map(|t| match t.as_str() {
+        "g" => Some(("g", Units::G, 1.0)),
+        "mg" => Some(("mg", Units::G, 1e-3)),
+        "mps2" | "ms2" | "si" => Some(("m/s^2", Units::Mps2, 1.0)),
+        // `raw` often means uncalibrated (in g or m/s^2), not counts: it declares nothing.
+        "lsb" | "counts" | "cnt" => Some(("counts", Units::Counts, 1.0)),
+        _ => None,
+    })?;
+    Some(HeaderUnit { column: name.to_string(), label, units, factor })
+}
+
 impl Table {
     /// What the units are and why, e.g. `g (detected: median |a| = 0.998)`.
     pub fn units_summary(&self) -> String {
-        let how = if self.units_detected { "detected" } else { "declared" };
+        let how = match &self.units_header {
+            Some(h) if h.factor != 1.0 => format!("header `{}`: {}, scaled by {}", clip(&h.column), h.label, h.factor),
+            Some(h) => format!("header `{}`", clip(&h.column)),
+            None if self.units_detected => "detected".to_string(),
+            None => "declared".to_string(),
+        };
         format!("{} ({how}: median |a| = {:.4} {})", self.units, self.median_magnitude, self.units)
     }
 
@@ -534,6 +568,8 @@ pub enum CsvError {
         median_magnitude: f64,
         /// What the values look like (`None` when nothing fits).
         looks_like: Option<Units>,
+        /// The column whose name declared the units (`None`: `--units` declared them).
+        header: Option<String>,
     },
     /// The units cannot be told from the values.
     UnknownUnits {
@@ -638,20 +674,22 @@ impl fmt::Display for CsvError {
                 "{file}:{line}: time goes backwards, {time_s} s after {previous_s} s at line {previous_line} \
                  (concatenated captures? drop the time column with --columns)"
             ),
-            Self::WrongUnits { file, declared, median_magnitude, looks_like } => {
+            Self::WrongUnits { file, declared, median_magnitude, looks_like, header } => {
                 let typical = match declared {
                     Units::G => "about 1",
                     Units::Mps2 => "about 9.8",
                     _ => "hundreds to tens of thousands",
                 };
+                let by = header.as_ref().map_or(String::new(), |h| format!(" (as the header `{}` says)", clip(h)));
                 write!(
                     f,
-                    "{file}: values no accelerometer reads in {declared}: the median |a| is {median_magnitude:.4}, \
-                     a static accelerometer reads {typical}"
+                    "{file}: values no accelerometer reads in {declared}{by}: the median |a| is \
+                     {median_magnitude:.4}, a static accelerometer reads {typical}"
                 )?;
-                match looks_like {
-                    Some(u) => write!(f, "; the values look like {u}: use --units {u} (or --units auto)"),
-                    None => f.write_str("; check the columns"),
+                match (looks_like, header) {
+                    (Some(u), Some(_)) => write!(f, "; the values look like {u}: use --units {u}"),
+                    (Some(u), None) => write!(f, "; the values look like {u}: use --units {u} (or --units auto)"),
+                    (None, _) => f.write_str("; check the columns"),
                 }
             }
             Self::UnknownUnits { file, median_magnitude } => write!(
@@ -1095,6 +1133,7 @@ impl Parser<'_> {
             std_devs: columns.std.map(|_| Vec::new()),
             units: self.opts.units,
             units_detected: false,
+            units_header: None,
             median_magnitude: 0.0,
             line_of_row: Vec::with_capacity(data_lines.len()),
             warnings: notes,
@@ -1345,19 +1384,66 @@ impl Parser<'_> {
         Ok(())
     }
 
+    /// The unit the acceleration column names agree on (`--units` other than auto overrides it, with
+    /// a warning when they differ); names that disagree are warned about and ignored.
+    fn header_units(&self, table: &mut Table) -> Option<HeaderUnit> {
+        let named: Vec<HeaderUnit> = table.columns.accel.iter().filter_map(|c| header_unit(c)).collect();
+        let first = named.first()?.clone();
+        let file = &self.file;
+        if named.iter().any(|h| h.label != first.label) {
+            let labels: Vec<String> = named.iter().map(|h| format!("`{}`", clip(&h.column))).collect();
+            table.warnings.push(format!("{file}: the columns {} name different units: ignored", labels.join(", ")));
+            return None;
+        }
+        if self.opts.units != Units::Auto {
+            if self.opts.units != first.units || first.factor != 1.0 {
+                table.warnings.push(format!(
+                    "{file}: --units {} overrides the unit {} in the header (`{}`)",
+                    self.opts.units,
+                    first.label,
+                    clip(&first.column)
+                ));
+            }
+            return None;
+        }
+        Some(first)
+    }
+
+    /// Scales the acceleration (and standard-deviation) values by a header unit's factor.
+    fn scale_to_working_unit(table: &mut Table, factor: f64) {
+        if factor == 1.0 {
+            return;
+        }
+        for s in table.samples.iter_mut().chain(table.std_devs.iter_mut().flatten()) {
+            *s = s.map(|v| v * factor);
+        }
+    }
+
     fn resolve_units(&self, table: &mut Table) -> Result<(), CsvError> {
         let file = &self.file;
+        let header_unit = self.header_units(table);
+        if let Some(h) = &header_unit {
+            Self::scale_to_working_unit(table, h.factor);
+        }
         let mut magnitudes: Vec<f64> = table.samples.iter().map(|s| s[0].hypot(s[1]).hypot(s[2])).collect();
         let median_magnitude = median(&mut magnitudes);
         let looks_like = units_from_magnitude(median_magnitude);
-        let units = match self.opts.units {
+        let declared = header_unit.as_ref().map_or(self.opts.units, |h| h.units);
+        let units = match declared {
             Units::Auto => match looks_like {
                 Some(u) => u,
                 None => return Err(CsvError::UnknownUnits { file: file.clone(), median_magnitude }),
             },
             declared if units_plausible(declared, median_magnitude) => declared,
             declared => {
-                return Err(CsvError::WrongUnits { file: file.clone(), declared, median_magnitude, looks_like });
+                let header = header_unit.map(|h| h.column);
+                return Err(CsvError::WrongUnits {
+                    file: file.clone(),
+                    declared,
+                    median_magnitude,
+                    looks_like,
+                    header,
+                });
             }
         };
         let limit = units.non_physical_limit();
@@ -1373,7 +1459,8 @@ impl Parser<'_> {
             }
         }
         table.units = units;
-        table.units_detected = self.opts.units == Units::Auto;
+        table.units_detected = declared == Units::Auto;
+        table.units_header = header_unit;
         table.median_magnitude = median_magnitude;
         Ok(())
     }
@@ -1725,13 +1812,14 @@ mod tests {
     fn reads_g_with_time_and_temperature() {
         let t = read("time_s,ax_g,ay_g,az_g,temp_C\n0.0,0.01,0.02,0.99,25.0\n0.01,0.02,0.01,1.01,25.1\n").unwrap();
         assert_eq!(t.units, Units::G);
-        assert!(t.units_detected);
+        assert!(!t.units_detected);
+        assert_eq!(t.units_header.as_ref().map(|h| (h.column.as_str(), h.label)), Some(("ax_g", "g")));
         assert_eq!(t.times_s, Some(vec![0.0, 0.01]));
         assert_eq!(t.temps_c, Some(vec![25.0, 25.1]));
         assert_eq!(t.samples[1], [0.02, 0.01, 1.01]);
         assert_eq!(t.line_of_row, vec![2, 3]);
         assert!(t.warnings.is_empty());
-        assert!(t.units_summary().starts_with("g (detected"));
+        assert!(t.units_summary().starts_with("g (header `ax_g`"), "{}", t.units_summary());
         assert!((t.sample_rate_hz().unwrap() - 100.0).abs() < 1e-9);
     }
 
@@ -1828,7 +1916,9 @@ mod tests {
         ];
         for (header, has_time) in cases {
             let cells = split_cells(header, Delimiter::detect(header)).len();
-            let row = vec!["1"; cells].join(if header.contains(';') { ";" } else { "," });
+            // A value the header's unit reads at rest (|a| = 1.73 g, or 9.87 m/s^2).
+            let value = if header.contains("m/s^2") { "5.7" } else { "1" };
+            let row = vec![value; cells].join(if header.contains(';') { ";" } else { "," });
             let t = read(&format!("{header}\n{row}\n")).unwrap_or_else(|e| panic!("{header}: {e}"));
             assert_eq!(t.times_s.is_some(), has_time, "{header}");
         }

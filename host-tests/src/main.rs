@@ -477,6 +477,7 @@ fn calibrate_file(
             "method": method.name(),
             "gravity": gravity,
             "units": table.units.to_string(),
+            "units_header": table.units_header.as_ref().map(|h| json!({"column": h.column, "unit": h.label, "factor": h.factor})),
             "poses": pose_json,
             "params": params_json(&cal.params),
             "objective": cal.objective,

@@ -228,3 +228,54 @@ fn a_columns_index_past_the_last_column_counts_the_columns_right() {
     let out = calibrate(&path, &["--columns", "t,ax,ay,nope"]);
     assert_short_error(&out, "four_columns.csv:1:", &["`nope` is not in the header [`t`, `ax`, `ay`, `az`]"]);
 }
+
+/// The six-face log with its values multiplied by `factor` and the header `header`.
+fn six_faces_scaled(header: &str, factor: f64) -> String {
+    let mut text = format!("{header}\n");
+    for r in six_face_rows(300) {
+        let c: Vec<f64> = r.split(',').map(|v| v.parse().unwrap()).collect();
+        text.push_str(&format!("{},{:.6},{:.6},{:.6}\n", c[0], c[1] * factor, c[2] * factor, c[3] * factor));
+    }
+    text
+}
+
+#[test]
+fn unit_labels_in_headers_are_honoured_and_reported() {
+    let reference = calibrate(&write("units_plain.csv", six_faces_scaled("t,ax,ay,az", 1.0).as_bytes()), &[]);
+    let params = |out: &Output| -> Vec<String> { stdout(out).lines().skip(1).take(4).map(str::to_string).collect() };
+    let cases = [
+        ("units_mg.csv", "t,ax_mg,ay_mg,az_mg", 1000.0, "g (header `ax_mg`: mg, scaled by 0.001"),
+        ("units_g.csv", "t,ax_g,ay_g,az_g", 1.0, "g (header `ax_g`"),
+        ("units_paren.csv", "t,ax (g),ay (g),az (g)", 1.0, "g (header `ax (g)`"),
+        ("units_mps2.csv", "t,acc_x_mps2,acc_y_mps2,acc_z_mps2", 9.80665, "mps2 (header `acc_x_mps2`"),
+        ("units_bracket.csv", "t,ax[m/s^2],ay[m/s^2],az[m/s^2]", 9.80665, "mps2 (header `ax[m/s^2]`"),
+    ];
+    for (name, header, factor, summary) in cases {
+        let out = calibrate(&write(name, six_faces_scaled(header, factor).as_bytes()), &[]);
+        assert_eq!(out.status.code(), Some(0), "{name}: {}", stderr(&out));
+        assert!(stdout(&out).contains(summary), "{name}: {}", stdout(&out));
+        assert!(stdout(&out).contains("6 poses"), "{name}: {}", stdout(&out));
+        if factor == 1000.0 || factor == 1.0 {
+            assert_eq!(params(&out), params(&reference), "{name}");
+        }
+    }
+    let json = calibrate(&dir().join("units_mg.csv"), &["--json"]);
+    let value: serde_json::Value = serde_json::from_slice(&json.stdout).unwrap();
+    assert_eq!(value["units"], "g");
+    assert_eq!(value["units_header"]["unit"], "mg");
+    assert_eq!(value["units_header"]["factor"], 0.001);
+}
+
+#[test]
+fn an_explicit_units_option_wins_over_the_header_and_a_wrong_label_is_an_error() {
+    let mg = dir().join("units_mg_explicit.csv");
+    std::fs::write(&mg, six_faces_scaled("t,ax_mg,ay_mg,az_mg", 1000.0)).unwrap();
+    let out = calibrate(&mg, &["--units", "counts"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(stdout(&out).contains("counts (declared"), "{}", stdout(&out));
+    assert!(stderr(&out).contains("--units counts overrides the unit mg in the header (`ax_mg`)"), "{}", stderr(&out));
+    // Values in m/s^2 under a `_g` header: the header is wrong, said so.
+    let wrong = write("units_wrong_label.csv", six_faces_scaled("t,ax_g,ay_g,az_g", 9.80665).as_bytes());
+    assert_short_error(&calibrate(&wrong, &[]), "units_wrong_label.csv", &["header `ax_g`", "--units mps2"]);
+    assert_eq!(calibrate(&wrong, &["--units", "mps2"]).status.code(), Some(0));
+}
