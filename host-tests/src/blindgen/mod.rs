@@ -15,17 +15,17 @@
 //! assert!(log.to_csv_string().starts_with("t,ax"));
 //! ```
 
-// STAGE2 pub mod colored;
+pub mod colored;
 pub mod drift;
-// STAGE2 pub mod motion;
+pub mod motion;
 pub mod noise;
 pub mod nonlinear;
 pub mod orientation;
-// STAGE2 pub mod outlier;
+pub mod outlier;
 pub mod output;
 pub mod sensor;
 pub mod session;
-// STAGE2 pub mod settling;
+pub mod settling;
 pub mod temperature;
 pub mod vec3;
 
@@ -54,11 +54,28 @@ pub enum Family {
     Temperature,
     /// Per-axis square and cube terms of the scale.
     Nonlinearity,
+    /// Transients after each rotation: exponential and/or mount ringing.
+    Settling,
+    /// Motion within holds: taps, sway, a bump.
+    Motion,
+    /// Coloured noise: random walk, Gauss-Markov, flicker.
+    ColoredNoise,
+    /// Outside the catalogue: one bad pose, mains pickup, hysteresis, cross-axis products.
+    OutOfCatalogue,
 }
 
 impl Family {
     /// Every family.
-    pub const ALL: [Self; 4] = [Self::Clean, Self::Drift, Self::Temperature, Self::Nonlinearity];
+    pub const ALL: [Self; 8] = [
+        Self::Clean,
+        Self::Drift,
+        Self::Temperature,
+        Self::Nonlinearity,
+        Self::Settling,
+        Self::Motion,
+        Self::ColoredNoise,
+        Self::OutOfCatalogue,
+    ];
 
     /// The name used in the manifest and on the command line.
     pub fn name(self) -> &'static str {
@@ -67,6 +84,10 @@ impl Family {
             Self::Drift => "drift",
             Self::Temperature => "temperature",
             Self::Nonlinearity => "nonlinearity",
+            Self::Settling => "settling",
+            Self::Motion => "motion",
+            Self::ColoredNoise => "colored_noise",
+            Self::OutOfCatalogue => "out_of_catalogue",
         }
     }
 
@@ -132,6 +153,14 @@ pub enum Effect {
     Temperature(temperature::TempEffect),
     /// See [`nonlinear`].
     Nonlinear(nonlinear::Nonlinear),
+    /// See [`settling`].
+    Settling(settling::Settling),
+    /// See [`motion`].
+    Motion(motion::Motion),
+    /// See [`colored`].
+    Colored(colored::Colored),
+    /// See [`outlier`].
+    Outlier(outlier::Outlier),
 }
 
 impl Effect {
@@ -141,6 +170,10 @@ impl Effect {
             Self::Drift(e) => e,
             Self::Temperature(e) => e,
             Self::Nonlinear(e) => e,
+            Self::Settling(e) => e,
+            Self::Motion(e) => e,
+            Self::Colored(e) => e,
+            Self::Outlier(e) => e,
         }
     }
 }
@@ -244,6 +277,10 @@ fn randomise_effect(rng: &mut Rng, spec: &mut LogSpec) {
         Family::Drift => drift::randomise(rng, spec),
         Family::Temperature => temperature::randomise(rng, spec),
         Family::Nonlinearity => nonlinear::randomise(rng, spec),
+        Family::Settling => settling::randomise(rng, spec),
+        Family::Motion => motion::randomise(rng, spec),
+        Family::ColoredNoise => colored::randomise(rng, spec),
+        Family::OutOfCatalogue => outlier::randomise(rng, spec),
     }
 }
 
