@@ -160,7 +160,8 @@ pub fn summarize(outcomes: &[Outcome]) -> Vec<FamilySummary> {
 fn summarize_family(family: Family, outcomes: &[Outcome]) -> FamilySummary {
     let mine: Vec<&Outcome> = outcomes.iter().filter(|o| o.family == family).collect();
     let visible: Vec<&&Outcome> = mine.iter().filter(|o| o.visible()).collect();
-    let mut shrinks: Vec<f64> = visible.iter().filter(|o| o.right).map(|o| o.shrink).filter(|s| s.is_finite()).collect();
+    let mut shrinks: Vec<f64> =
+        visible.iter().filter(|o| o.right).map(|o| o.shrink).filter(|s| s.is_finite()).collect();
     let mut answers: Vec<(String, usize)> = Vec::new();
     for o in &mine {
         let key = if o.verdict.starts_with("refused") { "refused".to_string() } else { o.verdict.clone() };
@@ -169,7 +170,7 @@ fn summarize_family(family: Family, outcomes: &[Outcome]) -> FamilySummary {
             None => answers.push((key, 1)),
         }
     }
-    answers.sort_by(|a, b| b.1.cmp(&a.1));
+    answers.sort_by_key(|a| std::cmp::Reverse(a.1));
     FamilySummary {
         family,
         logs: mine.len(),

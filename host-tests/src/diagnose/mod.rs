@@ -57,6 +57,7 @@ mod math;
 mod probe;
 mod report;
 mod verdict;
+mod within;
 
 use std::fmt;
 

@@ -87,6 +87,18 @@ pub struct Candidate {
     pub extra_params: usize,
     /// The chosen variant (time constant, bias/scale, dropped poses, walk).
     pub detail: String,
+    /// Gain on the within-pose channel (withheld poses' movement during their holds), as for
+    /// `heldout_gain`; NaN when the channel is not significant or the family does not move there.
+    pub within_gain: f64,
+    /// The variant chosen on the within-pose channel (empty when none).
+    pub within_detail: String,
+}
+
+impl Candidate {
+    /// The evidence for the family: the larger of its pose-level and within-pose gains.
+    pub fn evidence(&self) -> f64 {
+        if self.within_gain.is_finite() { self.heldout_gain.max(self.within_gain) } else { self.heldout_gain }
+    }
 }
 
 /// An out-of-catalogue probe (never a verdict; see `unexplained`).
@@ -150,7 +162,7 @@ impl Diagnosis {
     /// The applicable candidates, best held-out gain first.
     pub fn ranked(&self) -> Vec<&Candidate> {
         let mut v: Vec<&Candidate> = self.candidates.iter().filter(|c| c.applicable).collect();
-        v.sort_by(|a, b| b.heldout_gain.total_cmp(&a.heldout_gain));
+        v.sort_by(|a, b| b.evidence().total_cmp(&a.evidence()));
         v
     }
 }
@@ -217,8 +229,10 @@ impl Diagnosis {
                 "ratio_after": finite(c.ratio_after),
                 "extra_params": c.extra_params,
                 "detail": c.detail,
+                "within_gain": finite(c.within_gain),
+                "within_detail": c.within_detail,
             })).collect::<Vec<_>>(),
-            "candidates_ranked": self.ranked().iter().map(|c| json!({"effect": c.effect, "heldout_gain": finite(c.heldout_gain)})).collect::<Vec<_>>(),
+            "candidates_ranked": self.ranked().iter().map(|c| json!({"effect": c.effect, "heldout_gain": finite(c.heldout_gain), "within_gain": finite(c.within_gain), "evidence": finite(c.evidence())})).collect::<Vec<_>>(),
             "probes": self.probes.iter().map(|p| json!({"shape": p.shape, "heldout_gain": finite(p.heldout_gain), "detail": p.detail})).collect::<Vec<_>>(),
             "verdict": {
                 "effect": self.verdict,
@@ -320,6 +334,9 @@ impl Diagnosis {
                 "   {:<19} gain {:>6.2}  held-out ratio {:>7.2}  ratio after {:>7.2}  +{} params  {}",
                 c.effect, c.heldout_gain, c.heldout_ratio, c.ratio_after, c.extra_params, c.detail
             );
+            if c.within_gain.is_finite() {
+                let _ = writeln!(s, "   {:<19} within-pose gain {:>6.2}  {}", "", c.within_gain, c.within_detail);
+            }
         }
         let _ = writeln!(
             s,

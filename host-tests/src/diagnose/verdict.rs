@@ -29,12 +29,12 @@ pub(crate) fn decide(m: &Measured, evaluations: &[Evaluation], probes: &[Probe])
     let best = evaluations
         .iter()
         .enumerate()
-        .filter(|(_, e)| e.candidate.applicable && e.candidate.heldout_gain.is_finite())
-        .max_by(|a, b| a.1.candidate.heldout_gain.total_cmp(&b.1.candidate.heldout_gain));
+        .filter(|(_, e)| e.candidate.applicable && e.candidate.evidence().is_finite())
+        .max_by(|a, b| a.1.candidate.evidence().total_cmp(&b.1.candidate.evidence()));
     // A family wins only if no out-of-catalogue probe explains the withheld poses better.
     let beaten = |gain: f64| best_probe.is_some_and(|p| p.heldout_gain > gain);
     let winner = best
-        .filter(|(_, e)| significant && e.candidate.heldout_gain >= MIN_GAIN && !beaten(e.candidate.heldout_gain))
+        .filter(|(_, e)| significant && e.candidate.evidence() >= MIN_GAIN && !beaten(e.candidate.evidence()))
         .map(|(i, _)| i);
     let mut gap = m.gap.clone();
     let (verdict, after) = match winner {

@@ -26,7 +26,7 @@ impl Family for ColoredNoise {
         let rows = ctx.poses[longest].rows.clone();
         let (walk, floor) = colored_noise_estimate(ctx.table, rows.start, rows.end, m.rate, m.white);
         let noise = Noise { white: m.white, walk, floor: std::array::from_fn(|a| floor[a] + m.quantisation[a]) };
-        let applicable = walk.iter().chain(&floor).any(|w| *w > 0.0);
+        let applicable = ctx.pose_level && walk.iter().chain(&floor).any(|w| *w > 0.0);
         let draws = residual_noise_draws(&m.model, &m.directions, &m.poses, &noise, CV_NOISE_DRAWS, ctx.opts.seed);
         let e_col = expected_cv_ms(&ctx.base_rows, &draws, &ctx.fold, ctx.folds, &ctx.none_dropped);
         let ms = (crate::diagnose::math::sum_sq(&ctx.nominal_cv).0 + PARAMETER_PENALTY * ctx.e_white) / n as f64;
@@ -56,6 +56,8 @@ impl Family for ColoredNoise {
                 mg(floor, 1),
                 mg(floor, 2)
             ),
+            within_gain: f64::NAN,
+            within_detail: String::new(),
         };
         Evaluation { candidate, after: m.r.iter().map(|v| Some(*v)).collect() }
     }

@@ -1,9 +1,19 @@
 //! Drift: a bias that moves with time. Parametrisations: one exponential warm-up
 //! `c (1 - exp(-t / tau))` per axis (`tau` from a grid), two exponentials (a fast and a slow
-//! time constant), and polynomials in time of degree 1 to 3 (a smooth wander).
+//! time constant), polynomials in time of degree 1 to 3, and, on the within-pose channel (where
+//! every hold shows the drift's course), a smooth wander: piecewise-linear in time with knots
+//! evenly spaced over the log.
 
 use super::{Context, Family, Variant};
 use crate::diagnose::gap::PoseData;
+use crate::diagnose::math::V3;
+use crate::diagnose::within::{Within, WithinVariant};
+
+/// Knot counts of the piecewise-linear wander (within-pose channel).
+const KNOTS: [usize; 3] = [3, 5, 9];
+
+/// Harmonics of the smooth wander (sines and cosines of periods `2 T / j`, `T` the log's length).
+const HARMONICS: [usize; 5] = [1, 2, 3, 4, 6];
 
 /// Time constants tried, as fractions of the log's duration.
 const TAU_FACTORS: [f64; 6] = [0.05, 0.1, 0.2, 0.4, 0.8, 1.6];
@@ -19,9 +29,62 @@ fn columns(ctx: &Context<'_>, basis: &dyn Fn(f64) -> Vec<f64>) -> Vec<Vec<f64>> 
         .collect()
 }
 
+/// A function of time, s.
+type Basis = Box<dyn Fn(f64) -> f64>;
+
+/// Named time bases `phi_k(t)` (each costs 3 parameters, one per axis) over a log ending at `t_end`.
+fn time_bases(t_end: f64) -> Vec<(String, Vec<Basis>)> {
+    let warm = |tau: f64| Box::new(move |t: f64| 1.0 - (-t / tau).exp()) as Box<dyn Fn(f64) -> f64>;
+    let mut out: Vec<(String, Vec<Basis>)> = Vec::new();
+    for f in TAU_FACTORS {
+        out.push((format!("bias (1 - exp(-t / {:.0} s))", f * t_end), vec![warm(f * t_end)]));
+    }
+    for (i, f1) in TAU_FACTORS.iter().enumerate() {
+        for f2 in TAU_FACTORS.iter().skip(i + 2) {
+            let detail = format!("bias with two time constants, {:.0} s and {:.0} s", f1 * t_end, f2 * t_end);
+            out.push((detail, vec![warm(f1 * t_end), warm(f2 * t_end)]));
+        }
+    }
+    for degree in 1..=3i32 {
+        let bases = (1..=degree).map(|k| Box::new(move |t: f64| (t / t_end).powi(k)) as Box<dyn Fn(f64) -> f64>);
+        out.push((format!("bias polynomial in time, degree {degree}"), bases.collect()));
+    }
+    for harmonics in HARMONICS {
+        let mut bases: Vec<Box<dyn Fn(f64) -> f64>> = Vec::new();
+        for j in 1..=harmonics {
+            let w = std::f64::consts::PI * j as f64 / t_end;
+            bases.push(Box::new(move |t: f64| (w * t).sin()));
+            bases.push(Box::new(move |t: f64| (w * t).cos()));
+        }
+        let shortest = 2.0 * t_end / harmonics as f64;
+        out.push((format!("bias wandering smoothly in time (periods down to {shortest:.0} s)"), bases));
+    }
+    for knots in KNOTS {
+        let h = t_end / (knots - 1) as f64;
+        let hats = (0..knots).map(|j| {
+            Box::new(move |t: f64| (1.0 - ((t - j as f64 * h) / h).abs()).max(0.0)) as Box<dyn Fn(f64) -> f64>
+        });
+        out.push((format!("bias piecewise linear in time ({knots} knots, {h:.0} s apart)"), hats.collect()));
+    }
+    out
+}
+
 impl Family for Drift {
     fn name(&self) -> &'static str {
         "drift"
+    }
+
+    fn within_variants(&self, ctx: &Context<'_>, within: &Within) -> Vec<WithinVariant> {
+        let t_end = ctx.poses.last().map_or(1.0, |p| p.t_end).max(1e-9);
+        time_bases(t_end)
+            .into_iter()
+            .map(|(detail, bases)| {
+                let params = 3 * bases.len();
+                within.variant(ctx.m, params, detail, &|_, t, _| {
+                    bases.iter().flat_map(|phi| (0..3).map(move |a| axis(a, phi(t)))).collect()
+                })
+            })
+            .collect()
     }
 
     fn variants(&self, ctx: &Context<'_>) -> Vec<Variant> {
@@ -55,4 +118,9 @@ impl Family for Drift {
         }
         out
     }
+}
+
+/// `v` along axis `a`.
+fn axis(a: usize, v: f64) -> V3 {
+    std::array::from_fn(|i| if i == a { v } else { 0.0 })
 }

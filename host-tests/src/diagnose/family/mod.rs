@@ -16,6 +16,7 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 use super::gap::{Measured, Noise, PoseData, expected_cv_ms, expected_fit_rmse_mg, residual_noise_draws};
 use super::math::{V3, cv_residuals, fit_residuals, jacobian_row, rms, sum_sq};
 use super::report::Candidate;
+use super::within::{Within, WithinFit, WithinVariant};
 use super::{CV_NOISE_DRAWS, DiagnoseOptions, OVERSHOOT_WEIGHT, PARAMETER_PENALTY};
 use crate::csvio::Table;
 
@@ -50,17 +51,29 @@ pub(crate) trait Family {
     /// The parametrisations the data can test (none: not testable).
     fn variants(&self, ctx: &Context<'_>) -> Vec<Variant>;
 
+    /// The parametrisations on the within-pose channel (none: the family does not move during a
+    /// hold).
+    fn within_variants(&self, _ctx: &Context<'_>, _within: &Within) -> Vec<WithinVariant> {
+        Vec::new()
+    }
+
     /// The best parametrisation on withheld poses.
     fn fit(&self, ctx: &Context<'_>) -> Option<Fitted> {
         ctx.best_of(self.variants(ctx))
     }
 
-    /// The candidate line: held-out evidence and the gap with the family added.
+    /// The candidate line: held-out evidence on both channels and the gap with the family added.
     fn evaluate(&self, ctx: &Context<'_>) -> Evaluation {
-        match self.fit(ctx) {
+        let mut e = match self.fit(ctx) {
             Some(f) => ctx.evaluate_fitted(self.name(), f),
             None => ctx.not_testable(self.name()),
+        };
+        if let Some(w) = ctx.within.as_ref().filter(|w| w.significant)
+            && let Some(fit) = w.best_of(self.within_variants(ctx, w))
+        {
+            ctx.add_within(&mut e, w, fit);
         }
+        e
     }
 }
 
@@ -92,6 +105,10 @@ pub(crate) struct Context<'a> {
     pub(crate) nominal_cv: Vec<Option<f64>>,
     pub(crate) heldout_ratio_nominal: f64,
     base_fit_rmse_mg: f64,
+    /// The within-pose channel (`None`: too few poses with enough samples).
+    pub(crate) within: Option<Within>,
+    /// Poses can be withheld at the pose level (enough of them for the folds).
+    pub(crate) pose_level: bool,
 }
 
 /// Poses assigned to folds at random (seeded).
@@ -122,9 +139,17 @@ impl<'a> Context<'a> {
             residual_noise_draws(&m.model, &m.directions, &m.poses, &white_noise, CV_NOISE_DRAWS, opts.seed);
         let none_dropped = vec![false; n];
         let e_white = expected_cv_ms(&base_rows, &white_draws, &fold, folds, &none_dropped);
-        let nominal_cv = cv_residuals(&base_rows, &m.r, &fold, folds, &none_dropped)?;
-        let heldout_ratio_nominal = ((sum_sq(&nominal_cv).0 / n as f64) / e_white).sqrt();
+        // Too few poses to withhold some at the pose level: only the within-pose channel tests.
+        let nominal_cv = cv_residuals(&base_rows, &m.r, &fold, folds, &none_dropped);
+        let pose_level = nominal_cv.is_some();
+        let nominal_cv = nominal_cv.unwrap_or_else(|| vec![None; n]);
+        let heldout_ratio_nominal =
+            if pose_level { ((sum_sq(&nominal_cv).0 / n as f64) / e_white).sqrt() } else { f64::NAN };
         let base_fit_rmse_mg = expected_fit_rmse_mg(&base_rows, &white_draws, &none_dropped, m.gravity);
+        let within = Within::new(table, m);
+        if !pose_level && within.is_none() {
+            return None;
+        }
         Some(Self {
             table,
             m,
@@ -139,6 +164,8 @@ impl<'a> Context<'a> {
             nominal_cv,
             heldout_ratio_nominal,
             base_fit_rmse_mg,
+            within,
+            pose_level,
         })
     }
 
@@ -168,6 +195,9 @@ impl<'a> Context<'a> {
 
     /// The variant with the smallest penalised held-out ratio.
     pub(crate) fn best_of(&self, variants: Vec<Variant>) -> Option<Fitted> {
+        if !self.pose_level {
+            return None;
+        }
         let mut best: Option<Fitted> = None;
         for v in variants {
             let rows = self.rows_with(&v.extra);
@@ -205,6 +235,8 @@ impl<'a> Context<'a> {
             ratio_after: real_after / sim_after,
             extra_params: f.params,
             detail: f.detail,
+            within_gain: f64::NAN,
+            within_detail: String::new(),
         };
         Evaluation { candidate, after }
     }
@@ -218,7 +250,41 @@ impl<'a> Context<'a> {
             ratio_after: self.m.gap.ratio_before,
             extra_params: 0,
             detail: "not testable on this data".into(),
+            within_gain: f64::NAN,
+            within_detail: String::new(),
         };
         Evaluation { candidate, after: self.m.r.iter().map(|v| Some(*v)).collect() }
+    }
+
+    /// Adds the within-pose evidence to a family's evaluation. When it is the stronger channel, the
+    /// pose means are corrected by the effect it fitted and the nominal model refitted: that is the
+    /// residual "after".
+    fn add_within(&self, e: &mut Evaluation, w: &Within, fit: WithinFit) {
+        let before = w.nominal_ratio.ln();
+        let miss = if fit.heldout_ratio >= 1.0 {
+            fit.heldout_ratio.ln()
+        } else {
+            OVERSHOOT_WEIGHT * fit.heldout_ratio.ln().abs()
+        };
+        let gain = if before > 0.0 { 1.0 - miss / before } else { 0.0 };
+        let c = &mut e.candidate;
+        c.within_gain = gain;
+        c.within_detail = format!("{} (+{} params)", fit.detail, fit.params);
+        if c.applicable && c.heldout_gain >= gain {
+            return;
+        }
+        let corrected: Vec<f64> = self
+            .m
+            .r
+            .iter()
+            .zip(&fit.pose_extra)
+            .map(|(r, x)| r + x.iter().zip(&fit.coefficients).map(|(a, b)| a * b).sum::<f64>())
+            .collect();
+        if let Some(after) = fit_residuals(&self.base_rows, &corrected, &self.none_dropped) {
+            let kept: Vec<f64> = after.iter().flatten().copied().collect();
+            c.ratio_after = self.m.to_mg(rms(&kept)) / self.m.gap.sim_rmse_mg;
+            c.applicable = true;
+            e.after = after;
+        }
     }
 }

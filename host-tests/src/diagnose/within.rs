@@ -1,0 +1,229 @@
+//! Step 3's second channel: how each pose moves *during* its hold. Each pose is cut into
+//! [`SEGMENTS`] segments; a segment's modulus deviation from its pose's own mean is free of the
+//! calibration (a constant per pose), so it tests time-varying effects (drift, temperature,
+//! settling) even on logs with too few poses to withhold some at the pose level.
+//!
+//! The deviations are whitened by the white noise measured from successive differences (blind to
+//! anything slower than a sample), so pure white noise gives a ratio of 1. A family's
+//! parametrisation is fitted on the deviations of some poses and predicts the withheld poses'
+//! (the folds of the pose level), with the same per-parameter penalty.
+
+use std::ops::Range;
+
+use super::PARAMETER_PENALTY;
+use super::SEGMENTS;
+use super::gap::{Measured, PoseData, row_time};
+use super::math::{V3, cv_residuals, dot, median, sum_sq};
+use crate::csvio::Table;
+
+/// Most cross-validation folds (leave-one-pose-out up to this many poses).
+const MAX_FOLDS: usize = 20;
+
+/// Fewest samples per segment for the channel.
+const MIN_SEGMENT_SAMPLES: usize = 4;
+
+/// The channel is significant when the mean squared whitened deviation exceeds 1 by this many of
+/// its standard deviations under white noise (and the ratio is at least [`MIN_RATIO`]).
+const SIGNIFICANT_Z: f64 = 4.0;
+
+/// ... and at least this ratio.
+const MIN_RATIO: f64 = 1.15;
+
+/// One parametrisation on both channels: whitened within-pose columns (per row) and the pose-level
+/// columns of the same parameters (per pose).
+pub(crate) struct WithinVariant {
+    pub(crate) rows: Vec<Vec<f64>>,
+    pub(crate) pose_extra: Vec<Vec<f64>>,
+    pub(crate) params: usize,
+    pub(crate) detail: String,
+}
+
+/// The best parametrisation of a family on this channel.
+pub(crate) struct WithinFit {
+    pub(crate) heldout_ratio: f64,
+    pub(crate) params: usize,
+    pub(crate) detail: String,
+    /// Coefficients fitted on every pose.
+    pub(crate) coefficients: Vec<f64>,
+    pub(crate) pose_extra: Vec<Vec<f64>>,
+}
+
+/// The within-pose deviations of a log.
+pub(crate) struct Within {
+    /// Whitened deviation per row (one row per pose and segment).
+    pub(crate) d: Vec<f64>,
+    /// Pose and segment of each row.
+    pub(crate) index: Vec<(usize, usize)>,
+    /// Table rows of each row's segment.
+    pub(crate) rows: Vec<Range<usize>>,
+    /// Segment mid time of each row, s.
+    pub(crate) t: Vec<f64>,
+    /// Whitening factor of each row (1 / sigma, output unit).
+    weight: Vec<f64>,
+    fold: Vec<usize>,
+    folds: usize,
+    /// `sqrt(mean d^2)`: 1 for white noise.
+    pub(crate) nominal_ratio: f64,
+    pub(crate) significant: bool,
+}
+
+/// White variance per axis from successive differences (`var(x[i+1] - x[i]) / 2`), median over
+/// the poses: slow movements within a pose do not inflate it.
+fn white_from_differences(table: &Table, poses: &[PoseData]) -> V3 {
+    std::array::from_fn(|a| {
+        let per_pose: Vec<f64> = poses
+            .iter()
+            .filter(|p| p.n >= 2)
+            .map(|p| {
+                let s = &table.samples[p.rows.clone()];
+                s.windows(2).map(|w| (w[1][a] - w[0][a]).powi(2)).sum::<f64>() / (2.0 * (s.len() - 1) as f64)
+            })
+            .collect();
+        median(&per_pose)
+    })
+}
+
+impl Within {
+    /// The deviations of every pose with enough samples per segment; `None` when fewer than three
+    /// poses qualify or the noise is not measurable.
+    pub(crate) fn new(table: &Table, m: &Measured) -> Option<Self> {
+        // Withheld poses are spread in time (pose i in fold i mod folds): a smooth effect is then
+        // interpolated between the kept neighbours, not extrapolated over a gap.
+        let folds = m.poses.len().min(MAX_FOLDS);
+        let white = white_from_differences(table, &m.poses);
+        let mut w = Within {
+            d: Vec::new(),
+            index: Vec::new(),
+            rows: Vec::new(),
+            t: Vec::new(),
+            weight: Vec::new(),
+            fold: Vec::new(),
+            folds,
+            nominal_ratio: 1.0,
+            significant: false,
+        };
+        let mut used = 0;
+        for (p, pose) in m.poses.iter().enumerate() {
+            if pose.seg_n < MIN_SEGMENT_SAMPLES {
+                continue;
+            }
+            let kt = m.model.kt_times(m.directions[p]);
+            let var: f64 = (0..3).map(|a| kt[a] * kt[a] * white[a]).sum::<f64>() / pose.seg_n as f64
+                * (SEGMENTS - 1) as f64
+                / SEGMENTS as f64;
+            if !(var > 0.0 && var.is_finite()) {
+                continue;
+            }
+            used += 1;
+            w.push_pose(table, m, p, pose, kt, 1.0 / var.sqrt(), p % w.folds);
+        }
+        if used < 3 {
+            return None;
+        }
+        let ms = w.d.iter().map(|v| v * v).sum::<f64>() / w.d.len() as f64;
+        let spread = (2.0 / (used * (SEGMENTS - 1)) as f64).sqrt();
+        w.nominal_ratio = ms.sqrt();
+        w.significant = ms > 1.0 + SIGNIFICANT_Z * spread && w.nominal_ratio >= MIN_RATIO;
+        Some(w)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn push_pose(&mut self, table: &Table, m: &Measured, p: usize, pose: &PoseData, kt: V3, weight: f64, fold: usize) {
+        let centre = super::math::mean_of(&pose.seg);
+        for k in 0..SEGMENTS {
+            let dev: V3 = std::array::from_fn(|a| pose.seg[k][a] - centre[a]);
+            let start = pose.rows.start + k * pose.seg_n;
+            let rows = start..start + pose.seg_n;
+            let t = 0.5 * (row_time(table, rows.start, m.rate) + row_time(table, rows.end - 1, m.rate));
+            self.d.push(dot(kt, dev) * weight);
+            self.index.push((p, k));
+            self.rows.push(rows);
+            self.t.push(t);
+            self.weight.push(weight);
+            self.fold.push(fold);
+        }
+    }
+
+    /// A variant from the effect's contribution to the calibrated reading (output unit) of every
+    /// parameter at each pose and segment: `effect(pose, t, rows)` (the segment's mid time and table
+    /// rows) gives one vector per parameter.
+    pub(crate) fn variant(&self, m: &Measured, params: usize, detail: String, effect: &Effect<'_>) -> WithinVariant {
+        let n = m.poses.len();
+        let mut pose_extra = vec![vec![0.0; params]; n];
+        let mut by_pose: Vec<Vec<(usize, Vec<f64>)>> = vec![Vec::new(); n];
+        for (i, &(p, k)) in self.index.iter().enumerate() {
+            let u = m.directions[p];
+            let _ = k;
+            let col: Vec<f64> = effect(p, self.t[i], self.rows[i].clone()).iter().map(|e| dot(u, *e)).collect();
+            by_pose[p].push((i, col));
+        }
+        let mut rows = vec![vec![0.0; params]; self.d.len()];
+        for (p, segs) in by_pose.iter().enumerate() {
+            if segs.is_empty() {
+                pose_extra[p] = effect_pose_mean(m, table_rate(m), p, params, effect);
+                continue;
+            }
+            let mean: Vec<f64> =
+                (0..params).map(|j| segs.iter().map(|(_, c)| c[j]).sum::<f64>() / segs.len() as f64).collect();
+            for (i, c) in segs {
+                rows[*i] = (0..params).map(|j| (c[j] - mean[j]) * self.weight[*i]).collect();
+            }
+            pose_extra[p] = mean;
+        }
+        WithinVariant { rows, pose_extra, params, detail }
+    }
+
+    /// Penalised held-out ratio of a variant on the withheld poses' deviations.
+    fn heldout_ratio(&self, v: &WithinVariant) -> Option<f64> {
+        let dropped = vec![false; self.d.len()];
+        let cv = cv_residuals(&v.rows, &self.d, &self.fold, self.folds, &dropped)?;
+        let (ss, count) = sum_sq(&cv);
+        (count > 0).then(|| ((ss + PARAMETER_PENALTY * v.params as f64) / count as f64).sqrt())
+    }
+
+    /// The variant with the smallest penalised held-out ratio, refitted on every pose.
+    pub(crate) fn best_of(&self, variants: Vec<WithinVariant>) -> Option<WithinFit> {
+        let mut best: Option<(f64, WithinVariant)> = None;
+        for v in variants {
+            if let Some(r) = self.heldout_ratio(&v)
+                && best.as_ref().is_none_or(|(b, _)| r < *b)
+            {
+                best = Some((r, v));
+            }
+        }
+        let (heldout_ratio, v) = best?;
+        let train: Vec<usize> = (0..self.d.len()).collect();
+        let coefficients = super::math::lstsq(&v.rows, &self.d, &train)?;
+        Some(WithinFit { heldout_ratio, params: v.params, detail: v.detail, coefficients, pose_extra: v.pose_extra })
+    }
+}
+
+/// The effect's contribution per parameter to the calibrated reading at a pose, a time and over
+/// some table rows.
+pub(crate) type Effect<'a> = dyn Fn(usize, f64, Range<usize>) -> Vec<V3> + 'a;
+
+fn table_rate(m: &Measured) -> f64 {
+    m.rate
+}
+
+/// A pose's mean contribution of every parameter, for a pose outside the channel (its segments
+/// evenly over its rows).
+fn effect_pose_mean(m: &Measured, rate: f64, p: usize, params: usize, effect: &Effect<'_>) -> Vec<f64> {
+    let (u, pose) = (m.directions[p], &m.poses[p]);
+    let mut mean = vec![0.0; params];
+    let seg = (pose.n / SEGMENTS).max(1);
+    let mut parts = 0.0f64;
+    for k in 0..SEGMENTS {
+        let rows =
+            (pose.rows.start + k * seg).min(pose.rows.end - 1)..(pose.rows.start + (k + 1) * seg).min(pose.rows.end);
+        let t = pose.t_start + (k as f64 + 0.5) * seg as f64 / rate;
+        if rows.is_empty() {
+            continue;
+        }
+        parts += 1.0;
+        for (j, e) in effect(p, t, rows).iter().enumerate().take(params) {
+            mean[j] += dot(u, *e);
+        }
+    }
+    mean.iter().map(|v| v / parts.max(1.0)).collect()
+}
