@@ -359,6 +359,19 @@ pub struct Table {
     pub header: Vec<String>,
     /// The columns the values came from.
     pub columns: ColumnsUsed,
+    /// Data rows not read into the table, by reason.
+    pub dropped: DroppedRows,
+}
+
+/// Data rows [`read_csv`] dropped, by reason (each row counted once).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct DroppedRows {
+    /// A needed cell empty, NaN or infinite.
+    pub non_finite: usize,
+    /// Marked stale by a stale-flag column (`stale`, `is_stale`, ...: non-zero).
+    pub stale_flag: usize,
+    /// A truncated last line (a power cut while logging).
+    pub truncated: usize,
 }
 
 /// A unit named in an acceleration column's header, e.g. `mg` in `ax_mg`.
@@ -787,6 +800,8 @@ enum Field {
     Std(usize),
     Temp,
     Count,
+    /// A flag marking stale (repeated, not new) readings: non-zero drops the row.
+    Stale,
 }
 
 /// Unit and decoration tokens dropped from header names before matching.
@@ -879,6 +894,7 @@ fn classify(name: &str) -> Option<Field> {
             Some(Field::Time(scale))
         }
         "temp" | "temperature" | "die_temp" | "temp_die" => Some(Field::Temp),
+        "stale" | "is_stale" | "stale_flag" | "repeated" | "is_repeated" => Some(Field::Stale),
         "n" | "n_samples" | "nsamples" | "samples" | "count" | "n_kept" | "num_samples" | "sample_count" => {
             Some(Field::Count)
         }
@@ -906,13 +922,14 @@ struct Columns {
     accel: [usize; 3],
     temp: Option<usize>,
     count: Option<usize>,
+    stale: Option<usize>,
     std: Option<[usize; 3]>,
 }
 
 impl Columns {
     fn max_index(&self) -> usize {
         let mut m = self.accel.iter().copied().max().unwrap_or(0);
-        for i in [self.time.map(|t| t.0), self.temp, self.count].into_iter().flatten() {
+        for i in [self.time.map(|t| t.0), self.temp, self.count, self.stale].into_iter().flatten() {
             m = m.max(i);
         }
         if let Some(s) = self.std {
@@ -1134,6 +1151,7 @@ impl Parser<'_> {
             units: self.opts.units,
             units_detected: false,
             units_header: None,
+            dropped: DroppedRows::default(),
             median_magnitude: 0.0,
             line_of_row: Vec::with_capacity(data_lines.len()),
             warnings: notes,
@@ -1155,6 +1173,7 @@ impl Parser<'_> {
             let is_last = k == last;
             if cells.len() != expected_cells {
                 if is_last && cells.len() < expected_cells {
+                    table.dropped.truncated += 1;
                     table.warnings.push(format!(
                         "{file}:{line}: last line truncated ({} of {expected_cells} cells; power cut?): ignored",
                         cells.len()
@@ -1168,11 +1187,16 @@ impl Parser<'_> {
                     expected: expected_cells,
                 });
             }
+            if self.is_stale(&cells, line, &columns, &header, delimiter)? {
+                table.dropped.stale_flag += 1;
+                continue;
+            }
             let row = self.parse_row(&cells, line, &columns, &header, delimiter);
             let row = match row {
                 Ok(r) => r,
                 // A cut-off last line (no line end) may end in half a number.
                 Err(e) if is_last && !ends_with_newline => {
+                    table.dropped.truncated += 1;
                     table.warnings.push(format!("{file}:{line}: last line truncated ({e}; power cut?): ignored"));
                     continue;
                 }
@@ -1197,6 +1221,7 @@ impl Parser<'_> {
                 s.push(row.std);
             }
         }
+        table.dropped.non_finite = skipped_lines.len();
         self.check_skipped(&mut table, &skipped_lines)?;
         if table.samples.is_empty() {
             return Err(CsvError::HeaderOnly { file: file.clone(), line: header_line });
@@ -1273,6 +1298,27 @@ impl Parser<'_> {
             None => [0.0; 3],
         };
         Ok(Some(Row { time, accel, temp, count, std }))
+    }
+
+    /// `true` when the row's stale flag (if the file has one) is a non-zero number; empty is not stale.
+    fn is_stale(
+        &self,
+        cells: &[Cow<'_, str>],
+        line: usize,
+        columns: &Columns,
+        header: &[String],
+        delimiter: Delimiter,
+    ) -> Result<bool, CsvError> {
+        let Some(i) = columns.stale else { return Ok(false) };
+        match parse_number(&cells[i], delimiter) {
+            Ok(v) => Ok(v.is_some_and(|v| v != 0.0)),
+            Err(()) => Err(CsvError::NonNumeric {
+                file: self.file.clone(),
+                line,
+                column: header.get(i).cloned().unwrap_or_else(|| format!("#{i}")),
+                text: cells[i].to_string(),
+            }),
+        }
     }
 
     /// Warns about rows skipped for missing values, or fails when there are too many.
@@ -1501,6 +1547,7 @@ impl Parser<'_> {
             time,
             accel: accel.map(|a| a.unwrap_or(0)),
             temp: find("temperature", &|f| f == Field::Temp)?,
+            stale: find("stale flag", &|f| f == Field::Stale)?,
             count: find("n (sample count)", &|f| f == Field::Count)?,
             std: match std {
                 [Some(x), Some(y), Some(z)] => Some([x, y, z]),
@@ -1534,6 +1581,8 @@ impl Parser<'_> {
             accel: [resolve(&spec.accel[0])?, resolve(&spec.accel[1])?, resolve(&spec.accel[2])?],
             temp: spec.temp.as_ref().map(&resolve).transpose()?,
             count: spec.count.as_ref().map(&resolve).transpose()?,
+            // Not part of the spec: found by name.
+            stale: header.iter().position(|h| classify(h) == Some(Field::Stale)),
             std: None,
         })
     }
@@ -1580,15 +1629,23 @@ pub struct AccumulateOptions {
     /// spans a gap in the recording). Defaults to 10.
     pub gap_factor: f64,
     /// Skip rows that repeat the previous row exactly (all three axes): stale reads of a sensor polled
-    /// faster than its output data rate. `None` (default) decides from the data: skipped when more
-    /// than [`STALE_REPEAT_FRACTION`] of the rows are such repeats. Repeated readings are not
-    /// independent samples, and the library's detector assumes independent noise.
+    /// faster than its output data rate. `None` (default) decides from the data with
+    /// [`repeats_look_stale`]: a coarsely quantised sensor repeats readings too, and those are kept.
+    /// Stale readings are not independent samples, and the library's detector assumes independent
+    /// noise.
     pub skip_repeats: Option<bool>,
 }
 
-/// Fraction of rows repeating their predecessor exactly above which [`accumulate`] treats the
-/// repeats as stale reads and skips them (see [`AccumulateOptions::skip_repeats`]).
-pub const STALE_REPEAT_FRACTION: f64 = 0.5;
+/// Least fraction of rows repeating their predecessor (all three axes) for [`repeats_look_stale`].
+pub const STALE_REPEAT_FRACTION: f64 = 0.2;
+
+/// Least ratio of all-axes repeats to the count independent axes would give (per window of
+/// [`STALE_WINDOW_ROWS`]) for [`repeats_look_stale`]. Quantisation measures about 1.05, stale reads
+/// of a sensor polled 4x its data rate 1.6, 2x: 3.
+pub const STALE_DEPENDENCE_RATIO: f64 = 1.3;
+
+/// Rows per window in which [`repeats_look_stale`] compares the repeats of the axes.
+pub const STALE_WINDOW_ROWS: usize = 64;
 
 impl Default for AccumulateOptions {
     fn default() -> Self {
@@ -1608,6 +1665,25 @@ pub fn repeat_fraction(samples: &[[f64; 3]]) -> f64 {
         return 0.0;
     }
     samples.windows(2).filter(|w| w[0] == w[1]).count() as f64 / (samples.len() - 1) as f64
+}
+
+/// `true` when rows repeating their predecessor exactly look like stale reads, not quantisation: more
+/// than [`STALE_REPEAT_FRACTION`] of the rows repeat on all three axes, and all three repeat together
+/// more than [`STALE_DEPENDENCE_RATIO`] times as often as the per-axis repeats would by chance. A stale
+/// read repeats the whole sample; a quantised sensor whose noise is below one step repeats each axis
+/// on its own (counted per window, so that still and moving stretches are not mixed).
+pub fn repeats_look_stale(samples: &[[f64; 3]]) -> bool {
+    if repeat_fraction(samples) <= STALE_REPEAT_FRACTION {
+        return false;
+    }
+    let (mut observed, mut expected) = (0.0, 0.0);
+    for window in samples.windows(2).collect::<Vec<_>>().chunks(STALE_WINDOW_ROWS) {
+        let per_axis = [0, 1, 2].map(|a| window.iter().filter(|w| w[0][a] == w[1][a]).count() as f64);
+        let n = window.len() as f64;
+        observed += window.iter().filter(|w| w[0] == w[1]).count() as f64;
+        expected += per_axis[0] * per_axis[1] * per_axis[2] / (n * n);
+    }
+    observed > STALE_DEPENDENCE_RATIO * expected
 }
 
 /// Where a pose came from in the file.
@@ -1693,7 +1769,7 @@ pub fn quantisation_variance(samples: &[[f64; 3]]) -> f32 {
 /// [`Accumulation::dropped_full`].
 pub fn accumulate(table: &Table, opts: &AccumulateOptions) -> Result<Accumulation, AccumulatorError> {
     let repeats = repeat_fraction(&table.samples);
-    let skip_repeats = opts.skip_repeats.unwrap_or(repeats > STALE_REPEAT_FRACTION);
+    let skip_repeats = opts.skip_repeats.unwrap_or_else(|| repeats_look_stale(&table.samples));
     let fed_fraction = if skip_repeats { 1.0 - repeats } else { 1.0 };
     let sample_rate_hz = opts.sample_rate_hz.or_else(|| table.sample_rate_hz()).map(|r| r * fed_fraction);
     let block = opts.block_samples.unwrap_or_else(|| choose_block_samples(sample_rate_hz));

@@ -357,6 +357,8 @@ struct Loaded {
     poses: Vec<accelcal::accumulator::Pose>,
     spans: Option<Vec<csvio::PoseSpan>>,
     host: calib::HostCalibration,
+    /// Rows the pose detection skipped as stale repeats.
+    stale_repeats: usize,
 }
 
 /// The whole `calibrate` pipeline: read, find poses (or take the means), calibrate, leave-one-out.
@@ -371,12 +373,14 @@ fn load_and_calibrate(input: &InputArgs, method: Method, seed: u64, warn: bool) 
             eprintln!("accelcal: warning: {w}");
         }
     }
+    let mut stale_repeats = 0;
     let (poses, spans) = if input.means {
         (csvio::to_poses_from_means(&table), None)
     } else if let Some(column) = &input.pose_column {
         (accelcal_host::labelled::poses_by_label(&table, &input.file, column)?, None)
     } else {
         let acc = accumulate_all(&table, &input.file)?;
+        stale_repeats = acc.skipped_repeats;
         (acc.poses, Some(acc.spans))
     };
     check_pose_count(&input.file, poses.len(), None)?;
@@ -399,7 +403,7 @@ fn load_and_calibrate(input: &InputArgs, method: Method, seed: u64, warn: bool) 
     };
     let config = CalibrationConfig { gravity, method, before, init: input.init.into(), ..CalibrationConfig::DEFAULT };
     let host = calib::run_with_loo(&poses, &config, seed).map_err(|e| format!("{file}: {e}"))?;
-    Ok(Loaded { table, poses, spans, host })
+    Ok(Loaded { table, poses, spans, host, stale_repeats })
 }
 
 /// Refuses more poses than one calibration takes ([`calib::MAX_POSES`], the library's buffer),
@@ -448,7 +452,7 @@ fn calibrate_file(
     bench_runs: Option<usize>,
 ) -> Result<(), Failure> {
     let method = calib::parse_method(method)?;
-    let Loaded { table, poses, spans, host } = load_and_calibrate(input, method, seed, true)?;
+    let Loaded { table, poses, spans, host, stale_repeats } = load_and_calibrate(input, method, seed, true)?;
     let timing = match bench_runs {
         Some(runs) => Some(bench(input, method, seed, runs)?),
         None => None,
@@ -477,6 +481,7 @@ fn calibrate_file(
             "method": method.name(),
             "gravity": gravity,
             "units": table.units.to_string(),
+            "rows_dropped": calib::rows_dropped_json(&table.dropped, stale_repeats),
             "units_header": table.units_header.as_ref().map(|h| json!({"column": h.column, "unit": h.label, "factor": h.factor})),
             "poses": pose_json,
             "params": params_json(&cal.params),
@@ -525,6 +530,9 @@ fn calibrate_file(
         if !warnings.is_empty() {
             println!("warning: {warnings}");
         }
+        if let Some(line) = calib::rows_dropped_line(&table.dropped, stale_repeats) {
+            println!("{line}");
+        }
     }
     if v.pass() { Ok(()) } else { Err(Failure::Verdict) }
 }
@@ -542,16 +550,23 @@ fn diagnose_file(input: &InputArgs, as_json: bool, plots: Option<&std::path::Pat
     calib::check_gravity(input.gravity, table.units, table.median_magnitude)
         .map_err(|e| format!("{}: {e}", input.file.display()))?;
     // The diagnosis calibrates the same poses: refuse a log with more than one calibration takes.
-    accumulate_all(&table, &input.file)?;
+    let stale_repeats = accumulate_all(&table, &input.file)?.skipped_repeats;
     let options = diagnose::DiagnoseOptions { gravity: input.gravity, seed, ..diagnose::DiagnoseOptions::DEFAULT };
     let report = diagnose::diagnose(&table, &options).map_err(|e| e.to_string())?;
     if let Some(dir) = plots {
         report.write_plots(dir)?;
     }
     if as_json {
-        println!("{}", report.to_json());
+        let mut json = report.to_json();
+        if let Some(object) = json.as_object_mut() {
+            object.insert("rows_dropped".into(), calib::rows_dropped_json(&table.dropped, stale_repeats));
+        }
+        println!("{json}");
     } else {
         print!("{}", report.to_text());
+        if let Some(line) = calib::rows_dropped_line(&table.dropped, stale_repeats) {
+            println!("{line}");
+        }
     }
     Ok(())
 }
