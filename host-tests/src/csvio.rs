@@ -759,6 +759,15 @@ fn line_at(bytes: &[u8], offset: usize) -> usize {
 /// # Errors
 /// As [`read_csv`], except the file-system errors.
 pub fn read_csv_bytes(name: &str, bytes: &[u8], opts: &ReadOptions) -> Result<Table, CsvError> {
+    read_csv_bytes_with_columns(name, bytes, opts).map(|(table, _)| table)
+}
+
+/// [`read_csv_bytes`], also returning the column indices read (to read more rows the same way).
+pub(crate) fn read_csv_bytes_with_columns(
+    name: &str,
+    bytes: &[u8],
+    opts: &ReadOptions,
+) -> Result<(Table, Columns), CsvError> {
     let file = name.to_string();
     if let Some(pos) = bytes.iter().position(|&b| b == 0) {
         let utf16 = bytes.starts_with(&[0xFF, 0xFE]) || bytes.starts_with(&[0xFE, 0xFF]);
@@ -779,7 +788,7 @@ pub fn read_csv_bytes(name: &str, bytes: &[u8], opts: &ReadOptions) -> Result<Ta
         }
     };
     let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
-    Parser { file, opts, notes }.parse(text)
+    Parser { file, opts, notes }.parse_with_columns(text)
 }
 
 /// `true` for bytes that are not text in any 8-bit encoding: control characters other than tab,
@@ -917,8 +926,8 @@ fn time_scale(toks: &[String]) -> f64 {
 
 /// Indices of the columns to read.
 #[derive(Debug, Clone, Default)]
-struct Columns {
-    time: Option<(usize, f64)>,
+pub(crate) struct Columns {
+    pub(crate) time: Option<(usize, f64)>,
     accel: [usize; 3],
     temp: Option<usize>,
     count: Option<usize>,
@@ -927,7 +936,7 @@ struct Columns {
 }
 
 impl Columns {
-    fn max_index(&self) -> usize {
+    pub(crate) fn max_index(&self) -> usize {
         let mut m = self.accel.iter().copied().max().unwrap_or(0);
         for i in [self.time.map(|t| t.0), self.temp, self.count, self.stale].into_iter().flatten() {
             m = m.max(i);
@@ -939,15 +948,15 @@ impl Columns {
     }
 }
 
-struct Parser<'a> {
-    file: String,
-    opts: &'a ReadOptions,
+pub(crate) struct Parser<'a> {
+    pub(crate) file: String,
+    pub(crate) opts: &'a ReadOptions,
     /// Warnings found before parsing (encoding).
-    notes: Vec<String>,
+    pub(crate) notes: Vec<String>,
 }
 
 /// Splits one line into trimmed, unquoted cells.
-fn split_cells(line: &str, delimiter: Delimiter) -> Vec<Cow<'_, str>> {
+pub(crate) fn split_cells(line: &str, delimiter: Delimiter) -> Vec<Cow<'_, str>> {
     let Some(d) = delimiter.char() else {
         return line.split_whitespace().map(Cow::Borrowed).collect();
     };
@@ -1003,6 +1012,17 @@ fn parse_number(cell: &str, delimiter: Delimiter) -> Result<Option<f64>, ()> {
     }
 }
 
+/// `true` when `--columns` gives every column by index (then the first data row, not the header,
+/// sets the cell count: a header may be malformed, e.g. two names run together).
+pub(crate) fn all_by_index(opts: &ReadOptions) -> bool {
+    opts.columns.as_ref().is_some_and(|s| {
+        [Some(&s.accel[0]), Some(&s.accel[1]), Some(&s.accel[2]), s.time.as_ref(), s.temp.as_ref(), s.count.as_ref()]
+            .into_iter()
+            .flatten()
+            .all(|c| matches!(c, ColumnRef::Index(_)))
+    })
+}
+
 /// Lines ended by LF, CR LF or a lone CR (old Mac OS); a line number counts each of them once.
 fn split_lines(text: &str) -> Vec<&str> {
     let mut lines = Vec::new();
@@ -1024,7 +1044,7 @@ fn clip(text: &str) -> String {
     }
 }
 
-fn is_blank_or_comment(line: &str) -> bool {
+pub(crate) fn is_blank_or_comment(line: &str) -> bool {
     let t = line.trim();
     t.is_empty() || t.starts_with('#')
 }
@@ -1062,7 +1082,8 @@ fn units_plausible(units: Units, median_magnitude: f64) -> bool {
 }
 
 impl Parser<'_> {
-    fn parse(&self, text: &str) -> Result<Table, CsvError> {
+    /// The table, and the column indices it was read from.
+    pub(crate) fn parse_with_columns(&self, text: &str) -> Result<(Table, Columns), CsvError> {
         let file = &self.file;
         let lines = split_lines(text);
         let Some(first_index) = lines.iter().position(|l| !is_blank_or_comment(l)) else {
@@ -1116,19 +1137,7 @@ impl Parser<'_> {
         }
         // Rows must have the header's cell count; with all columns given by index the first data row
         // sets it (a header may be malformed, e.g. two names run together).
-        let all_by_index = self.opts.columns.as_ref().is_some_and(|s| {
-            [
-                Some(&s.accel[0]),
-                Some(&s.accel[1]),
-                Some(&s.accel[2]),
-                s.time.as_ref(),
-                s.temp.as_ref(),
-                s.count.as_ref(),
-            ]
-            .into_iter()
-            .flatten()
-            .all(|c| matches!(c, ColumnRef::Index(_)))
-        });
+        let all_by_index = all_by_index(self.opts);
         let expected_cells = if all_by_index { split_cells(data_lines[0].1, delimiter).len() } else { header.len() };
         if columns.max_index() >= expected_cells {
             return Err(CsvError::ColumnIndexOutOfRange {
@@ -1229,11 +1238,11 @@ impl Parser<'_> {
         self.check_times(&table)?;
         self.warn_slow_clock(&mut table);
         self.resolve_units(&mut table)?;
-        Ok(table)
+        Ok((table, columns))
     }
 
     /// One data row: `Ok(None)` when a needed cell is NaN, infinite or empty (the row is skipped).
-    fn parse_row(
+    pub(crate) fn parse_row(
         &self,
         cells: &[Cow<'_, str>],
         line: usize,
@@ -1301,7 +1310,7 @@ impl Parser<'_> {
     }
 
     /// `true` when the row's stale flag (if the file has one) is a non-zero number; empty is not stale.
-    fn is_stale(
+    pub(crate) fn is_stale(
         &self,
         cells: &[Cow<'_, str>],
         line: usize,
@@ -1588,9 +1597,9 @@ impl Parser<'_> {
     }
 }
 
-struct Row {
-    time: Option<f64>,
-    accel: [f64; 3],
+pub(crate) struct Row {
+    pub(crate) time: Option<f64>,
+    pub(crate) accel: [f64; 3],
     temp: Option<f64>,
     count: Option<u32>,
     std: [f64; 3],

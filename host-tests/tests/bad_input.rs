@@ -374,3 +374,16 @@ fn stale_reads_of_a_sensor_polled_faster_than_its_rate_are_dropped_and_counted()
     assert_eq!(out.status.code(), Some(0), "{}{}", stdout(&out), stderr(&out));
     assert!(stdout(&out).contains("rows dropped: 17850 (stale_repeat 17850)"), "{}", stdout(&out));
 }
+
+#[test]
+fn a_streamed_read_calibrates_as_the_in_memory_one() {
+    let rows = quantised_rows(0.0001, 0.002, 400);
+    let text: Vec<String> = rows.iter().map(|r| format!("{:.2},{:.4},{:.4},{:.4}", r[0], r[1], r[2], r[3])).collect();
+    let path = write("streamed.csv", format!("t,ax,ay,az\n{}\n", text.join("\n")).as_bytes());
+    let (memory, streamed) = (calibrate(&path, &["--json"]), calibrate(&path, &["--json", "--stream"]));
+    assert_eq!(streamed.status.code(), Some(0), "{}", stderr(&streamed));
+    assert!(stderr(&streamed).contains("read as a stream"), "{}", stderr(&streamed));
+    assert_eq!(stdout(&streamed), stdout(&memory));
+    let json: serde_json::Value = serde_json::from_slice(&streamed.stdout).unwrap();
+    assert_eq!(json["poses"].as_array().map(Vec::len), Some(14));
+}
