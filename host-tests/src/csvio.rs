@@ -401,6 +401,24 @@ fn header_unit(name: &str) -> Option<HeaderUnit> {
 }
 
 impl Table {
+    /// Appends one row read from file line `line`.
+    fn push_row(&mut self, row: Row, line: usize) {
+        self.samples.push(row.accel);
+        self.line_of_row.push(line);
+        if let (Some(t), Some(v)) = (self.times_s.as_mut(), row.time) {
+            t.push(v);
+        }
+        if let (Some(t), Some(v)) = (self.temps_c.as_mut(), row.temp) {
+            t.push(v);
+        }
+        if let (Some(n), Some(v)) = (self.counts_n.as_mut(), row.count) {
+            n.push(v);
+        }
+        if let Some(s) = self.std_devs.as_mut() {
+            s.push(row.std);
+        }
+    }
+
     /// What the units are and why, e.g. `g (detected: median |a| = 0.998)`.
     pub fn units_summary(&self) -> String {
         let how = match &self.units_header {
@@ -1086,28 +1104,7 @@ impl Parser<'_> {
     pub(crate) fn parse_with_columns(&self, text: &str) -> Result<(Table, Columns), CsvError> {
         let file = &self.file;
         let lines = split_lines(text);
-        let Some(first_index) = lines.iter().position(|l| !is_blank_or_comment(l)) else {
-            return Err(CsvError::Empty { file: file.clone() });
-        };
-        if self.is_numeric_line(lines[first_index]) {
-            return Err(CsvError::NoHeader {
-                file: file.clone(),
-                line: first_index + 1,
-                text: lines[first_index].trim().to_string(),
-            });
-        }
-        // The header is the last all-text line (no numeric cell) before the first all-numeric line;
-        // lines before it (a logger's title or metadata such as `Fs,100`) are a preamble. Without
-        // such a pair (e.g. a text label column in every row) the first line is the header.
-        let header_index = lines
-            .iter()
-            .enumerate()
-            .skip(first_index)
-            .filter(|(_, l)| !is_blank_or_comment(l))
-            .take(PREAMBLE_SEARCH_LINES)
-            .find(|(_, l)| self.is_numeric_line(l))
-            .and_then(|(k, _)| (first_index..k).rev().find(|&i| self.is_text_line(lines[i])))
-            .unwrap_or(first_index);
+        let (first_index, header_index) = self.find_header(&lines)?;
         let header_line = header_index + 1;
         let mut notes = self.notes.clone();
         if header_index > first_index {
@@ -1135,25 +1132,82 @@ impl Parser<'_> {
         if data_lines.is_empty() {
             return Err(CsvError::HeaderOnly { file: file.clone(), line: header_line });
         }
+        let expected_cells = self.expected_cells(&columns, &header, header_line, data_lines[0], delimiter)?;
+        let mut table = self.empty_table(&columns, header, delimiter, notes);
+        let ends_with_newline = text.ends_with(['\n', '\r']);
+        let skipped_lines = self.read_rows(&mut table, &data_lines, &columns, expected_cells, ends_with_newline)?;
+        table.dropped.non_finite = skipped_lines.len();
+        self.check_skipped(&mut table, &skipped_lines)?;
+        if table.samples.is_empty() {
+            return Err(CsvError::HeaderOnly { file: file.clone(), line: header_line });
+        }
+        self.check_times(&table)?;
+        self.warn_slow_clock(&mut table);
+        self.resolve_units(&mut table)?;
+        Ok((table, columns))
+    }
+
+    /// The first non-blank line and the header's (0-based indices).
+    fn find_header(&self, lines: &[&str]) -> Result<(usize, usize), CsvError> {
+        let file = &self.file;
+        let Some(first_index) = lines.iter().position(|l| !is_blank_or_comment(l)) else {
+            return Err(CsvError::Empty { file: file.clone() });
+        };
+        if self.is_numeric_line(lines[first_index]) {
+            return Err(CsvError::NoHeader {
+                file: file.clone(),
+                line: first_index + 1,
+                text: lines[first_index].trim().to_string(),
+            });
+        }
+        // The header is the last all-text line (no numeric cell) before the first all-numeric line;
+        // lines before it (a logger's title or metadata such as `Fs,100`) are a preamble. Without
+        // such a pair (e.g. a text label column in every row) the first line is the header.
+        let header_index = lines
+            .iter()
+            .enumerate()
+            .skip(first_index)
+            .filter(|(_, l)| !is_blank_or_comment(l))
+            .take(PREAMBLE_SEARCH_LINES)
+            .find(|(_, l)| self.is_numeric_line(l))
+            .and_then(|(k, _)| (first_index..k).rev().find(|&i| self.is_text_line(lines[i])))
+            .unwrap_or(first_index);
+        Ok((first_index, header_index))
+    }
+
+    /// The cell count every row must have, checked to hold every column read.
+    fn expected_cells(
+        &self,
+        columns: &Columns,
+        header: &[String],
+        header_line: usize,
+        first_data: (usize, &str),
+        delimiter: Delimiter,
+    ) -> Result<usize, CsvError> {
         // Rows must have the header's cell count; with all columns given by index the first data row
         // sets it (a header may be malformed, e.g. two names run together).
         let all_by_index = all_by_index(self.opts);
-        let expected_cells = if all_by_index { split_cells(data_lines[0].1, delimiter).len() } else { header.len() };
+        let expected_cells = if all_by_index { split_cells(first_data.1, delimiter).len() } else { header.len() };
         if columns.max_index() >= expected_cells {
             return Err(CsvError::ColumnIndexOutOfRange {
-                file: file.clone(),
-                line: if all_by_index { data_lines[0].0 } else { header_line },
+                file: self.file.clone(),
+                line: if all_by_index { first_data.0 } else { header_line },
                 index: columns.max_index(),
                 columns: expected_cells,
                 from_header: !all_by_index,
             });
         }
+        Ok(expected_cells)
+    }
+
+    /// A table with no rows yet, for `columns` of `header`.
+    fn empty_table(&self, columns: &Columns, header: Vec<String>, delimiter: Delimiter, notes: Vec<String>) -> Table {
         let name_of = |i: usize| header.get(i).cloned().unwrap_or_else(|| format!("#{i}"));
 
-        let mut table = Table {
-            file: file.clone(),
+        Table {
+            file: self.file.clone(),
             times_s: columns.time.map(|_| Vec::new()),
-            samples: Vec::with_capacity(data_lines.len()),
+            samples: Vec::new(),
             temps_c: columns.temp.map(|_| Vec::new()),
             counts_n: columns.count.map(|_| Vec::new()),
             std_devs: columns.std.map(|_| Vec::new()),
@@ -1162,10 +1216,9 @@ impl Parser<'_> {
             units_header: None,
             dropped: DroppedRows::default(),
             median_magnitude: 0.0,
-            line_of_row: Vec::with_capacity(data_lines.len()),
+            line_of_row: Vec::new(),
             warnings: notes,
             delimiter,
-            header: header.clone(),
             columns: ColumnsUsed {
                 time: columns.time.map(|(i, s)| (name_of(i), s)),
                 accel: columns.accel.map(name_of),
@@ -1173,8 +1226,22 @@ impl Parser<'_> {
                 count: columns.count.map(name_of),
                 std: columns.std.map(|s| s.map(name_of)),
             },
-        };
-        let ends_with_newline = text.ends_with(['\n', '\r']);
+            header,
+        }
+    }
+
+    /// Reads the data lines into `table`; returns the lines skipped for a missing value.
+    fn read_rows(
+        &self,
+        table: &mut Table,
+        data_lines: &[(usize, &str)],
+        columns: &Columns,
+        expected_cells: usize,
+        ends_with_newline: bool,
+    ) -> Result<Vec<usize>, CsvError> {
+        let (file, delimiter) = (&self.file, table.delimiter);
+        table.samples.reserve(data_lines.len());
+        table.line_of_row.reserve(data_lines.len());
         let mut skipped_lines: Vec<usize> = Vec::new();
         let last = data_lines.len() - 1;
         for (k, &(line, row_text)) in data_lines.iter().enumerate() {
@@ -1196,11 +1263,11 @@ impl Parser<'_> {
                     expected: expected_cells,
                 });
             }
-            if self.is_stale(&cells, line, &columns, &header, delimiter)? {
+            if self.is_stale(&cells, line, columns, &table.header, delimiter)? {
                 table.dropped.stale_flag += 1;
                 continue;
             }
-            let row = self.parse_row(&cells, line, &columns, &header, delimiter);
+            let row = self.parse_row(&cells, line, columns, &table.header, delimiter);
             let row = match row {
                 Ok(r) => r,
                 // A cut-off last line (no line end) may end in half a number.
@@ -1215,30 +1282,9 @@ impl Parser<'_> {
                 skipped_lines.push(line);
                 continue;
             };
-            table.samples.push(row.accel);
-            table.line_of_row.push(line);
-            if let (Some(t), Some(v)) = (table.times_s.as_mut(), row.time) {
-                t.push(v);
-            }
-            if let (Some(t), Some(v)) = (table.temps_c.as_mut(), row.temp) {
-                t.push(v);
-            }
-            if let (Some(n), Some(v)) = (table.counts_n.as_mut(), row.count) {
-                n.push(v);
-            }
-            if let Some(s) = table.std_devs.as_mut() {
-                s.push(row.std);
-            }
+            table.push_row(row, line);
         }
-        table.dropped.non_finite = skipped_lines.len();
-        self.check_skipped(&mut table, &skipped_lines)?;
-        if table.samples.is_empty() {
-            return Err(CsvError::HeaderOnly { file: file.clone(), line: header_line });
-        }
-        self.check_times(&table)?;
-        self.warn_slow_clock(&mut table);
-        self.resolve_units(&mut table)?;
-        Ok((table, columns))
+        Ok(skipped_lines)
     }
 
     /// One data row: `Ok(None)` when a needed cell is NaN, infinite or empty (the row is skipped).
