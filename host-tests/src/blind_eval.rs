@@ -169,7 +169,7 @@ fn summarize_family(family: Family, outcomes: &[Outcome]) -> FamilySummary {
             None => answers.push((key, 1)),
         }
     }
-    answers.sort_by(|a, b| b.1.cmp(&a.1));
+    answers.sort_by_key(|a| std::cmp::Reverse(a.1));
     FamilySummary {
         family,
         logs: mine.len(),
