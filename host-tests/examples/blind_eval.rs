@@ -36,7 +36,10 @@ fn main() -> Result<(), String> {
     let families: Vec<Family> = if args.families.is_empty() {
         Family::ALL.to_vec()
     } else {
-        args.families.iter().map(|n| Family::from_name(n).ok_or(format!("unknown family {n:?}"))).collect::<Result<_, _>>()?
+        args.families
+            .iter()
+            .map(|n| Family::from_name(n).ok_or(format!("unknown family {n:?}")))
+            .collect::<Result<_, _>>()?
     };
     let offset = if args.held_out { HELD_OUT_SEED } else { 0 };
     let mut outcomes: Vec<Outcome> = Vec::new();
@@ -62,6 +65,9 @@ fn main() -> Result<(), String> {
     }
     print!("{}", blind_eval::table(&blind_eval::summarize(&outcomes)));
     let slowest = outcomes.iter().map(|o| (o.seconds, o.samples)).fold((0.0, 0), |a, b| if b.0 > a.0 { b } else { a });
-    println!("\nslowest diagnosis: {:.2} s for {} samples (release build: these figures need --release)", slowest.0, slowest.1);
+    println!(
+        "\nslowest diagnosis: {:.2} s for {} samples (release build: these figures need --release)",
+        slowest.0, slowest.1
+    );
     Ok(())
 }

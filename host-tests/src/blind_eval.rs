@@ -160,7 +160,8 @@ pub fn summarize(outcomes: &[Outcome]) -> Vec<FamilySummary> {
 fn summarize_family(family: Family, outcomes: &[Outcome]) -> FamilySummary {
     let mine: Vec<&Outcome> = outcomes.iter().filter(|o| o.family == family).collect();
     let visible: Vec<&&Outcome> = mine.iter().filter(|o| o.visible()).collect();
-    let mut shrinks: Vec<f64> = visible.iter().filter(|o| o.right).map(|o| o.shrink).filter(|s| s.is_finite()).collect();
+    let mut shrinks: Vec<f64> =
+        visible.iter().filter(|o| o.right).map(|o| o.shrink).filter(|s| s.is_finite()).collect();
     let mut answers: Vec<(String, usize)> = Vec::new();
     for o in &mine {
         let key = if o.verdict.starts_with("refused") { "refused".to_string() } else { o.verdict.clone() };

@@ -315,7 +315,20 @@ pub(crate) fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Measured,
         return Err(err(format!("{}: the simulated experiment could not be calibrated", table.file)));
     }
     let gap = gap_before(rms(&r) / gravity * 1000.0, &sims);
-    Ok(Measured { rate, poses, params: cal.params, model, calibrated, directions, r, white, quantisation, sims, gap, gravity })
+    Ok(Measured {
+        rate,
+        poses,
+        params: cal.params,
+        model,
+        calibrated,
+        directions,
+        r,
+        white,
+        quantisation,
+        sims,
+        gap,
+        gravity,
+    })
 }
 
 /// The gap of the nominal model (the "after" fields equal to "before" until a verdict).
