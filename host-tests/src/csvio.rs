@@ -3,9 +3,12 @@
 //! [`Pose`]s, either directly (means files) or through the library's static detector
 //! ([`Accumulator`]).
 //!
-//! Every error names the file, the line where one applies, and what is wrong; nothing here panics on
-//! input. Two defects are tolerated with a warning in [`Table::warnings`]: a truncated last line
-//! (e.g. a power cut while logging) and isolated NaN/inf/empty cells (those rows are skipped).
+//! Every error names the file, the line where one applies, and what is wrong, quoting at most
+//! [`MAX_QUOTED_CHARS`] characters of input; nothing here panics on input. Tolerated defects get a
+//! warning in [`Table::warnings`]: a truncated last line (e.g. a power cut while logging), isolated
+//! NaN/inf/empty cells (those rows are skipped), a temperature column empty or NaN throughout (read
+//! without it). Rows dropped are counted by reason in [`Table::dropped`] (a non-zero stale-flag
+//! column, `stale`/`is_stale`, drops its row). Lines may end in LF, CR LF or a lone CR.
 //!
 //! ```
 //! use accelcal_host::csvio::{read_csv_str, ReadOptions, Units};
@@ -26,6 +29,8 @@
 //!   `accel_x`/`x`/`mean_x`/`x_mean` (and y, z), optional `temp`/`temperature` (deg C), optional
 //!   `n`/`n_samples`/`count` (samples per mean), and in means files optional `std_x`/`x_std` (the
 //!   per-pose standard deviation). [`ColumnSpec`] overrides the detection.
+//! - A unit in the acceleration columns' names (`ax_mg`, `ax_g`, `acc_x_mps2`, `ax[m/s^2]`, `ax (g)`,
+//!   `ax_lsb`) sets the units (mg is scaled to g); [`ReadOptions::units`] other than auto wins.
 
 use std::borrow::Cow;
 use std::fmt;
@@ -636,7 +641,7 @@ pub enum CsvError {
 }
 
 /// The cells quoted and joined, clipped to about [`MAX_QUOTED_CHARS`] characters.
-fn list(cells: &[String]) -> String {
+pub(crate) fn list(cells: &[String]) -> String {
     let quoted: Vec<String> = cells.iter().map(|c| format!("`{c}`")).collect();
     let joined = quoted.join(", ");
     if joined.chars().count() > MAX_QUOTED_CHARS {
@@ -1042,7 +1047,7 @@ pub(crate) fn all_by_index(opts: &ReadOptions) -> bool {
 }
 
 /// Lines ended by LF, CR LF or a lone CR (old Mac OS); a line number counts each of them once.
-fn split_lines(text: &str) -> Vec<&str> {
+pub(crate) fn split_lines(text: &str) -> Vec<&str> {
     let mut lines = Vec::new();
     let mut rest = text;
     while let Some(end) = rest.find(['\n', '\r']) {
@@ -1055,7 +1060,7 @@ fn split_lines(text: &str) -> Vec<&str> {
 }
 
 /// At most [`MAX_QUOTED_CHARS`] characters of `text` for a message, with `...` when cut.
-fn clip(text: &str) -> String {
+pub(crate) fn clip(text: &str) -> String {
     match text.char_indices().nth(MAX_QUOTED_CHARS) {
         Some((cut, _)) => format!("{}...", &text[..cut]),
         None => text.to_string(),
@@ -1452,9 +1457,10 @@ impl Parser<'_> {
         let step_s = median(&mut steps);
         if step_s >= MAX_PLAUSIBLE_STEP_S {
             table.warnings.push(format!(
-                "{}: time column `{name}` steps by {step_s} per row, taken as seconds ({:.3} Hz); if it counts \
+                "{}: time column `{}` steps by {step_s} per row, taken as seconds ({:.3} Hz); if it counts \
                  milliseconds, name it e.g. `time_ms`",
                 self.file,
+                clip(name),
                 1.0 / step_s
             ));
         }

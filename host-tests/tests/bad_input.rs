@@ -387,3 +387,22 @@ fn a_streamed_read_calibrates_as_the_in_memory_one() {
     let json: serde_json::Value = serde_json::from_slice(&streamed.stdout).unwrap();
     assert_eq!(json["poses"].as_array().map(Vec::len), Some(14));
 }
+
+#[test]
+fn pose_column_reads_cr_only_files_and_refuses_an_unknown_name_briefly() {
+    let rows = six_face_rows(300);
+    let labelled: Vec<String> = rows.iter().enumerate().map(|(i, r)| format!("\"P{}\",{r}", i / 400)).collect();
+    let lf = write("labels_lf.csv", format!("pos,t,ax,ay,az\n{}\n", labelled.join("\n")).as_bytes());
+    let cr = write("labels_cr.csv", format!("pos,t,ax,ay,az\r{}\r", labelled.join("\r")).as_bytes());
+    let (lf_out, cr_out) = (calibrate(&lf, &["--pose-column", "pos"]), calibrate(&cr, &["--pose-column", "pos"]));
+    // Each label also spans the move after its hold: the fit may fail its verdict (exit 1), the same way.
+    assert_eq!(cr_out.status.code(), lf_out.status.code(), "{}", stderr(&cr_out));
+    assert!(stdout(&cr_out).contains("2400 rows") && stdout(&cr_out).contains("6 poses"), "{}", stdout(&cr_out));
+    assert_eq!(without_name(&stdout(&cr_out), "labels_cr.csv"), without_name(&stdout(&lf_out), "labels_lf.csv"));
+    let mut wide: Vec<String> = (0..500).map(|i| format!("extra{i}")).collect();
+    wide.extend(["t", "ax", "ay", "az"].map(String::from));
+    let row = vec!["0"; 500].join(",");
+    let text = format!("{}\n{row},0,0,0,1\n{row},0.01,0,0,1\n", wide.join(","));
+    let out = calibrate(&write("labels_wide.csv", text.as_bytes()), &["--pose-column", &"q".repeat(300)]);
+    assert_short_error(&out, "labels_wide.csv", &["--pose-column", "no such column", "(504 cells)"]);
+}
