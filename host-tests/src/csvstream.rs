@@ -173,12 +173,11 @@ struct Totals {
     truncated: usize,
 }
 
-/// What one pass over the rows does with each sample.
-enum Feed {
-    /// Not fed (a stale repeat).
-    Skip,
-    /// Fed, after an interruption of the stream when `gap` (a gap in the time stamps).
-    Push { gap: bool },
+/// What one pass over the rows does with each sample: interrupt the stream first when `gap` (a gap
+/// in the time stamps, even before a skipped row), then feed it when `push` (not a stale repeat).
+struct Feed {
+    gap: bool,
+    push: bool,
 }
 
 /// The state deciding what to do with each row, as `Run::go` in `csvio` does.
@@ -200,10 +199,10 @@ impl Feeder<'_> {
         }
         if self.settings.skip_repeats && previous.is_some_and(|p| p.1 == sample) {
             totals.skipped_repeats += 1;
-            return Feed::Skip;
+            return Feed { gap, push: false };
         }
         totals.pushed += 1;
-        Feed::Push { gap }
+        Feed { gap, push: true }
     }
 }
 
@@ -242,10 +241,11 @@ impl Source<'_> {
         let mut feeder = Feeder { settings, previous: None };
         let mut totals = Totals::default();
         self.for_each_row(table, &mut totals, |_, time, sample, totals| {
-            if let Feed::Push { gap } = feeder.feed(time, sample, totals) {
-                if gap {
-                    handle(acc.interrupt());
-                }
+            let feed = feeder.feed(time, sample, totals);
+            if feed.gap {
+                handle(acc.interrupt());
+            }
+            if feed.push {
                 handle(acc.push(sample.map(|v| v as f32)));
             }
         })?;
@@ -272,9 +272,7 @@ impl Source<'_> {
         let mut totals = Totals::default();
         self.for_each_row(table, &mut totals, |line, time, sample, totals| {
             let row = totals.rows;
-            if matches!(feeder.feed(time, sample, totals), Feed::Push { .. })
-                && wanted.get(found.len()) == Some(&(totals.pushed - 1))
-            {
+            if feeder.feed(time, sample, totals).push && wanted.get(found.len()) == Some(&(totals.pushed - 1)) {
                 found.push((totals.pushed - 1, row, line, time));
             }
         })?;
@@ -548,6 +546,33 @@ mod tests {
         assert_eq!(streamed.rows, table.samples.len());
         assert_eq!(streamed.table.dropped, table.dropped);
         assert_eq!(streamed.table.dropped.non_finite, 1);
+    }
+
+    #[test]
+    fn streaming_skips_stale_repeats_and_breaks_at_time_gaps_as_in_memory() {
+        // Every reading of `log` four times (a sensor polled at 4x its rate), and a 5 s gap in a hold.
+        let mut text = String::from("t,ax,ay,az\n");
+        let mut t = 0.0;
+        for (k, line) in log().lines().skip(1).filter(|l| l.contains(',') && !l.contains("nan")).enumerate() {
+            let values = line.split_once(',').unwrap().1;
+            for copy in 0..4 {
+                // The gap falls before a repeated copy: the stream is interrupted all the same.
+                if k == 2000 && copy == 2 {
+                    t += 5.0;
+                }
+                text.push_str(&format!("{t:.4},{values}\n"));
+                t += 0.0025;
+            }
+        }
+        let path = temp_file("stale_gap.csv", &text);
+        let opts = ReadOptions::default();
+        let table = csvio::read_csv(&path, &opts).unwrap();
+        let in_memory = csvio::accumulate(&table, &AccumulateOptions::default()).unwrap();
+        let streamed = stream_poses(&path, &opts, &AccumulateOptions::default(), 4000).unwrap().accumulation;
+        assert!(in_memory.skipped_repeats > 10_000 && in_memory.interruptions == 1, "{in_memory:?}");
+        assert_eq!((streamed.skipped_repeats, streamed.interruptions), (in_memory.skipped_repeats, 1));
+        assert_eq!(streamed.poses, in_memory.poses);
+        assert_eq!(streamed.spans, in_memory.spans);
     }
 
     #[test]
