@@ -6,7 +6,7 @@ use accelcal::calibrate::{Calibration, CalibrationConfig, CalibrationError, Meth
 use accelcal::frame::{Deviation, modulus_error};
 use accelcal::model::{Params, STANDARD_GRAVITY_MPS2};
 
-use crate::csvio::Units;
+use crate::csvio::{DroppedRows, Units};
 use accelcal::solve::levenberg_marquardt;
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro128PlusPlus;
@@ -163,4 +163,35 @@ pub fn warnings_line(v: &accelcal::verdict::Verdict) -> String {
         parts.push(format!("poses {} left out: far off the fitted ellipsoid (a shock or a glitch?)", list.join(", ")));
     }
     parts.join("; ")
+}
+
+/// The rows dropped while reading (by reason) and while finding poses (stale repeats), with their
+/// names as in [`rows_dropped_json`].
+fn rows_dropped(dropped: &DroppedRows, stale_repeats: usize) -> [(&'static str, usize); 4] {
+    [
+        ("non_finite", dropped.non_finite),
+        ("stale_flag", dropped.stale_flag),
+        ("stale_repeat", stale_repeats),
+        ("truncated_last_line", dropped.truncated),
+    ]
+}
+
+/// JSON of the rows dropped, by reason, and their total: every reason, zeros included.
+pub fn rows_dropped_json(dropped: &DroppedRows, stale_repeats: usize) -> serde_json::Value {
+    let reasons = rows_dropped(dropped, stale_repeats);
+    let mut object = serde_json::Map::new();
+    for (name, count) in reasons {
+        object.insert(name.into(), count.into());
+    }
+    object.insert("total".into(), reasons.iter().map(|r| r.1).sum::<usize>().into());
+    serde_json::Value::Object(object)
+}
+
+/// One text line of the rows dropped (`rows dropped: 12 (non_finite 2, stale_flag 10)`), `None`
+/// when none were.
+pub fn rows_dropped_line(dropped: &DroppedRows, stale_repeats: usize) -> Option<String> {
+    let reasons = rows_dropped(dropped, stale_repeats);
+    let total: usize = reasons.iter().map(|r| r.1).sum();
+    let parts: Vec<String> = reasons.iter().filter(|r| r.1 > 0).map(|(name, n)| format!("{name} {n}")).collect();
+    (total > 0).then(|| format!("rows dropped: {total} ({})", parts.join(", ")))
 }

@@ -3,9 +3,12 @@
 //! [`Pose`]s, either directly (means files) or through the library's static detector
 //! ([`Accumulator`]).
 //!
-//! Every error names the file, the line where one applies, and what is wrong; nothing here panics on
-//! input. Two defects are tolerated with a warning in [`Table::warnings`]: a truncated last line
-//! (e.g. a power cut while logging) and isolated NaN/inf/empty cells (those rows are skipped).
+//! Every error names the file, the line where one applies, and what is wrong, quoting at most
+//! [`MAX_QUOTED_CHARS`] characters of input; nothing here panics on input. Tolerated defects get a
+//! warning in [`Table::warnings`]: a truncated last line (e.g. a power cut while logging), isolated
+//! NaN/inf/empty cells (those rows are skipped), a temperature column empty or NaN throughout (read
+//! without it). Rows dropped are counted by reason in [`Table::dropped`] (a non-zero stale-flag
+//! column, `stale`/`is_stale`, drops its row). Lines may end in LF, CR LF or a lone CR.
 //!
 //! ```
 //! use accelcal_host::csvio::{read_csv_str, ReadOptions, Units};
@@ -26,6 +29,8 @@
 //!   `accel_x`/`x`/`mean_x`/`x_mean` (and y, z), optional `temp`/`temperature` (deg C), optional
 //!   `n`/`n_samples`/`count` (samples per mean), and in means files optional `std_x`/`x_std` (the
 //!   per-pose standard deviation). [`ColumnSpec`] overrides the detection.
+//! - A unit in the acceleration columns' names (`ax_mg`, `ax_g`, `acc_x_mps2`, `ax[m/s^2]`, `ax (g)`,
+//!   `ax_lsb`) sets the units (mg is scaled to g); [`ReadOptions::units`] other than auto wins.
 
 use std::borrow::Cow;
 use std::fmt;
@@ -359,6 +364,19 @@ pub struct Table {
     pub header: Vec<String>,
     /// The columns the values came from.
     pub columns: ColumnsUsed,
+    /// Data rows not read into the table, by reason.
+    pub dropped: DroppedRows,
+}
+
+/// Data rows [`read_csv`] dropped, by reason (each row counted once).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct DroppedRows {
+    /// A needed cell empty, NaN or infinite.
+    pub non_finite: usize,
+    /// Marked stale by a stale-flag column (`stale`, `is_stale`, ...: non-zero).
+    pub stale_flag: usize,
+    /// A truncated last line (a power cut while logging).
+    pub truncated: usize,
 }
 
 /// A unit named in an acceleration column's header, e.g. `mg` in `ax_mg`.
@@ -388,6 +406,24 @@ fn header_unit(name: &str) -> Option<HeaderUnit> {
 }
 
 impl Table {
+    /// Appends one row read from file line `line`.
+    fn push_row(&mut self, row: Row, line: usize) {
+        self.samples.push(row.accel);
+        self.line_of_row.push(line);
+        if let (Some(t), Some(v)) = (self.times_s.as_mut(), row.time) {
+            t.push(v);
+        }
+        if let (Some(t), Some(v)) = (self.temps_c.as_mut(), row.temp) {
+            t.push(v);
+        }
+        if let (Some(n), Some(v)) = (self.counts_n.as_mut(), row.count) {
+            n.push(v);
+        }
+        if let Some(s) = self.std_devs.as_mut() {
+            s.push(row.std);
+        }
+    }
+
     /// What the units are and why, e.g. `g (detected: median |a| = 0.998)`.
     pub fn units_summary(&self) -> String {
         let how = match &self.units_header {
@@ -605,7 +641,7 @@ pub enum CsvError {
 }
 
 /// The cells quoted and joined, clipped to about [`MAX_QUOTED_CHARS`] characters.
-fn list(cells: &[String]) -> String {
+pub(crate) fn list(cells: &[String]) -> String {
     let quoted: Vec<String> = cells.iter().map(|c| format!("`{c}`")).collect();
     let joined = quoted.join(", ");
     if joined.chars().count() > MAX_QUOTED_CHARS {
@@ -746,6 +782,15 @@ fn line_at(bytes: &[u8], offset: usize) -> usize {
 /// # Errors
 /// As [`read_csv`], except the file-system errors.
 pub fn read_csv_bytes(name: &str, bytes: &[u8], opts: &ReadOptions) -> Result<Table, CsvError> {
+    read_csv_bytes_with_columns(name, bytes, opts).map(|(table, _)| table)
+}
+
+/// [`read_csv_bytes`], also returning the column indices read (to read more rows the same way).
+pub(crate) fn read_csv_bytes_with_columns(
+    name: &str,
+    bytes: &[u8],
+    opts: &ReadOptions,
+) -> Result<(Table, Columns), CsvError> {
     let file = name.to_string();
     if let Some(pos) = bytes.iter().position(|&b| b == 0) {
         let utf16 = bytes.starts_with(&[0xFF, 0xFE]) || bytes.starts_with(&[0xFE, 0xFF]);
@@ -766,7 +811,7 @@ pub fn read_csv_bytes(name: &str, bytes: &[u8], opts: &ReadOptions) -> Result<Ta
         }
     };
     let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
-    Parser { file, opts, notes }.parse(text)
+    Parser { file, opts, notes }.parse_with_columns(text)
 }
 
 /// `true` for bytes that are not text in any 8-bit encoding: control characters other than tab,
@@ -787,6 +832,8 @@ enum Field {
     Std(usize),
     Temp,
     Count,
+    /// A flag marking stale (repeated, not new) readings: non-zero drops the row.
+    Stale,
 }
 
 /// Unit and decoration tokens dropped from header names before matching.
@@ -879,6 +926,7 @@ fn classify(name: &str) -> Option<Field> {
             Some(Field::Time(scale))
         }
         "temp" | "temperature" | "die_temp" | "temp_die" => Some(Field::Temp),
+        "stale" | "is_stale" | "stale_flag" | "repeated" | "is_repeated" => Some(Field::Stale),
         "n" | "n_samples" | "nsamples" | "samples" | "count" | "n_kept" | "num_samples" | "sample_count" => {
             Some(Field::Count)
         }
@@ -901,18 +949,19 @@ fn time_scale(toks: &[String]) -> f64 {
 
 /// Indices of the columns to read.
 #[derive(Debug, Clone, Default)]
-struct Columns {
-    time: Option<(usize, f64)>,
+pub(crate) struct Columns {
+    pub(crate) time: Option<(usize, f64)>,
     accel: [usize; 3],
     temp: Option<usize>,
     count: Option<usize>,
+    stale: Option<usize>,
     std: Option<[usize; 3]>,
 }
 
 impl Columns {
-    fn max_index(&self) -> usize {
+    pub(crate) fn max_index(&self) -> usize {
         let mut m = self.accel.iter().copied().max().unwrap_or(0);
-        for i in [self.time.map(|t| t.0), self.temp, self.count].into_iter().flatten() {
+        for i in [self.time.map(|t| t.0), self.temp, self.count, self.stale].into_iter().flatten() {
             m = m.max(i);
         }
         if let Some(s) = self.std {
@@ -922,15 +971,15 @@ impl Columns {
     }
 }
 
-struct Parser<'a> {
-    file: String,
-    opts: &'a ReadOptions,
+pub(crate) struct Parser<'a> {
+    pub(crate) file: String,
+    pub(crate) opts: &'a ReadOptions,
     /// Warnings found before parsing (encoding).
-    notes: Vec<String>,
+    pub(crate) notes: Vec<String>,
 }
 
 /// Splits one line into trimmed, unquoted cells.
-fn split_cells(line: &str, delimiter: Delimiter) -> Vec<Cow<'_, str>> {
+pub(crate) fn split_cells(line: &str, delimiter: Delimiter) -> Vec<Cow<'_, str>> {
     let Some(d) = delimiter.char() else {
         return line.split_whitespace().map(Cow::Borrowed).collect();
     };
@@ -986,8 +1035,19 @@ fn parse_number(cell: &str, delimiter: Delimiter) -> Result<Option<f64>, ()> {
     }
 }
 
+/// `true` when `--columns` gives every column by index (then the first data row, not the header,
+/// sets the cell count: a header may be malformed, e.g. two names run together).
+pub(crate) fn all_by_index(opts: &ReadOptions) -> bool {
+    opts.columns.as_ref().is_some_and(|s| {
+        [Some(&s.accel[0]), Some(&s.accel[1]), Some(&s.accel[2]), s.time.as_ref(), s.temp.as_ref(), s.count.as_ref()]
+            .into_iter()
+            .flatten()
+            .all(|c| matches!(c, ColumnRef::Index(_)))
+    })
+}
+
 /// Lines ended by LF, CR LF or a lone CR (old Mac OS); a line number counts each of them once.
-fn split_lines(text: &str) -> Vec<&str> {
+pub(crate) fn split_lines(text: &str) -> Vec<&str> {
     let mut lines = Vec::new();
     let mut rest = text;
     while let Some(end) = rest.find(['\n', '\r']) {
@@ -1000,14 +1060,14 @@ fn split_lines(text: &str) -> Vec<&str> {
 }
 
 /// At most [`MAX_QUOTED_CHARS`] characters of `text` for a message, with `...` when cut.
-fn clip(text: &str) -> String {
+pub(crate) fn clip(text: &str) -> String {
     match text.char_indices().nth(MAX_QUOTED_CHARS) {
         Some((cut, _)) => format!("{}...", &text[..cut]),
         None => text.to_string(),
     }
 }
 
-fn is_blank_or_comment(line: &str) -> bool {
+pub(crate) fn is_blank_or_comment(line: &str) -> bool {
     let t = line.trim();
     t.is_empty() || t.starts_with('#')
 }
@@ -1045,31 +1105,11 @@ fn units_plausible(units: Units, median_magnitude: f64) -> bool {
 }
 
 impl Parser<'_> {
-    fn parse(&self, text: &str) -> Result<Table, CsvError> {
+    /// The table, and the column indices it was read from.
+    pub(crate) fn parse_with_columns(&self, text: &str) -> Result<(Table, Columns), CsvError> {
         let file = &self.file;
         let lines = split_lines(text);
-        let Some(first_index) = lines.iter().position(|l| !is_blank_or_comment(l)) else {
-            return Err(CsvError::Empty { file: file.clone() });
-        };
-        if self.is_numeric_line(lines[first_index]) {
-            return Err(CsvError::NoHeader {
-                file: file.clone(),
-                line: first_index + 1,
-                text: lines[first_index].trim().to_string(),
-            });
-        }
-        // The header is the last all-text line (no numeric cell) before the first all-numeric line;
-        // lines before it (a logger's title or metadata such as `Fs,100`) are a preamble. Without
-        // such a pair (e.g. a text label column in every row) the first line is the header.
-        let header_index = lines
-            .iter()
-            .enumerate()
-            .skip(first_index)
-            .filter(|(_, l)| !is_blank_or_comment(l))
-            .take(PREAMBLE_SEARCH_LINES)
-            .find(|(_, l)| self.is_numeric_line(l))
-            .and_then(|(k, _)| (first_index..k).rev().find(|&i| self.is_text_line(lines[i])))
-            .unwrap_or(first_index);
+        let (first_index, header_index) = self.find_header(&lines)?;
         let header_line = header_index + 1;
         let mut notes = self.notes.clone();
         if header_index > first_index {
@@ -1097,48 +1137,93 @@ impl Parser<'_> {
         if data_lines.is_empty() {
             return Err(CsvError::HeaderOnly { file: file.clone(), line: header_line });
         }
+        let expected_cells = self.expected_cells(&columns, &header, header_line, data_lines[0], delimiter)?;
+        let mut table = self.empty_table(&columns, header, delimiter, notes);
+        let ends_with_newline = text.ends_with(['\n', '\r']);
+        let skipped_lines = self.read_rows(&mut table, &data_lines, &columns, expected_cells, ends_with_newline)?;
+        table.dropped.non_finite = skipped_lines.len();
+        self.check_skipped(&mut table, &skipped_lines)?;
+        if table.samples.is_empty() {
+            return Err(CsvError::HeaderOnly { file: file.clone(), line: header_line });
+        }
+        self.check_times(&table)?;
+        self.warn_slow_clock(&mut table);
+        self.resolve_units(&mut table)?;
+        Ok((table, columns))
+    }
+
+    /// The first non-blank line and the header's (0-based indices).
+    fn find_header(&self, lines: &[&str]) -> Result<(usize, usize), CsvError> {
+        let file = &self.file;
+        let Some(first_index) = lines.iter().position(|l| !is_blank_or_comment(l)) else {
+            return Err(CsvError::Empty { file: file.clone() });
+        };
+        if self.is_numeric_line(lines[first_index]) {
+            return Err(CsvError::NoHeader {
+                file: file.clone(),
+                line: first_index + 1,
+                text: lines[first_index].trim().to_string(),
+            });
+        }
+        // The header is the last all-text line (no numeric cell) before the first all-numeric line;
+        // lines before it (a logger's title or metadata such as `Fs,100`) are a preamble. Without
+        // such a pair (e.g. a text label column in every row) the first line is the header.
+        let header_index = lines
+            .iter()
+            .enumerate()
+            .skip(first_index)
+            .filter(|(_, l)| !is_blank_or_comment(l))
+            .take(PREAMBLE_SEARCH_LINES)
+            .find(|(_, l)| self.is_numeric_line(l))
+            .and_then(|(k, _)| (first_index..k).rev().find(|&i| self.is_text_line(lines[i])))
+            .unwrap_or(first_index);
+        Ok((first_index, header_index))
+    }
+
+    /// The cell count every row must have, checked to hold every column read.
+    fn expected_cells(
+        &self,
+        columns: &Columns,
+        header: &[String],
+        header_line: usize,
+        first_data: (usize, &str),
+        delimiter: Delimiter,
+    ) -> Result<usize, CsvError> {
         // Rows must have the header's cell count; with all columns given by index the first data row
         // sets it (a header may be malformed, e.g. two names run together).
-        let all_by_index = self.opts.columns.as_ref().is_some_and(|s| {
-            [
-                Some(&s.accel[0]),
-                Some(&s.accel[1]),
-                Some(&s.accel[2]),
-                s.time.as_ref(),
-                s.temp.as_ref(),
-                s.count.as_ref(),
-            ]
-            .into_iter()
-            .flatten()
-            .all(|c| matches!(c, ColumnRef::Index(_)))
-        });
-        let expected_cells = if all_by_index { split_cells(data_lines[0].1, delimiter).len() } else { header.len() };
+        let all_by_index = all_by_index(self.opts);
+        let expected_cells = if all_by_index { split_cells(first_data.1, delimiter).len() } else { header.len() };
         if columns.max_index() >= expected_cells {
             return Err(CsvError::ColumnIndexOutOfRange {
-                file: file.clone(),
-                line: if all_by_index { data_lines[0].0 } else { header_line },
+                file: self.file.clone(),
+                line: if all_by_index { first_data.0 } else { header_line },
                 index: columns.max_index(),
                 columns: expected_cells,
                 from_header: !all_by_index,
             });
         }
+        Ok(expected_cells)
+    }
+
+    /// A table with no rows yet, for `columns` of `header`.
+    fn empty_table(&self, columns: &Columns, header: Vec<String>, delimiter: Delimiter, notes: Vec<String>) -> Table {
         let name_of = |i: usize| header.get(i).cloned().unwrap_or_else(|| format!("#{i}"));
 
-        let mut table = Table {
-            file: file.clone(),
+        Table {
+            file: self.file.clone(),
             times_s: columns.time.map(|_| Vec::new()),
-            samples: Vec::with_capacity(data_lines.len()),
+            samples: Vec::new(),
             temps_c: columns.temp.map(|_| Vec::new()),
             counts_n: columns.count.map(|_| Vec::new()),
             std_devs: columns.std.map(|_| Vec::new()),
             units: self.opts.units,
             units_detected: false,
             units_header: None,
+            dropped: DroppedRows::default(),
             median_magnitude: 0.0,
-            line_of_row: Vec::with_capacity(data_lines.len()),
+            line_of_row: Vec::new(),
             warnings: notes,
             delimiter,
-            header: header.clone(),
             columns: ColumnsUsed {
                 time: columns.time.map(|(i, s)| (name_of(i), s)),
                 accel: columns.accel.map(name_of),
@@ -1146,8 +1231,22 @@ impl Parser<'_> {
                 count: columns.count.map(name_of),
                 std: columns.std.map(|s| s.map(name_of)),
             },
-        };
-        let ends_with_newline = text.ends_with(['\n', '\r']);
+            header,
+        }
+    }
+
+    /// Reads the data lines into `table`; returns the lines skipped for a missing value.
+    fn read_rows(
+        &self,
+        table: &mut Table,
+        data_lines: &[(usize, &str)],
+        columns: &Columns,
+        expected_cells: usize,
+        ends_with_newline: bool,
+    ) -> Result<Vec<usize>, CsvError> {
+        let (file, delimiter) = (&self.file, table.delimiter);
+        table.samples.reserve(data_lines.len());
+        table.line_of_row.reserve(data_lines.len());
         let mut skipped_lines: Vec<usize> = Vec::new();
         let last = data_lines.len() - 1;
         for (k, &(line, row_text)) in data_lines.iter().enumerate() {
@@ -1155,6 +1254,7 @@ impl Parser<'_> {
             let is_last = k == last;
             if cells.len() != expected_cells {
                 if is_last && cells.len() < expected_cells {
+                    table.dropped.truncated += 1;
                     table.warnings.push(format!(
                         "{file}:{line}: last line truncated ({} of {expected_cells} cells; power cut?): ignored",
                         cells.len()
@@ -1168,11 +1268,16 @@ impl Parser<'_> {
                     expected: expected_cells,
                 });
             }
-            let row = self.parse_row(&cells, line, &columns, &header, delimiter);
+            if self.is_stale(&cells, line, columns, &table.header, delimiter)? {
+                table.dropped.stale_flag += 1;
+                continue;
+            }
+            let row = self.parse_row(&cells, line, columns, &table.header, delimiter);
             let row = match row {
                 Ok(r) => r,
                 // A cut-off last line (no line end) may end in half a number.
                 Err(e) if is_last && !ends_with_newline => {
+                    table.dropped.truncated += 1;
                     table.warnings.push(format!("{file}:{line}: last line truncated ({e}; power cut?): ignored"));
                     continue;
                 }
@@ -1182,33 +1287,13 @@ impl Parser<'_> {
                 skipped_lines.push(line);
                 continue;
             };
-            table.samples.push(row.accel);
-            table.line_of_row.push(line);
-            if let (Some(t), Some(v)) = (table.times_s.as_mut(), row.time) {
-                t.push(v);
-            }
-            if let (Some(t), Some(v)) = (table.temps_c.as_mut(), row.temp) {
-                t.push(v);
-            }
-            if let (Some(n), Some(v)) = (table.counts_n.as_mut(), row.count) {
-                n.push(v);
-            }
-            if let Some(s) = table.std_devs.as_mut() {
-                s.push(row.std);
-            }
+            table.push_row(row, line);
         }
-        self.check_skipped(&mut table, &skipped_lines)?;
-        if table.samples.is_empty() {
-            return Err(CsvError::HeaderOnly { file: file.clone(), line: header_line });
-        }
-        self.check_times(&table)?;
-        self.warn_slow_clock(&mut table);
-        self.resolve_units(&mut table)?;
-        Ok(table)
+        Ok(skipped_lines)
     }
 
     /// One data row: `Ok(None)` when a needed cell is NaN, infinite or empty (the row is skipped).
-    fn parse_row(
+    pub(crate) fn parse_row(
         &self,
         cells: &[Cow<'_, str>],
         line: usize,
@@ -1273,6 +1358,27 @@ impl Parser<'_> {
             None => [0.0; 3],
         };
         Ok(Some(Row { time, accel, temp, count, std }))
+    }
+
+    /// `true` when the row's stale flag (if the file has one) is a non-zero number; empty is not stale.
+    pub(crate) fn is_stale(
+        &self,
+        cells: &[Cow<'_, str>],
+        line: usize,
+        columns: &Columns,
+        header: &[String],
+        delimiter: Delimiter,
+    ) -> Result<bool, CsvError> {
+        let Some(i) = columns.stale else { return Ok(false) };
+        match parse_number(&cells[i], delimiter) {
+            Ok(v) => Ok(v.is_some_and(|v| v != 0.0)),
+            Err(()) => Err(CsvError::NonNumeric {
+                file: self.file.clone(),
+                line,
+                column: header.get(i).cloned().unwrap_or_else(|| format!("#{i}")),
+                text: cells[i].to_string(),
+            }),
+        }
     }
 
     /// Warns about rows skipped for missing values, or fails when there are too many.
@@ -1351,9 +1457,10 @@ impl Parser<'_> {
         let step_s = median(&mut steps);
         if step_s >= MAX_PLAUSIBLE_STEP_S {
             table.warnings.push(format!(
-                "{}: time column `{name}` steps by {step_s} per row, taken as seconds ({:.3} Hz); if it counts \
+                "{}: time column `{}` steps by {step_s} per row, taken as seconds ({:.3} Hz); if it counts \
                  milliseconds, name it e.g. `time_ms`",
                 self.file,
+                clip(name),
                 1.0 / step_s
             ));
         }
@@ -1501,6 +1608,7 @@ impl Parser<'_> {
             time,
             accel: accel.map(|a| a.unwrap_or(0)),
             temp: find("temperature", &|f| f == Field::Temp)?,
+            stale: find("stale flag", &|f| f == Field::Stale)?,
             count: find("n (sample count)", &|f| f == Field::Count)?,
             std: match std {
                 [Some(x), Some(y), Some(z)] => Some([x, y, z]),
@@ -1534,14 +1642,16 @@ impl Parser<'_> {
             accel: [resolve(&spec.accel[0])?, resolve(&spec.accel[1])?, resolve(&spec.accel[2])?],
             temp: spec.temp.as_ref().map(&resolve).transpose()?,
             count: spec.count.as_ref().map(&resolve).transpose()?,
+            // Not part of the spec: found by name.
+            stale: header.iter().position(|h| classify(h) == Some(Field::Stale)),
             std: None,
         })
     }
 }
 
-struct Row {
-    time: Option<f64>,
-    accel: [f64; 3],
+pub(crate) struct Row {
+    pub(crate) time: Option<f64>,
+    pub(crate) accel: [f64; 3],
     temp: Option<f64>,
     count: Option<u32>,
     std: [f64; 3],
@@ -1580,15 +1690,23 @@ pub struct AccumulateOptions {
     /// spans a gap in the recording). Defaults to 10.
     pub gap_factor: f64,
     /// Skip rows that repeat the previous row exactly (all three axes): stale reads of a sensor polled
-    /// faster than its output data rate. `None` (default) decides from the data: skipped when more
-    /// than [`STALE_REPEAT_FRACTION`] of the rows are such repeats. Repeated readings are not
-    /// independent samples, and the library's detector assumes independent noise.
+    /// faster than its output data rate. `None` (default) decides from the data with
+    /// [`repeats_look_stale`]: a coarsely quantised sensor repeats readings too, and those are kept.
+    /// Stale readings are not independent samples, and the library's detector assumes independent
+    /// noise.
     pub skip_repeats: Option<bool>,
 }
 
-/// Fraction of rows repeating their predecessor exactly above which [`accumulate`] treats the
-/// repeats as stale reads and skips them (see [`AccumulateOptions::skip_repeats`]).
-pub const STALE_REPEAT_FRACTION: f64 = 0.5;
+/// Least fraction of rows repeating their predecessor (all three axes) for [`repeats_look_stale`].
+pub const STALE_REPEAT_FRACTION: f64 = 0.2;
+
+/// Least ratio of all-axes repeats to the count independent axes would give (per window of
+/// [`STALE_WINDOW_ROWS`]) for [`repeats_look_stale`]. Quantisation measures about 1.05, stale reads
+/// of a sensor polled 4x its data rate 1.6, 2x: 3.
+pub const STALE_DEPENDENCE_RATIO: f64 = 1.3;
+
+/// Rows per window in which [`repeats_look_stale`] compares the repeats of the axes.
+pub const STALE_WINDOW_ROWS: usize = 64;
 
 impl Default for AccumulateOptions {
     fn default() -> Self {
@@ -1608,6 +1726,25 @@ pub fn repeat_fraction(samples: &[[f64; 3]]) -> f64 {
         return 0.0;
     }
     samples.windows(2).filter(|w| w[0] == w[1]).count() as f64 / (samples.len() - 1) as f64
+}
+
+/// `true` when rows repeating their predecessor exactly look like stale reads, not quantisation: more
+/// than [`STALE_REPEAT_FRACTION`] of the rows repeat on all three axes, and all three repeat together
+/// more than [`STALE_DEPENDENCE_RATIO`] times as often as the per-axis repeats would by chance. A stale
+/// read repeats the whole sample; a quantised sensor whose noise is below one step repeats each axis
+/// on its own (counted per window, so that still and moving stretches are not mixed).
+pub fn repeats_look_stale(samples: &[[f64; 3]]) -> bool {
+    if repeat_fraction(samples) <= STALE_REPEAT_FRACTION {
+        return false;
+    }
+    let (mut observed, mut expected) = (0.0, 0.0);
+    for window in samples.windows(2).collect::<Vec<_>>().chunks(STALE_WINDOW_ROWS) {
+        let per_axis = [0, 1, 2].map(|a| window.iter().filter(|w| w[0][a] == w[1][a]).count() as f64);
+        let n = window.len() as f64;
+        observed += window.iter().filter(|w| w[0] == w[1]).count() as f64;
+        expected += per_axis[0] * per_axis[1] * per_axis[2] / (n * n);
+    }
+    observed > STALE_DEPENDENCE_RATIO * expected
 }
 
 /// Where a pose came from in the file.
@@ -1693,7 +1830,7 @@ pub fn quantisation_variance(samples: &[[f64; 3]]) -> f32 {
 /// [`Accumulation::dropped_full`].
 pub fn accumulate(table: &Table, opts: &AccumulateOptions) -> Result<Accumulation, AccumulatorError> {
     let repeats = repeat_fraction(&table.samples);
-    let skip_repeats = opts.skip_repeats.unwrap_or(repeats > STALE_REPEAT_FRACTION);
+    let skip_repeats = opts.skip_repeats.unwrap_or_else(|| repeats_look_stale(&table.samples));
     let fed_fraction = if skip_repeats { 1.0 - repeats } else { 1.0 };
     let sample_rate_hz = opts.sample_rate_hz.or_else(|| table.sample_rate_hz()).map(|r| r * fed_fraction);
     let block = opts.block_samples.unwrap_or_else(|| choose_block_samples(sample_rate_hz));

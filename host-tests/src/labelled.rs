@@ -7,23 +7,27 @@ use std::path::Path;
 
 use accelcal::accumulator::Pose;
 
-use crate::csvio::{Delimiter, Table};
+use crate::csvio::{Table, clip, list, split_cells, split_lines};
 
 /// The poses of `table` segmented by the column `column` of the file at `path` (the file the table was
 /// read from). Each contiguous run of equal labels is one pose (mean and population variance per
 /// axis); a run of a single row has no variance.
 pub fn poses_by_label(table: &Table, path: &Path, column: &str) -> Result<Vec<Pose>, String> {
     let file = path.display();
+    let named = clip(column);
     let index = table.header.iter().position(|h| h.trim().eq_ignore_ascii_case(column)).ok_or_else(|| {
-        format!("{file}: --pose-column {column}: no such column (the header has: {})", table.header.join(", "))
+        format!("{file}: --pose-column {named}: no such column (the header has: {})", list(&table.header))
     })?;
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{file}: {e}"))?;
-    let lines: Vec<&str> = text.lines().collect();
+    // Read as the CSV reader read it: any line end, Latin-1 bytes kept as characters, quoted cells.
+    let bytes = std::fs::read(path).map_err(|e| format!("{file}: {e}"))?;
+    let text = String::from_utf8(bytes).unwrap_or_else(|e| e.into_bytes().iter().map(|&b| char::from(b)).collect());
+    let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
+    let lines = split_lines(text);
     let mut labels = Vec::with_capacity(table.samples.len());
     for &line in &table.line_of_row {
-        let cells = lines.get(line.wrapping_sub(1)).map(|l| split(l, table.delimiter)).unwrap_or_default();
+        let cells = lines.get(line.wrapping_sub(1)).map(|l| split_cells(l, table.delimiter)).unwrap_or_default();
         let label = cells.get(index).map(|c| c.trim().to_string()).filter(|c| !c.is_empty());
-        labels.push(label.ok_or_else(|| format!("{file}:{line}: --pose-column {column}: no label on this row"))?);
+        labels.push(label.ok_or_else(|| format!("{file}:{line}: --pose-column {named}: no label on this row"))?);
     }
     let mut poses = Vec::new();
     let mut start = 0;
@@ -34,15 +38,6 @@ pub fn poses_by_label(table: &Table, path: &Path, column: &str) -> Result<Vec<Po
         }
     }
     Ok(poses)
-}
-
-fn split(line: &str, delimiter: Delimiter) -> Vec<&str> {
-    match delimiter {
-        Delimiter::Comma => line.split(',').collect(),
-        Delimiter::Semicolon => line.split(';').collect(),
-        Delimiter::Tab => line.split('\t').collect(),
-        Delimiter::Whitespace => line.split_whitespace().collect(),
-    }
 }
 
 /// Mean and population variance of `rows` (rows `start..end` of the table).

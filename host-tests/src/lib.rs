@@ -5,6 +5,7 @@ pub mod blindgen;
 pub mod calib;
 pub mod convergence;
 pub mod csvio;
+pub mod csvstream;
 pub mod diagnose;
 pub mod effects;
 pub mod i2c_sim;

@@ -9,6 +9,7 @@ use accelcal::calibrate::{CalibrationConfig, Method};
 use accelcal::model::{PARAM_COUNT, PARAM_NAMES, Params};
 use accelcal_host::calib::{self, num, params_json, verdict_json};
 use accelcal_host::csvio::{self, AccumulateOptions, ColumnSpec, ReadOptions, Units};
+use accelcal_host::csvstream;
 use accelcal_host::diagnose;
 use accelcal_host::paper::{self, PaperOptions, format_sig};
 use accelcal_host::plots::{Series, line_chart};
@@ -151,6 +152,10 @@ struct InputArgs {
     /// ellipsoid fits), ellipsoid, or six-position (the paper's: each axis pointed up and down).
     #[arg(long, value_enum, default_value_t = InitArg::Auto)]
     init: InitArg,
+    /// Read a raw log as a stream (constant memory; automatic from 64 MB): units, rate and noise floor
+    /// from its first 4 MB.
+    #[arg(long)]
+    stream: bool,
     /// Segment the raw log by this label column (one pose per contiguous run of a label) instead of
     /// detecting still intervals.
     #[arg(long, value_name = "NAME", conflicts_with = "means")]
@@ -357,13 +362,31 @@ struct Loaded {
     poses: Vec<accelcal::accumulator::Pose>,
     spans: Option<Vec<csvio::PoseSpan>>,
     host: calib::HostCalibration,
+    /// Rows the pose detection skipped as stale repeats.
+    stale_repeats: usize,
+    /// Data rows read (a large file's `table` holds only its first rows).
+    rows: usize,
+}
+
+/// A file read: the table (a large raw log's first rows only), its data rows, and for a large raw log
+/// the poses found while streaming it (constant memory).
+fn read_input(input: &InputArgs) -> Result<(csvio::Table, usize, Option<csvio::Accumulation>), Failure> {
+    let opts = ReadOptions { columns: input.columns.clone(), units: input.units, means: input.means, delimiter: None };
+    let large = input.stream || csvstream::is_large(&input.file);
+    if input.means || input.pose_column.is_some() || !large {
+        let table = csvio::read_csv(&input.file, &opts).map_err(|e| e.to_string())?;
+        let rows = table.samples.len();
+        return Ok((table, rows, None));
+    }
+    let streamed = csvstream::stream_poses(&input.file, &opts, &AccumulateOptions::default(), csvstream::PREFIX_BYTES)
+        .map_err(|e| e.to_string())?;
+    Ok((streamed.table, streamed.rows, Some(streamed.accumulation)))
 }
 
 /// The whole `calibrate` pipeline: read, find poses (or take the means), calibrate, leave-one-out.
 fn load_and_calibrate(input: &InputArgs, method: Method, seed: u64, warn: bool) -> Result<Loaded, Failure> {
     calib::check_gravity_positive(input.gravity)?;
-    let opts = ReadOptions { columns: input.columns.clone(), units: input.units, means: input.means, delimiter: None };
-    let table = csvio::read_csv(&input.file, &opts).map_err(|e| e.to_string())?;
+    let (table, rows, streamed) = read_input(input)?;
     calib::check_gravity(input.gravity, table.units, table.median_magnitude)
         .map_err(|e| format!("{}: {e}", input.file.display()))?;
     if warn {
@@ -371,12 +394,17 @@ fn load_and_calibrate(input: &InputArgs, method: Method, seed: u64, warn: bool) 
             eprintln!("accelcal: warning: {w}");
         }
     }
+    let mut stale_repeats = 0;
     let (poses, spans) = if input.means {
         (csvio::to_poses_from_means(&table), None)
     } else if let Some(column) = &input.pose_column {
         (accelcal_host::labelled::poses_by_label(&table, &input.file, column)?, None)
     } else {
-        let acc = accumulate_all(&table, &input.file)?;
+        let acc = match streamed {
+            Some(acc) => check_accumulation(acc, &input.file)?,
+            None => accumulate_all(&table, &input.file)?,
+        };
+        stale_repeats = acc.skipped_repeats;
         (acc.poses, Some(acc.spans))
     };
     check_pose_count(&input.file, poses.len(), None)?;
@@ -399,7 +427,7 @@ fn load_and_calibrate(input: &InputArgs, method: Method, seed: u64, warn: bool) 
     };
     let config = CalibrationConfig { gravity, method, before, init: input.init.into(), ..CalibrationConfig::DEFAULT };
     let host = calib::run_with_loo(&poses, &config, seed).map_err(|e| format!("{file}: {e}"))?;
-    Ok(Loaded { table, poses, spans, host })
+    Ok(Loaded { table, poses, spans, host, stale_repeats, rows })
 }
 
 /// Refuses more poses than one calibration takes ([`calib::MAX_POSES`], the library's buffer),
@@ -422,6 +450,11 @@ fn check_pose_count(file: &std::path::Path, found: usize, last_fitting_line: Opt
 fn accumulate_all(table: &csvio::Table, file: &std::path::Path) -> Result<csvio::Accumulation, Failure> {
     let acc =
         csvio::accumulate(table, &AccumulateOptions::default()).map_err(|e| format!("{}: {e}", file.display()))?;
+    check_accumulation(acc, file)
+}
+
+/// The accumulation, unless it found more poses than one calibration takes.
+fn check_accumulation(acc: csvio::Accumulation, file: &std::path::Path) -> Result<csvio::Accumulation, Failure> {
     let found = acc.poses.len() + acc.dropped_full as usize;
     check_pose_count(file, found, acc.spans.get(calib::MAX_POSES - 1).map(|s| s.last_line))?;
     Ok(acc)
@@ -448,7 +481,7 @@ fn calibrate_file(
     bench_runs: Option<usize>,
 ) -> Result<(), Failure> {
     let method = calib::parse_method(method)?;
-    let Loaded { table, poses, spans, host } = load_and_calibrate(input, method, seed, true)?;
+    let Loaded { table, poses, spans, host, stale_repeats, rows } = load_and_calibrate(input, method, seed, true)?;
     let timing = match bench_runs {
         Some(runs) => Some(bench(input, method, seed, runs)?),
         None => None,
@@ -477,6 +510,7 @@ fn calibrate_file(
             "method": method.name(),
             "gravity": gravity,
             "units": table.units.to_string(),
+            "rows_dropped": calib::rows_dropped_json(&table.dropped, stale_repeats),
             "units_header": table.units_header.as_ref().map(|h| json!({"column": h.column, "unit": h.label, "factor": h.factor})),
             "poses": pose_json,
             "params": params_json(&cal.params),
@@ -496,13 +530,7 @@ fn calibrate_file(
                 "bench: read + find poses + calibrate + leave-one-out, {runs} runs: min {min:.1} ms, median {median:.1} ms, max {max:.1} ms"
             );
         }
-        println!(
-            "{file}: {} rows in {}, {} poses, method {}",
-            table.samples.len(),
-            table.units_summary(),
-            poses.len(),
-            method.name()
-        );
+        println!("{file}: {} rows in {}, {} poses, method {}", rows, table.units_summary(), poses.len(), method.name());
         println!("{:<6}{:>16}{:>16}{:>16}", "", "x", "y", "z");
         println!("{:<6}{:>16.8}{:>16.8}{:>16.8}", "B", cal.params.bias[0], cal.params.bias[1], cal.params.bias[2]);
         println!(
@@ -525,6 +553,9 @@ fn calibrate_file(
         if !warnings.is_empty() {
             println!("warning: {warnings}");
         }
+        if let Some(line) = calib::rows_dropped_line(&table.dropped, stale_repeats) {
+            println!("{line}");
+        }
     }
     if v.pass() { Ok(()) } else { Err(Failure::Verdict) }
 }
@@ -542,16 +573,23 @@ fn diagnose_file(input: &InputArgs, as_json: bool, plots: Option<&std::path::Pat
     calib::check_gravity(input.gravity, table.units, table.median_magnitude)
         .map_err(|e| format!("{}: {e}", input.file.display()))?;
     // The diagnosis calibrates the same poses: refuse a log with more than one calibration takes.
-    accumulate_all(&table, &input.file)?;
+    let stale_repeats = accumulate_all(&table, &input.file)?.skipped_repeats;
     let options = diagnose::DiagnoseOptions { gravity: input.gravity, seed, ..diagnose::DiagnoseOptions::DEFAULT };
     let report = diagnose::diagnose(&table, &options).map_err(|e| e.to_string())?;
     if let Some(dir) = plots {
         report.write_plots(dir)?;
     }
     if as_json {
-        println!("{}", report.to_json());
+        let mut json = report.to_json();
+        if let Some(object) = json.as_object_mut() {
+            object.insert("rows_dropped".into(), calib::rows_dropped_json(&table.dropped, stale_repeats));
+        }
+        println!("{json}");
     } else {
         print!("{}", report.to_text());
+        if let Some(line) = calib::rows_dropped_line(&table.dropped, stale_repeats) {
+            println!("{line}");
+        }
     }
     Ok(())
 }

@@ -279,3 +279,130 @@ fn an_explicit_units_option_wins_over_the_header_and_a_wrong_label_is_an_error()
     assert_short_error(&calibrate(&wrong, &[]), "units_wrong_label.csv", &["header `ax_g`", "--units mps2"]);
     assert_eq!(calibrate(&wrong, &["--units", "mps2"]).status.code(), Some(0));
 }
+
+/// Deterministic noise: a sum of four uniforms (about Gaussian), standard deviation `sd`.
+fn noise(state: &mut u64, sd: f64) -> f64 {
+    let mut sum = 0.0;
+    for _ in 0..4 {
+        *state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+        sum += (*state >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+    }
+    sum * sd * 3f64.sqrt()
+}
+
+/// Fourteen still directions (faces and diagonals) in g with biases, quantised to `lsb_g` with noise
+/// `sd_g`, `still` rows each, 100 Hz, as `[t, ax, ay, az]`.
+fn quantised_rows(lsb_g: f64, sd_g: f64, still: usize) -> Vec<[f64; 4]> {
+    let s = 1.0 / 3f64.sqrt();
+    let mut dirs =
+        vec![[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]];
+    dirs.extend([[s, s, s], [-s, s, -s], [s, -s, -s], [-s, -s, s], [s, s, -s], [-s, s, s], [s, -s, s], [-s, -s, -s]]);
+    let bias = [0.0123, -0.0207, 0.0311];
+    let (mut state, mut t, mut rows) = (5u64, 0.0, Vec::new());
+    let mut push = |v: [f64; 3], rows: &mut Vec<[f64; 4]>, state: &mut u64| {
+        let q = [0, 1, 2].map(|a| ((v[a] + bias[a] + noise(state, sd_g)) / lsb_g).round() * lsb_g);
+        rows.push([t, q[0], q[1], q[2]]);
+        t += 0.01;
+    };
+    for d in dirs {
+        for _ in 0..still {
+            push(d, &mut rows, &mut state);
+        }
+        for i in 0..100 {
+            let w = (f64::from(i) * 0.3).sin();
+            push([d[0] + w, d[1] + 0.5 * w, d[2] - w], &mut rows, &mut state);
+        }
+    }
+    rows
+}
+
+#[test]
+fn a_coarsely_quantised_sensor_keeps_its_repeated_readings() {
+    let rows = quantised_rows(0.008, 0.0005, 400);
+    let repeats = rows.windows(2).filter(|w| w[0][1..] == w[1][1..]).count() as f64 / (rows.len() - 1) as f64;
+    assert!(repeats > 0.5, "the log must repeat in over half its rows to test this: {repeats}");
+    let text: Vec<String> = rows.iter().map(|r| format!("{:.2},{:.3},{:.3},{:.3}", r[0], r[1], r[2], r[3])).collect();
+    let path = write("quantised_8mg.csv", format!("t,ax,ay,az\n{}\n", text.join("\n")).as_bytes());
+    let out = calibrate(&path, &[]);
+    assert_eq!(out.status.code(), Some(0), "{}{}", stdout(&out), stderr(&out));
+    assert!(stdout(&out).contains("7000 rows") && stdout(&out).contains("14 poses"), "{}", stdout(&out));
+    assert!(!stdout(&out).contains("rows dropped"), "{}", stdout(&out));
+    let json: serde_json::Value = serde_json::from_slice(&calibrate(&path, &["--json"]).stdout).unwrap();
+    assert_eq!(json["rows_dropped"]["total"], 0, "{}", json["rows_dropped"]);
+}
+
+#[test]
+fn rows_dropped_are_counted_by_reason_in_text_and_json() {
+    let rows = quantised_rows(0.001, 0.002, 400);
+    let mut text = String::from("t,ax,ay,az,stale\n");
+    for (i, r) in rows.iter().enumerate() {
+        // Every fifth row is a flagged stale copy of the previous one; two rows have a NaN.
+        text.push_str(&format!("{:.3},{:.3},{:.3},{:.3},0\n", r[0], r[1], r[2], r[3]));
+        if i % 5 == 4 {
+            text.push_str(&format!("{:.3},{:.3},{:.3},{:.3},1\n", r[0] + 0.001, r[1], r[2], r[3]));
+        }
+        if i == 1000 || i == 3000 {
+            text.push_str(&format!("{:.3},nan,0,1,0\n", r[0] + 0.002));
+        }
+    }
+    text.push_str("99.0,0.1,");
+    let path = write("flagged.csv", text.as_bytes());
+    let out = calibrate(&path, &[]);
+    assert_eq!(out.status.code(), Some(0), "{}{}", stdout(&out), stderr(&out));
+    assert!(stdout(&out).contains("7000 rows"), "{}", stdout(&out));
+    let expected = "rows dropped: 1403 (non_finite 2, stale_flag 1400, truncated_last_line 1)";
+    assert!(stdout(&out).contains(expected), "{}", stdout(&out));
+    let json: serde_json::Value = serde_json::from_slice(&calibrate(&path, &["--json"]).stdout).unwrap();
+    let dropped = &json["rows_dropped"];
+    assert_eq!((dropped["non_finite"].as_u64(), dropped["stale_flag"].as_u64()), (Some(2), Some(1400)), "{dropped}");
+    assert_eq!((dropped["truncated_last_line"].as_u64(), dropped["total"].as_u64()), (Some(1), Some(1403)));
+    let diagnosed = command("diagnose", &path, &["--json"]);
+    let json: serde_json::Value = serde_json::from_slice(&diagnosed.stdout).unwrap();
+    assert_eq!(json["rows_dropped"]["stale_flag"], 1400, "{}", stderr(&diagnosed));
+}
+
+#[test]
+fn stale_reads_of_a_sensor_polled_faster_than_its_rate_are_dropped_and_counted() {
+    // Every reading of a fine-resolution sensor appears 4 times (polled at 4x its data rate).
+    let rows = quantised_rows(0.0001, 0.002, 1600);
+    let mut text = String::from("t,ax,ay,az\n");
+    for (i, r) in rows.iter().enumerate() {
+        let held = &rows[i - i % 4];
+        text.push_str(&format!("{:.2},{:.4},{:.4},{:.4}\n", r[0], held[1], held[2], held[3]));
+    }
+    let out = calibrate(&write("stale_4x.csv", text.as_bytes()), &[]);
+    assert_eq!(out.status.code(), Some(0), "{}{}", stdout(&out), stderr(&out));
+    assert!(stdout(&out).contains("rows dropped: 17850 (stale_repeat 17850)"), "{}", stdout(&out));
+}
+
+#[test]
+fn a_streamed_read_calibrates_as_the_in_memory_one() {
+    let rows = quantised_rows(0.0001, 0.002, 400);
+    let text: Vec<String> = rows.iter().map(|r| format!("{:.2},{:.4},{:.4},{:.4}", r[0], r[1], r[2], r[3])).collect();
+    let path = write("streamed.csv", format!("t,ax,ay,az\n{}\n", text.join("\n")).as_bytes());
+    let (memory, streamed) = (calibrate(&path, &["--json"]), calibrate(&path, &["--json", "--stream"]));
+    assert_eq!(streamed.status.code(), Some(0), "{}", stderr(&streamed));
+    assert!(stderr(&streamed).contains("read as a stream"), "{}", stderr(&streamed));
+    assert_eq!(stdout(&streamed), stdout(&memory));
+    let json: serde_json::Value = serde_json::from_slice(&streamed.stdout).unwrap();
+    assert_eq!(json["poses"].as_array().map(Vec::len), Some(14));
+}
+
+#[test]
+fn pose_column_reads_cr_only_files_and_refuses_an_unknown_name_briefly() {
+    let rows = six_face_rows(300);
+    let labelled: Vec<String> = rows.iter().enumerate().map(|(i, r)| format!("\"P{}\",{r}", i / 400)).collect();
+    let lf = write("labels_lf.csv", format!("pos,t,ax,ay,az\n{}\n", labelled.join("\n")).as_bytes());
+    let cr = write("labels_cr.csv", format!("pos,t,ax,ay,az\r{}\r", labelled.join("\r")).as_bytes());
+    let (lf_out, cr_out) = (calibrate(&lf, &["--pose-column", "pos"]), calibrate(&cr, &["--pose-column", "pos"]));
+    // Each label also spans the move after its hold: the fit may fail its verdict (exit 1), the same way.
+    assert_eq!(cr_out.status.code(), lf_out.status.code(), "{}", stderr(&cr_out));
+    assert!(stdout(&cr_out).contains("2400 rows") && stdout(&cr_out).contains("6 poses"), "{}", stdout(&cr_out));
+    assert_eq!(without_name(&stdout(&cr_out), "labels_cr.csv"), without_name(&stdout(&lf_out), "labels_lf.csv"));
+    let mut wide: Vec<String> = (0..500).map(|i| format!("extra{i}")).collect();
+    wide.extend(["t", "ax", "ay", "az"].map(String::from));
+    let row = vec!["0"; 500].join(",");
+    let text = format!("{}\n{row},0,0,0,1\n{row},0.01,0,0,1\n", wide.join(","));
+    let out = calibrate(&write("labels_wide.csv", text.as_bytes()), &["--pose-column", &"q".repeat(300)]);
+    assert_short_error(&out, "labels_wide.csv", &["--pose-column", "no such column", "(504 cells)"]);
+}

@@ -1,0 +1,597 @@
+//! Streaming pose detection for large raw logs: memory stays constant whatever the file's size.
+//!
+//! The first [`PREFIX_BYTES`] are read as a [`Table`] (header, columns, units, and the detector's
+//! settings: sample rate, block, stale repeats, noise floor, time-gap threshold); then every row of the
+//! file (the prefix's, then the rest, line by line) is fed to the library's accumulator without being
+//! kept. A second pass finds the lines and times of the poses' first and last samples. The checks of
+//! [`crate::csvio::read_csv`] apply to every row (cells, numbers, time order, physical range, NaN
+//! share); the units and the detector's settings come from the prefix.
+
+use std::borrow::Cow;
+use std::fmt;
+use std::io::{BufRead, BufReader, Read};
+use std::path::Path;
+
+use accelcal::accumulator::{Accumulator, AccumulatorConfig, AccumulatorError, Pose};
+
+use crate::csvio::{
+    self, AccumulateOptions, Accumulation, Columns, CsvError, MAX_POSES, MAX_SKIPPED_FRACTION, Parser, PoseSpan,
+    ReadOptions, Table,
+};
+
+/// Files at least this large are read by [`stream_poses`] in `calibrate` (smaller ones in memory).
+pub const STREAM_MIN_BYTES: u64 = 64 << 20;
+
+/// Bytes read into memory first to find the header, the units and the detector's settings.
+pub const PREFIX_BYTES: usize = 4 << 20;
+
+/// Why a streamed file could not be read or its poses found.
+#[derive(Debug, Clone, PartialEq)]
+pub enum StreamError {
+    /// The file (or a row of it).
+    Csv(CsvError),
+    /// The detector.
+    Accumulator(String, AccumulatorError),
+}
+
+impl fmt::Display for StreamError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Csv(e) => e.fmt(f),
+            Self::Accumulator(file, e) => write!(f, "{file}: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for StreamError {}
+
+impl From<CsvError> for StreamError {
+    fn from(e: CsvError) -> Self {
+        Self::Csv(e)
+    }
+}
+
+/// A streamed file: its prefix as a table (header, units, warnings and the rows dropped in the
+/// whole file), the number of rows read and the poses found.
+#[derive(Debug, Clone)]
+pub struct Streamed {
+    /// The prefix's table; [`Table::dropped`] and [`Table::warnings`] cover the whole file.
+    pub table: Table,
+    /// Data rows read in the whole file.
+    pub rows: usize,
+    /// The poses found; span rows count data rows read.
+    pub accumulation: Accumulation,
+}
+
+/// `true` when `path` is large enough for [`stream_poses`].
+pub fn is_large(path: &Path) -> bool {
+    std::fs::metadata(path).is_ok_and(|m| m.len() >= STREAM_MIN_BYTES)
+}
+
+/// Finds the poses of a raw log without holding its rows (see the [module docs](self)), reading the
+/// first `prefix_bytes` (normally [`PREFIX_BYTES`]) into memory.
+///
+/// # Errors
+/// The [`CsvError`] of the first bad row (as [`csvio::read_csv`]), or the accumulator's error.
+pub fn stream_poses(
+    path: &Path,
+    opts: &ReadOptions,
+    acc_opts: &AccumulateOptions,
+    prefix_bytes: usize,
+) -> Result<Streamed, StreamError> {
+    let file = path.display().to_string();
+    if !path.exists() {
+        return Err(CsvError::Missing { file }.into());
+    }
+    let (prefix, prefix_len) = read_prefix(path, &file, prefix_bytes)?;
+    let (mut table, columns) = csvio::read_csv_bytes_with_columns(&file, &prefix, opts)?;
+    let first_line = 1 + prefix.iter().filter(|&&b| b == b'\n').count();
+    drop(prefix);
+    let settings = Settings::from_prefix(&table, acc_opts);
+    let source = Source { path, file: &file, opts, columns: &columns, prefix_len, first_line };
+    let run = match settings.block {
+        8 => source.detect::<8>(&table, &settings)?,
+        16 => source.detect::<16>(&table, &settings)?,
+        32 => source.detect::<32>(&table, &settings)?,
+        64 => source.detect::<64>(&table, &settings)?,
+        128 => source.detect::<128>(&table, &settings)?,
+        _ => return Err(StreamError::Accumulator(file, AccumulatorError::InvalidConfig)),
+    };
+    let spans = source.spans(&table, &settings, &run.poses)?;
+    let prefix_rows = table.samples.len();
+    add_stream_drops(&mut table, &run.totals, prefix_rows)?;
+    table.warnings.push(format!(
+        "{file}: large file read as a stream: units, sample rate and noise floor from its first {prefix_rows} rows"
+    ));
+    let accumulation = Accumulation {
+        poses: run.poses,
+        spans,
+        rejections: run.rejections,
+        dropped_full: run.dropped_full,
+        interruptions: run.totals.interruptions,
+        block_samples: settings.block,
+        sample_rate_hz: settings.sample_rate_hz,
+        skipped_repeats: run.totals.skipped_repeats,
+        min_noise_variance: settings.config.min_noise_variance,
+        noise_variance: run.noise_variance,
+    };
+    Ok(Streamed { table, rows: run.totals.rows, accumulation })
+}
+
+/// The first `prefix_bytes` of the file cut after its last line end, and their length. A file whose
+/// prefix ends lines with a lone CR is refused (it has no LF to stream by).
+fn read_prefix(path: &Path, file: &str, prefix_bytes: usize) -> Result<(Vec<u8>, usize), CsvError> {
+    let io = |e: std::io::Error| CsvError::Io { file: file.to_string(), message: e.to_string() };
+    let f = std::fs::File::open(path).map_err(io)?;
+    let mut prefix = Vec::with_capacity(prefix_bytes.min(PREFIX_BYTES));
+    f.take(prefix_bytes as u64).read_to_end(&mut prefix).map_err(io)?;
+    let cut = prefix.iter().rposition(|&b| b == b'\n').map_or(prefix.len(), |i| i + 1);
+    prefix.truncate(cut);
+    if prefix.windows(2).any(|w| w[0] == b'\r' && w[1] != b'\n') {
+        let message = "lines end with a lone CR (old Mac); too large to read in memory: convert to LF".to_string();
+        return Err(CsvError::Io { file: file.to_string(), message });
+    }
+    Ok((prefix, cut))
+}
+
+/// The detector's settings, as [`csvio::accumulate`] derives them, from the prefix.
+struct Settings {
+    config: AccumulatorConfig,
+    block: usize,
+    sample_rate_hz: Option<f64>,
+    skip_repeats: bool,
+    gap_s: Option<f64>,
+}
+
+impl Settings {
+    fn from_prefix(table: &Table, opts: &AccumulateOptions) -> Self {
+        let repeats = csvio::repeat_fraction(&table.samples);
+        let skip_repeats = opts.skip_repeats.unwrap_or_else(|| csvio::repeats_look_stale(&table.samples));
+        let fed_fraction = if skip_repeats { 1.0 - repeats } else { 1.0 };
+        let sample_rate_hz = opts.sample_rate_hz.or_else(|| table.sample_rate_hz()).map(|r| r * fed_fraction);
+        let block = opts.block_samples.unwrap_or_else(|| csvio::choose_block_samples(sample_rate_hz));
+        let mut config = opts.config;
+        config.min_noise_variance = config.min_noise_variance.max(csvio::quantisation_variance(&table.samples));
+        let gap_s = table.times_s.as_ref().and_then(|t| {
+            let span = t.last()? - t.first()?;
+            (t.len() >= 2 && span > 0.0).then(|| opts.gap_factor * span / (t.len() - 1) as f64)
+        });
+        Self { config, block, sample_rate_hz, skip_repeats, gap_s }
+    }
+}
+
+/// Counts over the whole file.
+#[derive(Debug, Clone, Copy, Default)]
+struct Totals {
+    rows: usize,
+    pushed: usize,
+    skipped_repeats: usize,
+    interruptions: u32,
+    non_finite: usize,
+    first_non_finite_line: usize,
+    stale_flag: usize,
+    truncated: usize,
+}
+
+/// What one pass over the rows does with each sample: interrupt the stream first when `gap` (a gap
+/// in the time stamps, even before a skipped row), then feed it when `push` (not a stale repeat).
+struct Feed {
+    gap: bool,
+    push: bool,
+}
+
+/// The state deciding what to do with each row, as `Run::go` in `csvio` does.
+struct Feeder<'a> {
+    settings: &'a Settings,
+    previous: Option<(Option<f64>, [f64; 3])>,
+}
+
+impl Feeder<'_> {
+    fn feed(&mut self, time: Option<f64>, sample: [f64; 3], totals: &mut Totals) -> Feed {
+        let previous = self.previous.replace((time, sample));
+        totals.rows += 1;
+        let gap = match (previous.and_then(|p| p.0), time, self.settings.gap_s) {
+            (Some(t0), Some(t1), Some(gap_s)) => t1 - t0 > gap_s,
+            _ => false,
+        };
+        if gap {
+            totals.interruptions += 1;
+        }
+        if self.settings.skip_repeats && previous.is_some_and(|p| p.1 == sample) {
+            totals.skipped_repeats += 1;
+            return Feed { gap, push: false };
+        }
+        totals.pushed += 1;
+        Feed { gap, push: true }
+    }
+}
+
+/// The result of the detection pass.
+struct DetectRun {
+    poses: Vec<Pose>,
+    rejections: accelcal::accumulator::Rejections,
+    dropped_full: u32,
+    noise_variance: f32,
+    totals: Totals,
+}
+
+/// The file and how to read its rows.
+struct Source<'a> {
+    path: &'a Path,
+    file: &'a str,
+    opts: &'a ReadOptions,
+    columns: &'a Columns,
+    prefix_len: usize,
+    first_line: usize,
+}
+
+impl Source<'_> {
+    /// Pass 1: every row into the accumulator.
+    fn detect<const BLOCK: usize>(&self, table: &Table, settings: &Settings) -> Result<DetectRun, StreamError> {
+        let file = self.file.to_string();
+        let mut acc = Accumulator::<f32, MAX_POSES, BLOCK>::new(settings.config)
+            .map_err(|e| StreamError::Accumulator(file.clone(), e))?;
+        let mut dropped_full = 0u32;
+        let mut failure = None;
+        let mut handle = |r: Result<_, AccumulatorError>| match r {
+            Ok(_) | Err(AccumulatorError::NonFiniteSample) => {}
+            Err(AccumulatorError::Full) => dropped_full += 1,
+            Err(e) => failure = failure.or(Some(e)),
+        };
+        let mut feeder = Feeder { settings, previous: None };
+        let mut totals = Totals::default();
+        self.for_each_row(table, &mut totals, |_, time, sample, totals| {
+            let feed = feeder.feed(time, sample, totals);
+            if feed.gap {
+                handle(acc.interrupt());
+            }
+            if feed.push {
+                handle(acc.push(sample.map(|v| v as f32)));
+            }
+        })?;
+        handle(acc.finish());
+        if let Some(e) = failure {
+            return Err(StreamError::Accumulator(file, e));
+        }
+        let (rejections, noise_variance) = (acc.rejections(), acc.noise_variance());
+        Ok(DetectRun { poses: acc.poses().to_vec(), rejections, dropped_full, noise_variance, totals })
+    }
+
+    /// Pass 2: the line, time and row of each pose's first and last sample.
+    fn spans(&self, table: &Table, settings: &Settings, poses: &[Pose]) -> Result<Vec<PoseSpan>, StreamError> {
+        let mut wanted: Vec<usize> = poses
+            .iter()
+            .flat_map(|p| {
+                [p.start_index as usize, (p.end_index as usize).saturating_sub(1).max(p.start_index as usize)]
+            })
+            .collect();
+        wanted.sort_unstable();
+        wanted.dedup();
+        let mut found: Vec<(usize, usize, usize, Option<f64>)> = Vec::with_capacity(wanted.len());
+        let mut feeder = Feeder { settings, previous: None };
+        let mut totals = Totals::default();
+        self.for_each_row(table, &mut totals, |line, time, sample, totals| {
+            let row = totals.rows;
+            if feeder.feed(time, sample, totals).push && wanted.get(found.len()) == Some(&(totals.pushed - 1)) {
+                found.push((totals.pushed - 1, row, line, time));
+            }
+        })?;
+        let at = |index: usize| found.iter().rev().find(|f| f.0 <= index).or(found.first()).copied();
+        Ok(poses
+            .iter()
+            .filter_map(|p| {
+                let first = at(p.start_index as usize)?;
+                let last = at((p.end_index as usize).saturating_sub(1).max(p.start_index as usize))?;
+                Some(PoseSpan {
+                    first_row: first.1,
+                    last_row: last.1,
+                    first_line: first.2,
+                    last_line: last.2,
+                    start_s: first.3,
+                    end_s: last.3,
+                })
+            })
+            .collect())
+    }
+
+    /// Calls `f(line, time, sample, totals)` for every data row: the prefix table's rows, then the
+    /// rest of the file read line by line and checked as [`csvio::read_csv`] checks rows.
+    fn for_each_row(
+        &self,
+        table: &Table,
+        totals: &mut Totals,
+        mut f: impl FnMut(usize, Option<f64>, [f64; 3], &mut Totals),
+    ) -> Result<(), StreamError> {
+        for (i, sample) in table.samples.iter().enumerate() {
+            f(table.line_of_row[i], table.times_s.as_ref().map(|t| t[i]), *sample, totals);
+        }
+        let mut reader = self.open_rest()?;
+        let mut check = RowCheck::new(self, table);
+        let (mut current, mut next) = (Vec::new(), Vec::new());
+        let mut line = self.first_line;
+        let read = |r: &mut BufReader<std::fs::File>, buf: &mut Vec<u8>| {
+            buf.clear();
+            r.read_until(b'\n', buf).map_err(|e| CsvError::Io { file: self.file.to_string(), message: e.to_string() })
+        };
+        let mut has_current = read(&mut reader, &mut current)? > 0;
+        while has_current {
+            let has_next = read(&mut reader, &mut next)? > 0;
+            if let Some((time, sample)) = check.row(line, &current, !has_next, totals)? {
+                f(line, time, sample, totals);
+            }
+            std::mem::swap(&mut current, &mut next);
+            has_current = has_next;
+            line += 1;
+        }
+        Ok(())
+    }
+
+    fn open_rest(&self) -> Result<BufReader<std::fs::File>, CsvError> {
+        let io = |e: std::io::Error| CsvError::Io { file: self.file.to_string(), message: e.to_string() };
+        let mut f = std::fs::File::open(self.path).map_err(io)?;
+        std::io::Seek::seek(&mut f, std::io::SeekFrom::Start(self.prefix_len as u64)).map_err(io)?;
+        Ok(BufReader::with_capacity(1 << 16, f))
+    }
+}
+
+/// A row's time (with a time column), seconds, and its sample in the working unit.
+type TimedSample = (Option<f64>, [f64; 3]);
+
+/// The checks of one streamed row, with the state they need (previous time and line).
+struct RowCheck<'a> {
+    parser: Parser<'a>,
+    source: &'a Source<'a>,
+    header: &'a [String],
+    delimiter: csvio::Delimiter,
+    factor: f64,
+    limit: f64,
+    units: csvio::Units,
+    accel_names: &'a [String; 3],
+    previous: Option<(usize, f64)>,
+}
+
+impl<'a> RowCheck<'a> {
+    fn new(source: &'a Source<'a>, table: &'a Table) -> Self {
+        let previous = table.times_s.as_ref().and_then(|t| Some((*table.line_of_row.last()?, *t.last()?)));
+        Self {
+            parser: Parser { file: source.file.to_string(), opts: source.opts, notes: Vec::new() },
+            source,
+            header: &table.header,
+            delimiter: table.delimiter,
+            factor: table.units_header.as_ref().map_or(1.0, |h| h.factor),
+            limit: table.units.non_physical_limit(),
+            units: table.units,
+            accel_names: &table.columns.accel,
+            previous,
+        }
+    }
+
+    /// One line: `Ok(Some((time, sample)))` for a row read, `Ok(None)` for a line without one (blank,
+    /// comment, dropped row, counted in `totals`), or the row's error.
+    fn row(
+        &mut self,
+        line: usize,
+        bytes: &[u8],
+        is_last: bool,
+        totals: &mut Totals,
+    ) -> Result<Option<TimedSample>, CsvError> {
+        let file = self.source.file;
+        if bytes.contains(&0) {
+            return Err(CsvError::Binary { file: file.to_string(), line, what: "NUL bytes" });
+        }
+        let ends_with_newline = bytes.ends_with(b"\n");
+        let text: Cow<'_, str> = match std::str::from_utf8(bytes) {
+            Ok(t) => Cow::Borrowed(t),
+            Err(_) => Cow::Owned(bytes.iter().map(|&b| char::from(b)).collect()),
+        };
+        let text = text.trim_end_matches(['\n', '\r']);
+        if csvio::is_blank_or_comment(text) {
+            return Ok(None);
+        }
+        let cells = csvio::split_cells(text, self.delimiter);
+        // With every column by index any row holding them is read (the prefix checked the count).
+        let (expected, ragged) = if csvio::all_by_index(self.source.opts) {
+            let needed = self.source.columns.max_index() + 1;
+            (needed, cells.len() < needed)
+        } else {
+            (self.header.len(), cells.len() != self.header.len())
+        };
+        if ragged {
+            if is_last && cells.len() < expected {
+                totals.truncated += 1;
+                return Ok(None);
+            }
+            return Err(CsvError::RaggedRow { file: file.to_string(), line, cells: cells.len(), expected });
+        }
+        if self.parser.is_stale(&cells, line, self.source.columns, self.header, self.delimiter)? {
+            totals.stale_flag += 1;
+            return Ok(None);
+        }
+        let row = match self.parser.parse_row(&cells, line, self.source.columns, self.header, self.delimiter) {
+            Ok(Some(row)) => row,
+            Ok(None) => {
+                totals.non_finite += 1;
+                if totals.first_non_finite_line == 0 {
+                    totals.first_non_finite_line = line;
+                }
+                return Ok(None);
+            }
+            Err(_) if is_last && !ends_with_newline => {
+                totals.truncated += 1;
+                return Ok(None);
+            }
+            Err(e) => return Err(e),
+        };
+        let sample = row.accel.map(|v| v * self.factor);
+        self.check_range(line, sample)?;
+        self.check_time(line, row.time)?;
+        Ok(Some((row.time, sample)))
+    }
+
+    fn check_range(&self, line: usize, sample: [f64; 3]) -> Result<(), CsvError> {
+        match sample.iter().position(|v| v.abs() > self.limit) {
+            None => Ok(()),
+            Some(axis) => Err(CsvError::Gigantic {
+                file: self.source.file.to_string(),
+                line,
+                column: self.accel_names[axis].clone(),
+                value: sample[axis],
+                units: self.units,
+            }),
+        }
+    }
+
+    fn check_time(&mut self, line: usize, time: Option<f64>) -> Result<(), CsvError> {
+        let Some(time_s) = time else { return Ok(()) };
+        let previous = self.previous.replace((line, time_s));
+        let Some((previous_line, previous_s)) = previous else { return Ok(()) };
+        let file = self.source.file.to_string();
+        if time_s == previous_s {
+            return Err(CsvError::DuplicateTime { file, line, previous_line, time_s });
+        }
+        if time_s < previous_s {
+            return Err(CsvError::NonMonotonicTime { file, line, previous_line, previous_s, time_s });
+        }
+        Ok(())
+    }
+}
+
+/// Adds the rows dropped after the prefix to the table's counts and warnings; too many NaN rows in
+/// the whole file is the same error as in memory.
+fn add_stream_drops(table: &mut Table, totals: &Totals, prefix_rows: usize) -> Result<(), CsvError> {
+    let file = table.file.clone();
+    let all_non_finite = table.dropped.non_finite + totals.non_finite;
+    let rows = totals.rows + all_non_finite;
+    if all_non_finite > 1 && all_non_finite as f64 > MAX_SKIPPED_FRACTION * rows as f64 {
+        let first_line = totals.first_non_finite_line;
+        return Err(CsvError::TooManyNonFinite { file, skipped: all_non_finite, rows, first_line });
+    }
+    if totals.non_finite > 0 {
+        table.warnings.push(format!(
+            "{file}: {} more rows after the first {prefix_rows} skipped for NaN, infinite or empty values (first at \
+             line {})",
+            totals.non_finite, totals.first_non_finite_line
+        ));
+    }
+    if totals.truncated > 0 {
+        table.warnings.push(format!("{file}: last line truncated (power cut?): ignored"));
+    }
+    table.dropped.non_finite = all_non_finite;
+    table.dropped.stale_flag += totals.stale_flag;
+    table.dropped.truncated += totals.truncated;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::PathBuf;
+
+    fn temp_file(name: &str, text: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("accelcal-csvstream-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join(name);
+        std::fs::write(&path, text).unwrap();
+        path
+    }
+
+    /// Twelve still directions of 300 rows at 100 Hz with noise and 80-row moves, a NaN row, a
+    /// blank line and a comment in the middle.
+    fn log() -> String {
+        let s = 1.0 / 3f64.sqrt();
+        let dirs = [
+            [1.0, 0.0, 0.0],
+            [-1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, -1.0],
+            [s, s, s],
+            [-s, s, -s],
+            [s, -s, -s],
+            [-s, -s, s],
+            [s, s, -s],
+            [-s, s, s],
+        ];
+        let mut text = String::from("t,ax,ay,az\n");
+        let (mut t, mut lcg) = (0.0, 9u32);
+        for (k, d) in dirs.iter().enumerate() {
+            for i in 0..380 {
+                lcg = lcg.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                let n = (f64::from(lcg >> 16) / 65536.0 - 0.5) * 0.004;
+                let w = if i < 300 { 0.0 } else { (f64::from(i - 300) * 0.3).sin() };
+                text.push_str(&format!("{t:.2},{:.5},{:.5},{:.5}\n", d[0] + n + w, d[1] - n + 0.5 * w, d[2] + n - w));
+                t += 0.01;
+            }
+            if k == 7 {
+                text.push_str(&format!("{t:.2},nan,0,1\n\n# operator turned the cube\n"));
+                t += 0.01;
+            }
+        }
+        text
+    }
+
+    #[test]
+    fn streaming_finds_the_poses_and_spans_reading_in_memory_finds() {
+        let text = log();
+        let path = temp_file("log.csv", &text);
+        let opts = ReadOptions::default();
+        let table = csvio::read_csv(&path, &opts).unwrap();
+        let in_memory = csvio::accumulate(&table, &AccumulateOptions::default()).unwrap();
+        let streamed = stream_poses(&path, &opts, &AccumulateOptions::default(), 2000).unwrap();
+        assert!(streamed.table.samples.len() < 100, "the prefix must be a small part of the file");
+        assert_eq!(in_memory.poses.len(), 12);
+        assert_eq!(streamed.accumulation.poses, in_memory.poses);
+        assert_eq!(streamed.accumulation.spans, in_memory.spans);
+        assert_eq!(streamed.rows, table.samples.len());
+        assert_eq!(streamed.table.dropped, table.dropped);
+        assert_eq!(streamed.table.dropped.non_finite, 1);
+    }
+
+    #[test]
+    fn streaming_skips_stale_repeats_and_breaks_at_time_gaps_as_in_memory() {
+        // Every reading of `log` four times (a sensor polled at 4x its rate), and a 5 s gap in a hold.
+        let mut text = String::from("t,ax,ay,az\n");
+        let mut t = 0.0;
+        for (k, line) in log().lines().skip(1).filter(|l| l.contains(',') && !l.contains("nan")).enumerate() {
+            let values = line.split_once(',').unwrap().1;
+            for copy in 0..4 {
+                // The gap falls before a repeated copy: the stream is interrupted all the same.
+                if k == 2000 && copy == 2 {
+                    t += 5.0;
+                }
+                text.push_str(&format!("{t:.4},{values}\n"));
+                t += 0.0025;
+            }
+        }
+        let path = temp_file("stale_gap.csv", &text);
+        let opts = ReadOptions::default();
+        let table = csvio::read_csv(&path, &opts).unwrap();
+        let in_memory = csvio::accumulate(&table, &AccumulateOptions::default()).unwrap();
+        let streamed = stream_poses(&path, &opts, &AccumulateOptions::default(), 4000).unwrap().accumulation;
+        assert!(in_memory.skipped_repeats > 10_000 && in_memory.interruptions == 1, "{in_memory:?}");
+        assert_eq!((streamed.skipped_repeats, streamed.interruptions), (in_memory.skipped_repeats, 1));
+        assert_eq!(streamed.poses, in_memory.poses);
+        assert_eq!(streamed.spans, in_memory.spans);
+    }
+
+    #[test]
+    fn streamed_rows_are_checked_with_their_line() {
+        let text = log();
+        let lines: Vec<&str> = text.lines().collect();
+        let mut bad = lines.clone();
+        bad[3000] = "29.99,0,zero,1";
+        let path = temp_file("bad_cell.csv", &(bad.join("\n") + "\n"));
+        let e = stream_poses(&path, &ReadOptions::default(), &AccumulateOptions::default(), 2000).unwrap_err();
+        assert!(e.to_string().contains("bad_cell.csv:3001: column `ay`: `zero` is not a number"), "{e}");
+        let mut backwards = lines.clone();
+        backwards[4000] = "1.00,0,0,1";
+        let path = temp_file("backwards.csv", &(backwards.join("\n") + "\n"));
+        let e = stream_poses(&path, &ReadOptions::default(), &AccumulateOptions::default(), 2000).unwrap_err();
+        assert!(e.to_string().contains("backwards.csv:4001: time goes backwards"), "{e}");
+        let path = temp_file("truncated.csv", &(text.clone() + "99.99,0.1"));
+        let streamed = stream_poses(&path, &ReadOptions::default(), &AccumulateOptions::default(), 2000).unwrap();
+        assert_eq!(streamed.table.dropped.truncated, 1);
+        assert!(streamed.table.warnings.iter().any(|w| w.contains("truncated")), "{:?}", streamed.table.warnings);
+    }
+}
