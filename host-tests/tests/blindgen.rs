@@ -479,3 +479,38 @@ fn hand_rotations_are_smooth_with_no_jump_at_either_end() {
         .fold(0.0, f64::max);
     assert!(worst < 30.0 * MG, "largest step between 1 ms samples: {} mg", worst / MG);
 }
+
+#[test]
+fn a_face_aligned_session_points_each_body_axis_up_and_down_within_its_tilt() {
+    let mut spec = small(Family::Clean, 121);
+    let mut rng = accelcal_host::blindgen::noise::Rng::new(1, 2);
+    spec.session.align_to_faces(&mut rng);
+    let log = generate(&spec);
+    assert!([12, 18, 24].contains(&log.holds.len()), "{} poses", log.holds.len());
+    let mut faces = [0usize; 6];
+    for h in &log.holds {
+        let (k, v) = (0..3).map(|k| (k, h.up_body[k])).max_by(|a, b| a.1.abs().total_cmp(&b.1.abs())).unwrap();
+        let tilt_deg = v.abs().acos().to_degrees();
+        assert!((0.4..2.1).contains(&tilt_deg), "tilt {tilt_deg} deg");
+        faces[2 * k + usize::from(v < 0.0)] += 1;
+    }
+    assert!(faces.iter().all(|&n| n == log.holds.len() / 6), "faces {faces:?}");
+    for r in residuals(&spec, &log, 0.0) {
+        assert!(norm(r) < 1.0 * MG, "residual {r:?}");
+    }
+}
+
+#[test]
+fn quadratic_temperature_bias_grows_with_the_square_of_the_change() {
+    let profile = TempProfile::Cycling { mean_c: 25.0, amp_c: 8.0, period_s: 90.0 };
+    let b2 = [0.05 * MG, -0.1 * MG, 0.0];
+    let mut effect = temp_effect([0.0; 3], [0.0; 3], None);
+    effect.bias_per_c2 = b2;
+    let spec = temp_spec(44, profile, effect);
+    let log = generate(&spec);
+    for (i, r) in residuals(&spec, &log, 0.0).iter().enumerate() {
+        let h = log.holds[i];
+        let square = average(|t| [(profile.at(t) - 25.0).powi(2); 3], h.start_s, h.end_s)[0];
+        assert!(norm(sub(*r, scale(b2, square))) < 0.3 * MG, "hold {i}: {r:?} vs {:?}", scale(b2, square));
+    }
+}
