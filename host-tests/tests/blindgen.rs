@@ -452,7 +452,7 @@ fn cross_axis_error_is_the_product_of_the_other_axes() {
 fn a_lagged_sensor_temperature_trails_the_thermometer() {
     let (rate, tau_s) = (0.05, 60.0);
     let profile = TempProfile::Ramp { start_c: 20.0, rate_c_per_s: rate };
-    let b = [2.0 * MG, 0.0, -1.0 * MG];
+    let b = [2.0 * MG, 0.0, -MG];
     let spec = temp_spec(43, profile, temp_effect(b, [0.0; 3], Some(tau_s)));
     let log = generate(&spec);
     let res = residuals(&spec, &log, 0.0);
