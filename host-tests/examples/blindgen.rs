@@ -26,6 +26,9 @@ struct Args {
     /// Draw from the held-out seed range (seeds offset by 1 000 000).
     #[arg(long)]
     held_out: bool,
+    /// Small logs (12 poses at 100 Hz) for quick runs.
+    #[arg(long)]
+    small: bool,
     /// Families, comma-separated (default: all), assigned round-robin.
     #[arg(long, value_delimiter = ',')]
     families: Vec<String>,
@@ -39,7 +42,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut entries = Vec::new();
     for i in 0..args.count {
         let family = families[(i % families.len() as u64) as usize];
-        let spec = blindgen::random_spec(family, offset + args.first_seed + i);
+        let seed = offset + args.first_seed + i;
+        let spec =
+            if args.small { blindgen::random_small_spec(family, seed) } else { blindgen::random_spec(family, seed) };
         let (file, twin_file) = (format!("{i:04}.csv"), format!("{i:04}.twin.csv"));
         let log = blindgen::generate(&spec);
         let twin = blindgen::generate(&spec.twin());

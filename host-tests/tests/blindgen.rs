@@ -521,3 +521,20 @@ fn quadratic_temperature_bias_grows_with_the_square_of_the_change() {
         assert!(norm(sub(*r, scale(b2, square))) < 0.3 * MG, "hold {i}: {r:?} vs {:?}", scale(b2, square));
     }
 }
+
+#[test]
+fn random_attitudes_are_uniform_on_the_sphere_of_up_directions() {
+    use accelcal_host::blindgen::orientation::Quat;
+    let mut rng = accelcal_host::blindgen::noise::Rng::new(3, 4);
+    let n = 4000;
+    let ups: Vec<V3> = (0..n).map(|_| Quat::random(&mut rng).rotate_inv([0.0, 0.0, 1.0])).collect();
+    for k in 0..3 {
+        let mean = ups.iter().map(|u| u[k]).sum::<f64>() / n as f64;
+        let second = ups.iter().map(|u| u[k] * u[k]).sum::<f64>() / n as f64;
+        // Uniform on the sphere: mean 0 (sd 1/sqrt(3n)), second moment 1/3 (sd sqrt(4/45/n)).
+        assert!(mean.abs() < 4.0 / (3.0 * n as f64).sqrt(), "axis {k}: mean {mean}");
+        assert!((second - 1.0 / 3.0).abs() < 4.0 * (4.0 / 45.0 / n as f64).sqrt(), "axis {k}: second moment {second}");
+    }
+    let faces = ups.iter().filter(|u| u.iter().any(|c| c.abs() > 0.9998)).count();
+    assert!(faces < 10, "{faces} of {n} attitudes within 1 deg of a face");
+}
