@@ -52,11 +52,11 @@ pub struct Settling {
 pub fn randomise(rng: &mut Rng, spec: &mut LogSpec) {
     let poses = spec.session.poses.len();
     let kind = rng.index(3);
-    let creep_mg_per_g = rng.log_uniform(0.5, 50.0);
+    let creep_mg_per_g = rng.log_uniform(2.0, 100.0);
     let ring_mg = rng.log_uniform(2.0, 200.0);
     let creep = (kind != 1).then(|| Creep {
         lag_fraction: core::array::from_fn(|_| rng.sign() * rng.range(0.5, 1.0) * creep_mg_per_g * 1e-3),
-        tau_s: core::array::from_fn(|_| rng.log_uniform(0.1, 0.8)),
+        tau_s: core::array::from_fn(|_| rng.log_uniform(0.2, 0.8)),
     });
     let ringing = (kind != 0).then(|| random_ringing(rng, poses, ring_mg));
     let magnitude = if kind == 1 {

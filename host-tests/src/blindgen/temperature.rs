@@ -140,7 +140,7 @@ pub const TEMP_KINDS: [&str; 5] =
 
 impl TempEffect {
     /// A random effect over a temperature span of `span_c`: a bias change of 0.5-50 mg and/or a
-    /// scale change of 300-20 000 ppm across the span.
+    /// scale change of 1000-30 000 ppm across the span.
     pub fn random(rng: &mut Rng, span_c: f64, lag_tau_s: Option<f64>) -> Self {
         let kind = TEMP_KINDS[rng.index(TEMP_KINDS.len())];
         let mut e = Self {
@@ -173,9 +173,9 @@ impl TempEffect {
         self.magnitude = Magnitude { value: bias_mg, unit: "mg", what: "bias change over the temperature span" };
     }
 
-    /// A relative scale change of 300-20 000 ppm across `span_c`, random sign per axis.
+    /// A relative scale change of 1000-30 000 ppm across `span_c`, random sign per axis.
     fn set_scale(&mut self, rng: &mut Rng, quadratic: bool, span_c: f64) {
-        let scale_ppm = rng.log_uniform(300.0, 20_000.0);
+        let scale_ppm = rng.log_uniform(1000.0, 30_000.0);
         let power = if quadratic { 2 } else { 1 };
         let per: V3 =
             core::array::from_fn(|_| rng.sign() * rng.range(0.5, 1.0) * scale_ppm * 1e-6 / span_c.powi(power));
