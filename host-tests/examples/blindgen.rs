@@ -1,6 +1,14 @@
 //! Writes a directory of generated calibration logs for blind tests of the diagnosis: for each log
 //! `NNNN.csv`, its twin without the effect `NNNN.twin.csv`, and one `manifest.json`.
 //!
+//! Manifest fields per log: `file`, `twin`, `family`, `shape`, `params` (the effect's parameters,
+//! SI units, body or sensor frame as named), `magnitude` with `magnitude_unit` and `magnitude_what`
+//! (the strength as drawn), `rms_effect_mg` (RMS of log minus twin over all samples) and
+//! `max_hold_effect_mg` (largest change of a calibrated hold mean), `seed`, `held_out` (seed >=
+//! 1 000 000), `units` (`m/s^2`, `g`, `counts`), `lsb_per_g`, `sample_rate_hz`, `noise_mg`, `truth`
+//! (`B` in the output unit, `B_mps2`, `S`, `M`; the sensor at t = 0), `pose_count`, `rest_s`,
+//! `duration_s`, `samples`, `temperature` (the thermometer profile, if the log has a column).
+//!
 //! ```text
 //! cargo run -p accelcal-host --example blindgen -- --out target/blind --count 40
 //! cargo run -p accelcal-host --example blindgen -- --out target/held --count 40 --held-out

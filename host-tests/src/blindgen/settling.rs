@@ -62,7 +62,11 @@ pub fn randomise(rng: &mut Rng, spec: &mut LogSpec) {
     let magnitude = if kind == 1 {
         Magnitude { value: ring_mg, unit: "mg", what: "ringing amplitude after a rotation" }
     } else {
-        Magnitude { value: creep_mg_per_g, unit: "mg/g", what: "creep lag per g of input change" }
+        Magnitude {
+            value: creep_mg_per_g,
+            unit: "mg/g",
+            what: "creep fraction per g of input change (a hold start sees part of it)",
+        }
     };
     spec.set_effect(Effect::Settling(Settling { creep, ringing, magnitude }));
 }
