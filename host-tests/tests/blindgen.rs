@@ -538,3 +538,53 @@ fn random_attitudes_are_uniform_on_the_sphere_of_up_directions() {
     let faces = ups.iter().filter(|u| u.iter().any(|c| c.abs() > 0.9998)).count();
     assert!(faces < 10, "{faces} of {n} attitudes within 1 deg of a face");
 }
+
+#[test]
+fn every_shape_of_every_family_is_drawn() {
+    let expected: [(Family, &[&str]); 8] = [
+        (Family::Clean, &["plain", "quantised", "face_aligned", "temperature_column"]),
+        (Family::Drift, &["linear", "quadratic", "warm_up", "wander"]),
+        (
+            Family::Temperature,
+            &["bias_linear", "bias_quadratic_lagged", "scale_linear", "scale_quadratic", "bias_and_scale_lagged"],
+        ),
+        (Family::Nonlinearity, &["square", "cube", "square_and_cube"]),
+        (Family::Settling, &["exponential", "ringing", "exponential_and_ringing"]),
+        (Family::Motion, &["taps", "sway", "bump"]),
+        (Family::ColoredNoise, &["random_walk", "gauss_markov", "flicker"]),
+        (Family::OutOfCatalogue, &["bad_pose", "mains", "hysteresis", "cross_axis"]),
+    ];
+    for (family, shapes) in expected {
+        let drawn: Vec<String> = (0..60).map(|seed| random_small_spec(family, seed).shape).collect();
+        for shape in shapes {
+            assert!(drawn.iter().any(|d| d == shape), "{family:?}: {shape} never drawn in 60 seeds");
+        }
+        let specs = (0..60).map(|seed| random_small_spec(family, seed));
+        assert!(specs.clone().all(|s| s.family == family && s.effect.is_some() == (family != Family::Clean)));
+        let with_temp = specs.filter(|s| s.session.temperature.is_some()).count();
+        assert!(
+            family == Family::Temperature || (10..50).contains(&with_temp),
+            "{family:?}: {with_temp}/60 with a thermometer"
+        );
+    }
+}
+
+#[test]
+fn the_csv_reads_back_through_the_cli_reader_in_its_unit() {
+    use accelcal_host::csvio::{self, ReadOptions};
+    let cases = [(Units::Mps2, csvio::Units::Mps2), (Units::G, csvio::Units::G), (Units::COARSE, csvio::Units::Counts)];
+    for (units, read_as) in cases {
+        let mut spec = small(Family::Temperature, 131);
+        spec.units = units;
+        let log = generate(&spec);
+        let table = csvio::read_csv_str("blind.csv", &log.to_csv_string(), &ReadOptions::default()).expect("readable");
+        assert_eq!(table.units, read_as);
+        assert_eq!(table.samples.len(), log.samples.len());
+        let temps = table.temps_c.expect("a temperature column");
+        let times = table.times_s.expect("a time column");
+        for (i, s) in log.samples.iter().enumerate().step_by(97) {
+            assert!(sub(table.samples[i], s.accel).iter().all(|d| d.abs() < 1e-5), "row {i}");
+            assert!((times[i] - s.t_s).abs() < 1e-6 && (temps[i] - s.temp_c.unwrap()).abs() < 0.006, "row {i}");
+        }
+    }
+}
