@@ -11,7 +11,7 @@
 //! | symbol | what one call does |
 //! |---|---|
 //! | `accumulate_sample` | `Accumulator<i16, 24, 32>::push` of one raw sample (called for every sample of the stream) |
-//! | `apply_sample` | `Params::apply` of a batch of `APPLY_BATCH` samples in place (the pose means; the report gives cycles per sample) |
+//! | `apply_sample` | `Params::apply_in_place` of a batch of `APPLY_BATCH` samples (the pose means; the report gives cycles per sample) |
 //! | `taga_generation` | one `Ga::step` on the normalised 24-pose problem, population `POP` (called `GENERATIONS` = 10 times) |
 //! | `lm` | `levenberg_marquardt` from the coarse start (deviation 0) |
 //! | `full_calibration` | `calibrate::<_, POP, 24>` with `CalibrationConfig::DEFAULT`: coarse, TAGA, LM, verdict |
@@ -80,9 +80,7 @@ mod firmware {
     #[unsafe(no_mangle)]
     #[inline(never)]
     pub fn apply_sample(params: &Params, samples: &mut [[f32; 3]]) {
-        for s in samples {
-            *s = params.apply(*s);
-        }
+        params.apply_in_place(samples);
     }
 
     /// One TAGA generation on the normalised problem.

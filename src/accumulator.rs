@@ -52,7 +52,7 @@ pub trait Reading: Copy + Default {
     fn count(n: u32) -> Self::Sum;
     /// The exact sums of `samples` relative to the first one (zero for none), and whether one of them
     /// is saturated at `limit`. Called once per block.
-    fn block_sums(samples: &[[Self; 3]], limit: Self::Limit) -> BlockSums<Self::Sum>;
+    fn block_sums(axes: [&[Self]; 3], limit: Self::Limit) -> BlockSums<Self::Sum>;
     /// Mean and (population) variance of `n` samples, from their sums relative to `reference`
     /// (pose close; no software `f64` for `i16` on a Cortex-M4F).
     fn mean_and_variance(reference: Self, sum: Self::Sum, sum_sq: Self::Sum, n: u32) -> (f32, f32);
@@ -97,28 +97,24 @@ fn ratio_to_f32(total: i64, n: u32) -> f32 {
     if total < 0 { -v } else { v }
 }
 
-/// Raw sums `(sum x, sum x^2)` of axis `axis` of `i16` samples, in registers. The `i32` sum is exact
-/// for up to `2^16` samples (`2^16 * 2^15 = 2^31`), so longer slices are summed in chunks of that
-/// length; each square (at most `2^30`) is added into the `i64` by one multiply-accumulate.
+/// Raw sums `(sum x, sum x^2)` of one axis of a block of `i16` samples (at most `2^16`: the `i32` sum
+/// is exact, `2^16 * 2^15 = 2^31`), two samples per step: the pair of squares is one dual
+/// multiply-accumulate into the `i64` on a Cortex-M4 (each square is at most `2^30`).
 #[inline(always)]
-fn raw_i16_axis_sums(samples: &[[i16; 3]], axis: usize) -> (i64, i64) {
-    let (mut sum, mut sum_sq) = (0i64, 0i64);
-    for chunk in samples.chunks(1 << 16) {
-        let mut s = 0i32;
-        for v in chunk {
-            let x = i32::from(v.get(axis).copied().unwrap_or(0));
-            s += x;
-            sum_sq += i64::from(x) * i64::from(x);
-        }
-        sum += i64::from(s);
+fn raw_i16_axis_sums(values: &[i16]) -> (i64, i64) {
+    let (mut sum, mut sum_sq) = (0i32, 0i64);
+    let mut pairs = values.chunks_exact(2);
+    for pair in &mut pairs {
+        let (a, b) = (i32::from(pair[0]), i32::from(pair[1]));
+        sum += a + b;
+        sum_sq += i64::from(a) * i64::from(a) + i64::from(b) * i64::from(b);
     }
-    (sum, sum_sq)
-}
-
-/// Raw per-axis sums `(sum x, sum x^2)` of `i16` samples, one axis at a time.
-fn raw_i16_sums(samples: &[[i16; 3]]) -> ([i64; 3], [i64; 3]) {
-    let (x, y, z) = (raw_i16_axis_sums(samples, 0), raw_i16_axis_sums(samples, 1), raw_i16_axis_sums(samples, 2));
-    ([x.0, y.0, z.0], [x.1, y.1, z.1])
+    for &v in pairs.remainder() {
+        let a = i32::from(v);
+        sum += a;
+        sum_sq += i64::from(a) * i64::from(a);
+    }
+    (i64::from(sum), sum_sq)
 }
 
 impl Reading for i16 {
@@ -131,20 +127,20 @@ impl Reading for i16 {
     fn count(n: u32) -> i64 {
         i64::from(n)
     }
-    fn block_sums(samples: &[[i16; 3]], limit: i32) -> BlockSums<i64> {
+    fn block_sums(axes: [&[i16]; 3], limit: i32) -> BlockSums<i64> {
         let mut out = BlockSums { sum: [0; 3], sum_sq: [0; 3], saturated: false };
-        let Some(first) = samples.first() else { return out };
-        let n = samples.len() as i64;
-        let (raw, raw_sq) = raw_i16_sums(samples);
         for a in 0..3 {
-            let r = i64::from(first[a]);
-            out.sum[a] = raw[a] - n * r;
-            out.sum_sq[a] = raw_sq[a] - 2 * r * raw[a] + n * r * r;
+            let values = axes[a];
+            let Some(&first) = values.first() else { continue };
+            let (raw, raw_sq) = raw_i16_axis_sums(values);
+            let (n, r) = (values.len() as i64, i64::from(first));
+            out.sum[a] = raw - n * r;
+            out.sum_sq[a] = raw_sq - 2 * r * raw + n * r * r;
             // Every sample is within sqrt(sum_sq) of the first: none can reach the limit (nor a rail)
             // when sum_sq < (min(limit, i16::MAX) - |first|)^2. Only otherwise are the samples checked.
             let margin = i64::from(limit.min(i32::from(i16::MAX))) - r.abs();
             if margin <= 0 || out.sum_sq[a] >= margin * margin {
-                out.saturated |= samples.iter().any(|v| v[a].saturated(limit));
+                out.saturated |= values.iter().any(|v| v.saturated(limit));
             }
         }
         out
@@ -194,16 +190,17 @@ impl Reading for f32 {
     fn count(n: u32) -> f64 {
         f64::from(n)
     }
-    fn block_sums(samples: &[[f32; 3]], limit: f32) -> BlockSums<f64> {
+    fn block_sums(axes: [&[f32]; 3], limit: f32) -> BlockSums<f64> {
         let mut out = BlockSums { sum: [0.0; 3], sum_sq: [0.0; 3], saturated: false };
-        let Some(first) = samples.first() else { return out };
-        for v in samples {
-            for a in 0..3 {
-                let d = v[a].delta(first[a]);
+        for a in 0..3 {
+            let values = axes[a];
+            let Some(&first) = values.first() else { continue };
+            for &v in values {
+                let d = v.delta(first);
                 out.sum[a] += d;
                 out.sum_sq[a] += d * d;
+                out.saturated |= v.saturated(limit);
             }
-            out.saturated |= v[0].saturated(limit) | v[1].saturated(limit) | v[2].saturated(limit);
         }
         out
     }
@@ -452,13 +449,13 @@ impl<R: Reading> Sums<R> {
 
     /// Per-axis mean offset from the reference and variance, in `f32` (block statistics).
     fn mean_offset_and_variance(&self) -> ([f32; 3], [f32; 3]) {
-        let n = self.n.max(1) as f32;
+        let n_inverse = 1.0 / self.n.max(1) as f32;
         let mut mean = [0.0; 3];
         let mut var = [0.0; 3];
         for a in 0..3 {
-            let m = R::sum_to_f32(self.sum[a]) / n;
+            let m = R::sum_to_f32(self.sum[a]) * n_inverse;
             mean[a] = m;
-            let v = R::sum_to_f32(self.sum_sq[a]) / n - m * m;
+            let v = R::sum_to_f32(self.sum_sq[a]) * n_inverse - m * m;
             var[a] = if v > 0.0 { v } else { 0.0 };
         }
         (mean, var)
@@ -487,18 +484,20 @@ pub struct Accumulator<R: Reading, const POSES: usize, const BLOCK: usize> {
     config: AccumulatorConfig,
     poses: heapless::Vec<Pose, POSES>,
     rejections: Rejections,
-    /// The open block's samples, summed when it is full (a push only stores its sample).
-    buffer: [[R; 3]; BLOCK],
+    /// The open block's samples, axis by axis, summed when it is full (a push only stores its sample).
+    buffer: [[R; BLOCK]; 3],
     /// Samples in `buffer`.
     buffered: usize,
     /// Index of the open block's first sample.
     block_start: u32,
     saturation_limit: R::Limit,
+    /// The last block (the delay line: while a pose is open it is merged in only once the next block
+    /// is still too).
     previous: Option<BlockStats<R>>,
-    pending: Option<Sums<R>>,
     pose: Option<Sums<R>>,
     noise_variance: f32,
-    samples_seen: u32,
+    /// Samples seen (saturating), except those in `buffer`.
+    counted: u32,
 }
 
 impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, BLOCK> {
@@ -515,15 +514,14 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
             config,
             poses: heapless::Vec::new(),
             rejections: Rejections::default(),
-            buffer: [[R::default(); 3]; BLOCK],
+            buffer: [[R::default(); BLOCK]; 3],
             buffered: 0,
             block_start: 0,
             saturation_limit: R::saturation_limit(config.full_scale),
             previous: None,
-            pending: None,
             pose: None,
             noise_variance: f32::INFINITY,
-            samples_seen: 0,
+            counted: 0,
         })
     }
 
@@ -533,15 +531,16 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         if !(sample[0].is_finite() && sample[1].is_finite() && sample[2].is_finite()) {
             return Err(self.skip_sample());
         }
-        self.samples_seen = self.samples_seen.saturating_add(1);
-        let Some(slot) = self.buffer.get_mut(self.buffered) else {
+        let i = self.buffered;
+        if i >= BLOCK {
             // Unreachable: a full buffer is summed at once.
-            self.buffered = 0;
+            self.drop_block();
             return Ok(None);
-        };
-        *slot = sample;
-        self.buffered += 1;
-        if self.buffered >= BLOCK {
+        }
+        let [x, y, z] = &mut self.buffer;
+        (x[i], y[i], z[i]) = (sample[0], sample[1], sample[2]);
+        self.buffered = i + 1;
+        if i + 1 == BLOCK {
             return self.close_block();
         }
         Ok(None)
@@ -563,16 +562,14 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
     pub fn interrupt(&mut self) -> Result<Option<Event>, AccumulatorError> {
         self.drop_block();
         self.previous = None;
-        self.pending = None;
         self.close_pose()
     }
 
     /// Ends the stream: a pose still open is closed with every quiet block it has (no motion followed).
     pub fn finish(&mut self) -> Result<Option<Event>, AccumulatorError> {
         self.drop_block();
-        self.previous = None;
-        if let (Some(pose), Some(pending)) = (self.pose.as_mut(), self.pending.take()) {
-            pose.merge(&pending);
+        if let (Some(pose), Some(last)) = (self.pose.as_mut(), self.previous.take()) {
+            pose.merge(&last.sums);
         }
         self.close_pose()
     }
@@ -580,33 +577,27 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
     /// Counts a skipped non-finite sample (out of line: not the hot path).
     #[inline(never)]
     fn skip_sample(&mut self) -> AccumulatorError {
-        self.samples_seen = self.samples_seen.saturating_add(1);
+        self.counted = self.counted.saturating_add(1);
         if self.buffered == 0 {
-            self.block_start = self.samples_seen;
+            self.block_start = self.counted;
         }
         AccumulatorError::NonFiniteSample
     }
 
     /// Drops the open block's samples; the next block starts at the next sample.
     fn drop_block(&mut self) {
+        self.counted = self.samples_seen();
         self.buffered = 0;
-        self.block_start = self.samples_seen;
+        self.block_start = self.counted;
     }
 
     /// The full buffer's sums; the next block starts at the next sample.
     fn take_block(&mut self) -> Sums<R> {
-        let BlockSums { sum, sum_sq, saturated } = R::block_sums(&self.buffer, self.saturation_limit);
-        let sums = Sums {
-            reference: self.buffer[0],
-            sum,
-            sum_sq,
-            n: BLOCK as u32,
-            start_index: self.block_start,
-            end_index: self.samples_seen,
-            saturated,
-        };
+        let [x, y, z] = &self.buffer;
+        let BlockSums { sum, sum_sq, saturated } = R::block_sums([x, y, z], self.saturation_limit);
+        let (start_index, reference) = (self.block_start, [x[0], y[0], z[0]]);
         self.drop_block();
-        sums
+        Sums { reference, sum, sum_sq, n: BLOCK as u32, start_index, end_index: self.counted, saturated }
     }
 
     // Once per BLOCK samples: kept out of line so that `push`, inlined into the caller's sample loop, stays
@@ -615,53 +606,60 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
     fn close_block(&mut self) -> Result<Option<Event>, AccumulatorError> {
         let sums = self.take_block();
         let (offset, var) = sums.mean_offset_and_variance();
-        let mut mean = [0.0; 3];
-        for a in 0..3 {
-            mean[a] = sums.reference[a].to_f32() + offset[a];
+        let mut mean = offset;
+        for (m, r) in mean.iter_mut().zip(sums.reference) {
+            *m += r.to_f32();
         }
-        let stats = BlockStats { sums, mean, variance: var[0] + var[1] + var[2] };
-        let magnitude_sq = mean.iter().map(|m| m * m).sum::<f32>();
+        let variance = var[0] + var[1] + var[2];
+        let noise = self.update_noise(mean, variance);
+        let drift = self.previous.as_ref().map(|p| {
+            let d = [mean[0] - p.mean[0], mean[1] - p.mean[1], mean[2] - p.mean[2]];
+            (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) * (BLOCK as f32 * 0.5) / noise
+        });
+        let event = if self.pose.is_some() {
+            let still = variance <= self.config.exit_factor * noise
+                && drift.is_some_and(|d| d <= self.config.drift_exit_factor);
+            self.continue_pose(still)
+        } else {
+            let quiet = variance <= self.config.enter_factor * noise
+                && drift.is_some_and(|d| d <= self.config.drift_enter_factor);
+            Ok(self.open_pose(quiet, noise))
+        };
+        self.previous = Some(BlockStats { sums, mean, variance });
+        event
+    }
+
+    /// The noise variance after a block of this mean and variance (a leaky minimum, above the floor).
+    fn update_noise(&mut self, mean: [f32; 3], variance: f32) -> f32 {
+        let magnitude_sq = mean[0] * mean[0] + mean[1] * mean[1] + mean[2] * mean[2];
         let risen = if self.noise_variance.is_finite() {
             self.noise_variance * (1.0 + self.config.noise_rise_per_block)
         } else {
             f32::INFINITY
         };
         let floor = max_f32(max_f32(self.config.min_noise_variance, R::QUANTUM_VARIANCE), 1e-12 * magnitude_sq);
-        self.noise_variance = max_f32(min_f32(risen, stats.variance), floor);
-        let noise = self.noise_variance;
-        let drift_unit = 2.0 * noise / BLOCK as f32;
-        let drift = self.previous.map(|p| {
-            let d = [stats.mean[0] - p.mean[0], stats.mean[1] - p.mean[1], stats.mean[2] - p.mean[2]];
-            (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) / drift_unit
-        });
-        let previous = self.previous.replace(stats);
+        self.noise_variance = max_f32(min_f32(risen, variance), floor);
+        self.noise_variance
+    }
 
-        if self.pose.is_some() {
-            let still = stats.variance <= self.config.exit_factor * noise
-                && drift.is_some_and(|d| d <= self.config.drift_exit_factor);
-            if still {
-                if let (Some(pose), Some(pending)) = (self.pose.as_mut(), self.pending.replace(sums)) {
-                    pose.merge(&pending);
-                }
-                return Ok(None);
-            }
-            self.pending = None;
+    /// An open pose: the last block is merged in if this one is still too; else the pose closes.
+    fn continue_pose(&mut self, still: bool) -> Result<Option<Event>, AccumulatorError> {
+        if !still {
             return self.close_pose();
         }
-
-        let quiet = stats.variance <= self.config.enter_factor * noise
-            && drift.is_some_and(|d| d <= self.config.drift_enter_factor);
-        match previous {
-            // Two quiet blocks in a row with little change between them open a pose.
-            Some(prev) if quiet && prev.variance <= self.config.enter_factor * noise => {
-                let mut pose = Sums::new(prev.sums.reference, prev.sums.start_index);
-                pose.merge(&prev.sums);
-                self.pose = Some(pose);
-                self.pending = Some(sums);
-                Ok(Some(Event::StillnessDetected))
-            }
-            _ => Ok(None),
+        if let (Some(pose), Some(last)) = (self.pose.as_mut(), self.previous.as_ref()) {
+            pose.merge(&last.sums);
         }
+        Ok(None)
+    }
+
+    /// Two quiet blocks in a row with little change between them open a pose (with the first of them).
+    fn open_pose(&mut self, quiet: bool, noise: f32) -> Option<Event> {
+        let last = self.previous.as_ref().filter(|p| quiet && p.variance <= self.config.enter_factor * noise)?;
+        let mut pose = Sums::new(last.sums.reference, last.sums.start_index);
+        pose.merge(&last.sums);
+        self.pose = Some(pose);
+        Some(Event::StillnessDetected)
     }
 
     fn close_pose(&mut self) -> Result<Option<Event>, AccumulatorError> {
@@ -714,7 +712,7 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
 
     /// Samples pushed so far (including skipped non-finite ones).
     pub fn samples_seen(&self) -> u32 {
-        self.samples_seen
+        self.counted.saturating_add(self.buffered as u32)
     }
 
     /// `true` while a pose is being averaged.
@@ -752,7 +750,7 @@ mod tests {
     #[test]
     fn sample_index_saturates() {
         let mut acc: Accumulator<i16, 4, 32> = Accumulator::new(AccumulatorConfig::DEFAULT).unwrap();
-        acc.samples_seen = u32::MAX - 40;
+        acc.counted = u32::MAX - 40;
         for _ in 0..64 {
             acc.push([1, 2, 3]).unwrap();
         }

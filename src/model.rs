@@ -67,6 +67,20 @@ impl Params {
         [k[0] - self.bias[0], k[1] - self.bias[1], k[2] - self.bias[2]]
     }
 
+    /// [`Params::apply`] on every sample of a batch, in place: the parameters stay in registers and two
+    /// samples are calibrated per iteration (the fast path for a stream).
+    pub fn apply_in_place(&self, samples: &mut [[f32; 3]]) {
+        let mut pairs = samples.chunks_exact_mut(2);
+        for pair in &mut pairs {
+            let (a, b) = (self.apply(pair[0]), self.apply(pair[1]));
+            pair[0] = a;
+            pair[1] = b;
+        }
+        for s in pairs.into_remainder() {
+            *s = self.apply(*s);
+        }
+    }
+
     /// [`Params::apply`] on micromath's `F32x3`.
     #[cfg(feature = "micromath")]
     #[inline]

@@ -223,9 +223,9 @@ fn block_sums_are_exact_at_full_scale() {
         .map(|i| if i % 2 == 0 { [i16::MIN, i16::MAX, i16::MIN] } else { [i16::MAX, i16::MIN, i16::MAX] })
         .collect();
     samples.extend((0..4096).map(|_| [rng.next(32767) as i16, rng.next(32767) as i16, i16::MIN]));
-    for len in [4, 32, 4096, samples.len()] {
+    for len in [4, 32, 33, 4096, samples.len()] {
         let block = &samples[..len];
-        let sums = i16::block_sums(block, 40_000);
+        let sums = i16::block_sums(axes(block).each_ref().map(Vec::as_slice), 40_000);
         for a in 0..3 {
             let r = i128::from(block[0][a]);
             let sum: i128 = block.iter().map(|v| i128::from(v[a]) - r).sum();
@@ -236,8 +236,23 @@ fn block_sums_are_exact_at_full_scale() {
     }
     // Near full scale but inside a limit: not saturated, by the bound or by the check.
     let inside: Vec<[i16; 3]> = (0..64).map(|i| [32_000 + (i % 7) as i16, -32_000, 0]).collect();
-    assert!(!i16::block_sums(&inside, 32_767).saturated);
-    assert!(i16::block_sums(&inside, 32_006).saturated);
+    let inside = axes(&inside);
+    assert!(!i16::block_sums(inside.each_ref().map(Vec::as_slice), 32_767).saturated);
+    assert!(i16::block_sums(inside.each_ref().map(Vec::as_slice), 32_006).saturated);
+    // The longest block (2^16 samples) at the negative rail: the raw 32-bit sum reaches -2^31 exactly.
+    let rail = [vec![i16::MIN; 1 << 16], vec![i16::MAX; 1 << 16], vec![0; 1 << 16]];
+    let sums = i16::block_sums(rail.each_ref().map(Vec::as_slice), 40_000);
+    assert_eq!((sums.sum, sums.sum_sq), ([0; 3], [0; 3]));
+    let mut rail = rail;
+    rail[0][0] = 0;
+    let sums = i16::block_sums(rail.each_ref().map(Vec::as_slice), 40_000);
+    assert_eq!(sums.sum[0], -32_768 * 65_535);
+    assert_eq!(sums.sum_sq[0], 32_768 * 32_768 * 65_535);
+}
+
+/// Samples split axis by axis (the accumulator's block layout).
+fn axes(samples: &[[i16; 3]]) -> [Vec<i16>; 3] {
+    [0, 1, 2].map(|a| samples.iter().map(|v| v[a]).collect())
 }
 
 #[test]

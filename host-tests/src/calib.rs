@@ -4,7 +4,9 @@
 use accelcal::accumulator::Pose;
 use accelcal::calibrate::{Calibration, CalibrationConfig, CalibrationError, Method, NormalizedPoses, calibrate};
 use accelcal::frame::{Deviation, modulus_error};
-use accelcal::model::Params;
+use accelcal::model::{Params, STANDARD_GRAVITY_MPS2};
+
+use crate::csvio::Units;
 use accelcal::solve::levenberg_marquardt;
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro128PlusPlus;
@@ -13,6 +15,51 @@ use rand_xoshiro::Xoshiro128PlusPlus;
 pub const POPULATION: usize = 40;
 /// Largest pose count the host handles in one calibration.
 pub const MAX_POSES: usize = 512;
+
+/// Range of ratios of `--gravity` to the gravity the readings measure that [`check_gravity`] accepts.
+pub const GRAVITY_RATIO_RANGE: (f64, f64) = (0.5, 2.0);
+
+/// Refuses a non-positive or non-finite gravity (m/s^2), before any file is read.
+///
+/// # Errors
+/// A message naming the value.
+pub fn check_gravity_positive(gravity_mps2: f64) -> Result<(), String> {
+    if gravity_mps2.is_finite() && gravity_mps2 > 0.0 {
+        Ok(())
+    } else {
+        Err(format!("--gravity {gravity_mps2:?} must be a positive number of m/s^2 (e.g. 9.81)"))
+    }
+}
+
+/// Refuses a gravity (m/s^2) the data cannot be calibrated against: non-positive, non-finite, or
+/// outside [`GRAVITY_RATIO_RANGE`] of the modulus the readings measure (median |a|, g and m/s^2
+/// data) or of standard gravity (counts, whose scale is unknown).
+///
+/// # Errors
+/// A message saying what was given and what was measured.
+pub fn check_gravity(gravity_mps2: f64, units: Units, median_magnitude: f64) -> Result<(), String> {
+    check_gravity_positive(gravity_mps2)?;
+    let standard = f64::from(STANDARD_GRAVITY_MPS2);
+    let (reference_mps2, what) = match units.one_g() {
+        Some(one_g) => {
+            let measured = median_magnitude / one_g * standard;
+            (
+                measured,
+                format!("the readings measure |a| = {measured:.4} m/s^2 (median, {median_magnitude:.4} {units})"),
+            )
+        }
+        None => (standard, format!("standard gravity is {standard} m/s^2 (counts: the scale is unknown)")),
+    };
+    let ratio = gravity_mps2 / reference_mps2;
+    if (GRAVITY_RATIO_RANGE.0..=GRAVITY_RATIO_RANGE.1).contains(&ratio) {
+        return Ok(());
+    }
+    Err(format!(
+        "--gravity {gravity_mps2:?} m/s^2 is implausible: {what}; give the local gravity in m/s^2 (within {}x-{}x of \
+         that)",
+        GRAVITY_RATIO_RANGE.0, GRAVITY_RATIO_RANGE.1
+    ))
+}
 
 /// A calibration and its leave-one-pose-out RMSE.
 #[derive(Debug, Clone, Copy)]

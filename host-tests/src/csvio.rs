@@ -36,7 +36,7 @@ use accelcal::accumulator::{Accumulator, AccumulatorConfig, AccumulatorError, Po
 use accelcal::model::{Params, STANDARD_GRAVITY_MPS2};
 
 /// Pose capacity of the accumulator used by [`accumulate`].
-pub const MAX_POSES: usize = 512;
+pub const MAX_POSES: usize = crate::calib::MAX_POSES;
 
 /// Block lengths (samples) [`accumulate`] can use; the block length is a const generic of the
 /// library's accumulator, so only these are compiled in.
@@ -58,6 +58,9 @@ pub const PREAMBLE_SEARCH_LINES: usize = 1000;
 /// Largest fraction of data rows that may be skipped for NaN/inf/empty cells before the file is
 /// rejected instead of warned about.
 pub const MAX_SKIPPED_FRACTION: f64 = 0.1;
+
+/// Most characters of input text (a cell, a line, a header) an error message quotes.
+pub const MAX_QUOTED_CHARS: usize = 80;
 
 /// Units of the acceleration columns.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -215,7 +218,8 @@ impl fmt::Display for ColumnSpecError {
             f,
             "bad column spec `{}`: {} (expected `ax,ay,az`, `t,ax,ay,az`, `t,ax,ay,az,temp` or \
              `t,ax,ay,az,temp,n`; names or 0-based indices; `-` for none)",
-            self.spec, self.reason
+            clip(&self.spec),
+            self.reason
         )
     }
 }
@@ -340,6 +344,9 @@ pub struct Table {
     pub units: Units,
     /// `true` when the units were detected, not declared.
     pub units_detected: bool,
+    /// The unit the column names declare (`ax_mg`, `ax (g)`, ...), when they did and `--units` did
+    /// not override it; the values were scaled by its factor.
+    pub units_header: Option<HeaderUnit>,
     /// Median of |a| over the rows, in [`Table::units`].
     pub median_magnitude: f64,
     /// 1-based file line of each row.
@@ -354,10 +361,41 @@ pub struct Table {
     pub columns: ColumnsUsed,
 }
 
+/// A unit named in an acceleration column's header, e.g. `mg` in `ax_mg`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeaderUnit {
+    /// The column whose name says it.
+    pub column: String,
+    /// The unit as named (`g`, `mg`, `m/s^2`, `counts`).
+    pub label: &'static str,
+    /// The working unit the values are read in.
+    pub units: Units,
+    /// Factor from the named unit to the working unit (`mg` to `g`: 0.001).
+    pub factor: f64,
+}
+
+/// The unit a column name declares: its last unit token (`ax_mg`, `acc_x_mps2`, `ax[m/s^2]`, `ax (g)`).
+fn header_unit(name: &str) -> Option<HeaderUnit> {
+    let (label, units, factor) = tokens(name).iter().rev().find_map(|t| match t.as_str() {
+        "g" => Some(("g", Units::G, 1.0)),
+        "mg" => Some(("mg", Units::G, 1e-3)),
+        "mps2" | "ms2" | "si" => Some(("m/s^2", Units::Mps2, 1.0)),
+        // `raw` often means uncalibrated (in g or m/s^2), not counts: it declares nothing.
+        "lsb" | "counts" | "cnt" => Some(("counts", Units::Counts, 1.0)),
+        _ => None,
+    })?;
+    Some(HeaderUnit { column: name.to_string(), label, units, factor })
+}
+
 impl Table {
     /// What the units are and why, e.g. `g (detected: median |a| = 0.998)`.
     pub fn units_summary(&self) -> String {
-        let how = if self.units_detected { "detected" } else { "declared" };
+        let how = match &self.units_header {
+            Some(h) if h.factor != 1.0 => format!("header `{}`: {}, scaled by {}", clip(&h.column), h.label, h.factor),
+            Some(h) => format!("header `{}`", clip(&h.column)),
+            None if self.units_detected => "detected".to_string(),
+            None => "declared".to_string(),
+        };
         format!("{} ({how}: median |a| = {:.4} {})", self.units, self.median_magnitude, self.units)
     }
 
@@ -460,6 +498,20 @@ pub enum CsvError {
         /// Cells expected (from the header).
         expected: usize,
     },
+    /// `--columns` names a column index past the last column.
+    ColumnIndexOutOfRange {
+        /// File.
+        file: String,
+        /// Line that sets the column count (the header, or the first data row when every column is
+        /// given by index).
+        line: usize,
+        /// The largest index asked for (0-based).
+        index: usize,
+        /// Columns that line has.
+        columns: usize,
+        /// `true` when `line` is the header.
+        from_header: bool,
+    },
     /// A cell that should be a number is not.
     NonNumeric {
         /// File.
@@ -516,6 +568,8 @@ pub enum CsvError {
         median_magnitude: f64,
         /// What the values look like (`None` when nothing fits).
         looks_like: Option<Units>,
+        /// The column whose name declared the units (`None`: `--units` declared them).
+        header: Option<String>,
     },
     /// The units cannot be told from the values.
     UnknownUnits {
@@ -550,9 +604,15 @@ pub enum CsvError {
     },
 }
 
+/// The cells quoted and joined, clipped to about [`MAX_QUOTED_CHARS`] characters.
 fn list(cells: &[String]) -> String {
     let quoted: Vec<String> = cells.iter().map(|c| format!("`{c}`")).collect();
-    quoted.join(", ")
+    let joined = quoted.join(", ");
+    if joined.chars().count() > MAX_QUOTED_CHARS {
+        format!("{} ({} cells)", clip(&joined), cells.len())
+    } else {
+        joined
+    }
 }
 
 impl fmt::Display for CsvError {
@@ -566,7 +626,8 @@ impl fmt::Display for CsvError {
             }
             Self::NoHeader { file, line, text } => write!(
                 f,
-                "{file}:{line}: expected a header row naming the columns (e.g. `t,ax,ay,az`), found data: `{text}`"
+                "{file}:{line}: expected a header row naming the columns (e.g. `t,ax,ay,az`), found data: `{}`",
+                clip(text)
             ),
             Self::HeaderOnly { file, line } => write!(f, "{file}:{line}: the header is the only row; there is no data"),
             Self::MissingColumns { file, line, missing, header } => write!(
@@ -577,7 +638,7 @@ impl fmt::Display for CsvError {
                 list(header)
             ),
             Self::UnknownColumn { file, line, requested, header } => {
-                write!(f, "{file}:{line}: column {requested} is not in the header [{}]", list(header))
+                write!(f, "{file}:{line}: column {} is not in the header [{}]", clip(requested), list(header))
             }
             Self::AmbiguousColumn { file, line, role, candidates } => write!(
                 f,
@@ -587,12 +648,22 @@ impl fmt::Display for CsvError {
             Self::RaggedRow { file, line, cells, expected } => {
                 write!(f, "{file}:{line}: {cells} cells, the header has {expected}")
             }
+            Self::ColumnIndexOutOfRange { file, line, index, columns, from_header } => write!(
+                f,
+                "{file}:{line}: --columns asks for column index {index}, but the {} has {columns} columns (indices \
+                 0-{}); indices count from 0",
+                if *from_header { "header" } else { "first data row" },
+                columns.saturating_sub(1)
+            ),
             Self::NonNumeric { file, line, column, text } => {
-                write!(f, "{file}:{line}: column `{column}`: `{text}` is not a number")
+                write!(f, "{file}:{line}: column `{}`: `{}` is not a number", clip(column), clip(text))
             }
-            Self::BadCount { file, line, column, text } => {
-                write!(f, "{file}:{line}: column `{column}`: `{text}` is not a sample count (a non-negative integer)")
-            }
+            Self::BadCount { file, line, column, text } => write!(
+                f,
+                "{file}:{line}: column `{}`: `{}` is not a sample count (a non-negative integer)",
+                clip(column),
+                clip(text)
+            ),
             Self::DuplicateTime { file, line, previous_line, time_s } => write!(
                 f,
                 "{file}:{line}: time {time_s} s repeats line {previous_line}: time stamps must increase \
@@ -603,20 +674,22 @@ impl fmt::Display for CsvError {
                 "{file}:{line}: time goes backwards, {time_s} s after {previous_s} s at line {previous_line} \
                  (concatenated captures? drop the time column with --columns)"
             ),
-            Self::WrongUnits { file, declared, median_magnitude, looks_like } => {
+            Self::WrongUnits { file, declared, median_magnitude, looks_like, header } => {
                 let typical = match declared {
                     Units::G => "about 1",
                     Units::Mps2 => "about 9.8",
                     _ => "hundreds to tens of thousands",
                 };
+                let by = header.as_ref().map_or(String::new(), |h| format!(" (as the header `{}` says)", clip(h)));
                 write!(
                     f,
-                    "{file}: values no accelerometer reads in {declared}: the median |a| is {median_magnitude:.4}, \
-                     a static accelerometer reads {typical}"
+                    "{file}: values no accelerometer reads in {declared}{by}: the median |a| is \
+                     {median_magnitude:.4}, a static accelerometer reads {typical}"
                 )?;
-                match looks_like {
-                    Some(u) => write!(f, "; the values look like {u}: use --units {u} (or --units auto)"),
-                    None => f.write_str("; check the columns"),
+                match (looks_like, header) {
+                    (Some(u), Some(_)) => write!(f, "; the values look like {u}: use --units {u}"),
+                    (Some(u), None) => write!(f, "; the values look like {u}: use --units {u} (or --units auto)"),
+                    (None, _) => f.write_str("; check the columns"),
                 }
             }
             Self::UnknownUnits { file, median_magnitude } => write!(
@@ -626,8 +699,9 @@ impl fmt::Display for CsvError {
             ),
             Self::Gigantic { file, line, column, value, units } => write!(
                 f,
-                "{file}:{line}: column `{column}`: {value:e} {units} is not a physical accelerometer reading \
+                "{file}:{line}: column `{}`: {value:e} {units} is not a physical accelerometer reading \
                  (limit {:e} {units}); corrupt line?",
+                clip(column),
                 units.non_physical_limit()
             ),
             Self::TooManyNonFinite { file, skipped, rows, first_line } => write!(
@@ -912,6 +986,27 @@ fn parse_number(cell: &str, delimiter: Delimiter) -> Result<Option<f64>, ()> {
     }
 }
 
+/// Lines ended by LF, CR LF or a lone CR (old Mac OS); a line number counts each of them once.
+fn split_lines(text: &str) -> Vec<&str> {
+    let mut lines = Vec::new();
+    let mut rest = text;
+    while let Some(end) = rest.find(['\n', '\r']) {
+        lines.push(&rest[..end]);
+        let width = if rest[end..].starts_with("\r\n") { 2 } else { 1 };
+        rest = &rest[end + width..];
+    }
+    lines.push(rest);
+    lines
+}
+
+/// At most [`MAX_QUOTED_CHARS`] characters of `text` for a message, with `...` when cut.
+fn clip(text: &str) -> String {
+    match text.char_indices().nth(MAX_QUOTED_CHARS) {
+        Some((cut, _)) => format!("{}...", &text[..cut]),
+        None => text.to_string(),
+    }
+}
+
 fn is_blank_or_comment(line: &str) -> bool {
     let t = line.trim();
     t.is_empty() || t.starts_with('#')
@@ -952,7 +1047,7 @@ fn units_plausible(units: Units, median_magnitude: f64) -> bool {
 impl Parser<'_> {
     fn parse(&self, text: &str) -> Result<Table, CsvError> {
         let file = &self.file;
-        let lines: Vec<&str> = text.split('\n').map(|l| l.strip_suffix('\r').unwrap_or(l)).collect();
+        let lines = split_lines(text);
         let Some(first_index) = lines.iter().position(|l| !is_blank_or_comment(l)) else {
             return Err(CsvError::Empty { file: file.clone() });
         };
@@ -994,10 +1089,11 @@ impl Parser<'_> {
             .filter(|(_, l)| !is_blank_or_comment(l))
             .map(|(i, l)| (i + 1, *l))
             .collect();
-        let columns = match &self.opts.columns {
+        let mut columns = match &self.opts.columns {
             Some(spec) => self.columns_from_spec(spec, &header, header_line)?,
             None => self.detect_columns(&header, header_line)?,
         };
+        self.drop_empty_temperature(&mut columns, &header, &data_lines, delimiter, &mut notes);
         if data_lines.is_empty() {
             return Err(CsvError::HeaderOnly { file: file.clone(), line: header_line });
         }
@@ -1018,11 +1114,12 @@ impl Parser<'_> {
         });
         let expected_cells = if all_by_index { split_cells(data_lines[0].1, delimiter).len() } else { header.len() };
         if columns.max_index() >= expected_cells {
-            return Err(CsvError::RaggedRow {
+            return Err(CsvError::ColumnIndexOutOfRange {
                 file: file.clone(),
-                line: data_lines[0].0,
-                cells: expected_cells,
-                expected: columns.max_index() + 1,
+                line: if all_by_index { data_lines[0].0 } else { header_line },
+                index: columns.max_index(),
+                columns: expected_cells,
+                from_header: !all_by_index,
             });
         }
         let name_of = |i: usize| header.get(i).cloned().unwrap_or_else(|| format!("#{i}"));
@@ -1036,6 +1133,7 @@ impl Parser<'_> {
             std_devs: columns.std.map(|_| Vec::new()),
             units: self.opts.units,
             units_detected: false,
+            units_header: None,
             median_magnitude: 0.0,
             line_of_row: Vec::with_capacity(data_lines.len()),
             warnings: notes,
@@ -1049,7 +1147,7 @@ impl Parser<'_> {
                 std: columns.std.map(|s| s.map(name_of)),
             },
         };
-        let ends_with_newline = text.ends_with('\n');
+        let ends_with_newline = text.ends_with(['\n', '\r']);
         let mut skipped_lines: Vec<usize> = Vec::new();
         let last = data_lines.len() - 1;
         for (k, &(line, row_text)) in data_lines.iter().enumerate() {
@@ -1203,6 +1301,32 @@ impl Parser<'_> {
         Ok(())
     }
 
+    /// Drops the temperature column when it is empty, NaN or infinite in too many rows to skip them
+    /// (a logger without a sensor writes `nan`): a warning names it and the data is read without it.
+    fn drop_empty_temperature(
+        &self,
+        columns: &mut Columns,
+        header: &[String],
+        data_lines: &[(usize, &str)],
+        delimiter: Delimiter,
+        notes: &mut Vec<String>,
+    ) {
+        let Some(i) = columns.temp else { return };
+        let missing = data_lines
+            .iter()
+            .filter(|(_, l)| split_cells(l, delimiter).get(i).is_some_and(|c| parse_number(c, delimiter) == Ok(None)))
+            .count();
+        if missing > 1 && missing as f64 > MAX_SKIPPED_FRACTION * data_lines.len() as f64 {
+            let name = header.get(i).map_or_else(|| format!("#{i}"), |h| clip(h));
+            notes.push(format!(
+                "{}: temperature column `{name}` is empty or NaN in {missing} of {} rows: ignored (no temperature)",
+                self.file,
+                data_lines.len()
+            ));
+            columns.temp = None;
+        }
+    }
+
     /// `true` for a line whose cells are all numbers (or empty), at least one of them a number.
     fn is_numeric_line(&self, line: &str) -> bool {
         let delimiter = self.opts.delimiter.unwrap_or_else(|| Delimiter::detect(line));
@@ -1260,19 +1384,66 @@ impl Parser<'_> {
         Ok(())
     }
 
+    /// The unit the acceleration column names agree on (`--units` other than auto overrides it, with
+    /// a warning when they differ); names that disagree are warned about and ignored.
+    fn header_units(&self, table: &mut Table) -> Option<HeaderUnit> {
+        let named: Vec<HeaderUnit> = table.columns.accel.iter().filter_map(|c| header_unit(c)).collect();
+        let first = named.first()?.clone();
+        let file = &self.file;
+        if named.iter().any(|h| h.label != first.label) {
+            let labels: Vec<String> = named.iter().map(|h| format!("`{}`", clip(&h.column))).collect();
+            table.warnings.push(format!("{file}: the columns {} name different units: ignored", labels.join(", ")));
+            return None;
+        }
+        if self.opts.units != Units::Auto {
+            if self.opts.units != first.units || first.factor != 1.0 {
+                table.warnings.push(format!(
+                    "{file}: --units {} overrides the unit {} in the header (`{}`)",
+                    self.opts.units,
+                    first.label,
+                    clip(&first.column)
+                ));
+            }
+            return None;
+        }
+        Some(first)
+    }
+
+    /// Scales the acceleration (and standard-deviation) values by a header unit's factor.
+    fn scale_to_working_unit(table: &mut Table, factor: f64) {
+        if factor == 1.0 {
+            return;
+        }
+        for s in table.samples.iter_mut().chain(table.std_devs.iter_mut().flatten()) {
+            *s = s.map(|v| v * factor);
+        }
+    }
+
     fn resolve_units(&self, table: &mut Table) -> Result<(), CsvError> {
         let file = &self.file;
+        let header_unit = self.header_units(table);
+        if let Some(h) = &header_unit {
+            Self::scale_to_working_unit(table, h.factor);
+        }
         let mut magnitudes: Vec<f64> = table.samples.iter().map(|s| s[0].hypot(s[1]).hypot(s[2])).collect();
         let median_magnitude = median(&mut magnitudes);
         let looks_like = units_from_magnitude(median_magnitude);
-        let units = match self.opts.units {
+        let declared = header_unit.as_ref().map_or(self.opts.units, |h| h.units);
+        let units = match declared {
             Units::Auto => match looks_like {
                 Some(u) => u,
                 None => return Err(CsvError::UnknownUnits { file: file.clone(), median_magnitude }),
             },
             declared if units_plausible(declared, median_magnitude) => declared,
             declared => {
-                return Err(CsvError::WrongUnits { file: file.clone(), declared, median_magnitude, looks_like });
+                let header = header_unit.map(|h| h.column);
+                return Err(CsvError::WrongUnits {
+                    file: file.clone(),
+                    declared,
+                    median_magnitude,
+                    looks_like,
+                    header,
+                });
             }
         };
         let limit = units.non_physical_limit();
@@ -1288,7 +1459,8 @@ impl Parser<'_> {
             }
         }
         table.units = units;
-        table.units_detected = self.opts.units == Units::Auto;
+        table.units_detected = declared == Units::Auto;
+        table.units_header = header_unit;
         table.median_magnitude = median_magnitude;
         Ok(())
     }
@@ -1640,13 +1812,14 @@ mod tests {
     fn reads_g_with_time_and_temperature() {
         let t = read("time_s,ax_g,ay_g,az_g,temp_C\n0.0,0.01,0.02,0.99,25.0\n0.01,0.02,0.01,1.01,25.1\n").unwrap();
         assert_eq!(t.units, Units::G);
-        assert!(t.units_detected);
+        assert!(!t.units_detected);
+        assert_eq!(t.units_header.as_ref().map(|h| (h.column.as_str(), h.label)), Some(("ax_g", "g")));
         assert_eq!(t.times_s, Some(vec![0.0, 0.01]));
         assert_eq!(t.temps_c, Some(vec![25.0, 25.1]));
         assert_eq!(t.samples[1], [0.02, 0.01, 1.01]);
         assert_eq!(t.line_of_row, vec![2, 3]);
         assert!(t.warnings.is_empty());
-        assert!(t.units_summary().starts_with("g (detected"));
+        assert!(t.units_summary().starts_with("g (header `ax_g`"), "{}", t.units_summary());
         assert!((t.sample_rate_hz().unwrap() - 100.0).abs() < 1e-9);
     }
 
@@ -1743,7 +1916,9 @@ mod tests {
         ];
         for (header, has_time) in cases {
             let cells = split_cells(header, Delimiter::detect(header)).len();
-            let row = vec!["1"; cells].join(if header.contains(';') { ";" } else { "," });
+            // A value the header's unit reads at rest (|a| = 1.73 g, or 9.87 m/s^2).
+            let value = if header.contains("m/s^2") { "5.7" } else { "1" };
+            let row = vec![value; cells].join(if header.contains(';') { ";" } else { "," });
             let t = read(&format!("{header}\n{row}\n")).unwrap_or_else(|e| panic!("{header}: {e}"));
             assert_eq!(t.times_s.is_some(), has_time, "{header}");
         }
@@ -1801,7 +1976,15 @@ mod tests {
         assert!(message(&e).contains("`bz`"));
         let e = read_with("ax,ay,az\n1,2,3\n", &ReadOptions { columns: Some("0,1,7".parse().unwrap()), ..opts })
             .unwrap_err();
-        assert!(matches!(e, CsvError::RaggedRow { .. }), "{e:?}");
+        let expected = CsvError::ColumnIndexOutOfRange {
+            file: "test.csv".into(),
+            line: 2,
+            index: 7,
+            columns: 3,
+            from_header: false,
+        };
+        assert_eq!(e, expected);
+        assert!(message(&e).contains("column index 7, but the first data row has 3 columns (indices 0-2)"));
     }
 
     #[test]

@@ -1,5 +1,6 @@
 //! Host side of accelcal: simulator, CLI support, paper reproduction, real-data calibration.
 
+pub mod blind_eval;
 pub mod blindgen;
 pub mod calib;
 pub mod convergence;

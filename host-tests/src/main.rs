@@ -361,11 +361,11 @@ struct Loaded {
 
 /// The whole `calibrate` pipeline: read, find poses (or take the means), calibrate, leave-one-out.
 fn load_and_calibrate(input: &InputArgs, method: Method, seed: u64, warn: bool) -> Result<Loaded, Failure> {
-    if !(input.gravity.is_finite() && input.gravity > 0.0) {
-        return Err(format!("--gravity {} must be a positive number of m/s^2", input.gravity).into());
-    }
+    calib::check_gravity_positive(input.gravity)?;
     let opts = ReadOptions { columns: input.columns.clone(), units: input.units, means: input.means, delimiter: None };
     let table = csvio::read_csv(&input.file, &opts).map_err(|e| e.to_string())?;
+    calib::check_gravity(input.gravity, table.units, table.median_magnitude)
+        .map_err(|e| format!("{}: {e}", input.file.display()))?;
     if warn {
         for w in &table.warnings {
             eprintln!("accelcal: warning: {w}");
@@ -376,10 +376,10 @@ fn load_and_calibrate(input: &InputArgs, method: Method, seed: u64, warn: bool) 
     } else if let Some(column) = &input.pose_column {
         (accelcal_host::labelled::poses_by_label(&table, &input.file, column)?, None)
     } else {
-        let acc = csvio::accumulate(&table, &AccumulateOptions::default())
-            .map_err(|e| format!("{}: {e}", input.file.display()))?;
+        let acc = accumulate_all(&table, &input.file)?;
         (acc.poses, Some(acc.spans))
     };
+    check_pose_count(&input.file, poses.len(), None)?;
     let file = input.file.display();
     // Six faces fit biases and scales (the non-orthogonality held); nine directions or more fit all nine.
     if poses.len() < 6 {
@@ -400,6 +400,31 @@ fn load_and_calibrate(input: &InputArgs, method: Method, seed: u64, warn: bool) 
     let config = CalibrationConfig { gravity, method, before, init: input.init.into(), ..CalibrationConfig::DEFAULT };
     let host = calib::run_with_loo(&poses, &config, seed).map_err(|e| format!("{file}: {e}"))?;
     Ok(Loaded { table, poses, spans, host })
+}
+
+/// Refuses more poses than one calibration takes ([`calib::MAX_POSES`], the library's buffer),
+/// naming the count and, when known, the line where the last pose that fits ends.
+fn check_pose_count(file: &std::path::Path, found: usize, last_fitting_line: Option<usize>) -> Result<(), Failure> {
+    let limit = calib::MAX_POSES;
+    if found <= limit {
+        return Ok(());
+    }
+    let cut = last_fitting_line.map_or(String::new(), |l| format!("; pose {limit} ends at line {l}"));
+    Err(format!(
+        "{}: {found} poses found, one calibration takes at most {limit}: split the log (or the means file) into \
+         parts of at most {limit} poses{cut}",
+        file.display()
+    )
+    .into())
+}
+
+/// The poses of a raw log; more than one calibration takes is an error (never a silent drop).
+fn accumulate_all(table: &csvio::Table, file: &std::path::Path) -> Result<csvio::Accumulation, Failure> {
+    let acc =
+        csvio::accumulate(table, &AccumulateOptions::default()).map_err(|e| format!("{}: {e}", file.display()))?;
+    let found = acc.poses.len() + acc.dropped_full as usize;
+    check_pose_count(file, found, acc.spans.get(calib::MAX_POSES - 1).map(|s| s.last_line))?;
+    Ok(acc)
 }
 
 /// Wall time of `runs` repetitions of the whole pipeline: (min, median, max) in ms.
@@ -452,6 +477,7 @@ fn calibrate_file(
             "method": method.name(),
             "gravity": gravity,
             "units": table.units.to_string(),
+            "units_header": table.units_header.as_ref().map(|h| json!({"column": h.column, "unit": h.label, "factor": h.factor})),
             "poses": pose_json,
             "params": params_json(&cal.params),
             "objective": cal.objective,
@@ -513,6 +539,10 @@ fn diagnose_file(input: &InputArgs, as_json: bool, plots: Option<&std::path::Pat
     for w in &table.warnings {
         eprintln!("accelcal: warning: {w}");
     }
+    calib::check_gravity(input.gravity, table.units, table.median_magnitude)
+        .map_err(|e| format!("{}: {e}", input.file.display()))?;
+    // The diagnosis calibrates the same poses: refuse a log with more than one calibration takes.
+    accumulate_all(&table, &input.file)?;
     let options = diagnose::DiagnoseOptions { gravity: input.gravity, seed, ..diagnose::DiagnoseOptions::DEFAULT };
     let report = diagnose::diagnose(&table, &options).map_err(|e| e.to_string())?;
     if let Some(dir) = plots {

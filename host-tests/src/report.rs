@@ -65,7 +65,7 @@ pub const BUDGETS: [Budget; 6] = [
         limit: 30,
         unit: "cycles",
         enforced: false,
-        ceiling: 140,
+        ceiling: 107,
     },
     Budget {
         key: "apply_cycles_per_sample",
@@ -73,7 +73,7 @@ pub const BUDGETS: [Budget; 6] = [
         limit: 25,
         unit: "cycles",
         enforced: false,
-        ceiling: 38,
+        ceiling: 31,
     },
     Budget {
         key: "library_flash_bytes",
@@ -81,7 +81,7 @@ pub const BUDGETS: [Budget; 6] = [
         limit: 16 * 1024,
         unit: "bytes",
         enforced: false,
-        ceiling: 34_000,
+        ceiling: 35_600,
     },
     Budget {
         key: "solve_ram_bytes",

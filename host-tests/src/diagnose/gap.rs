@@ -213,6 +213,8 @@ pub(crate) struct Measured {
     pub(crate) r: Vec<f64>,
     /// White variance per sample per axis, input unit.
     pub(crate) white: V3,
+    /// Variance of a pose mean from quantisation that averaging does not remove, per axis, input unit.
+    pub(crate) quantisation: V3,
     /// Simulated RMSE of each repeat, mg.
     pub(crate) sims: Vec<f64>,
     pub(crate) gap: Gap,
@@ -247,7 +249,8 @@ fn read_poses(table: &Table) -> Result<(Vec<Pose>, Vec<PoseData>, f64), Diagnose
 /// White variance per axis: the median within-pose variance (quantisation included: a reading
 /// rounded to a step `q` adds `q^2 / 12`, which the within-pose variance already holds, and at
 /// least that is assumed).
-fn white_variance(table: &Table, poses: &[PoseData]) -> Result<V3, DiagnoseError> {
+/// Also returns the quantisation floor of a pose mean per axis ([`quantisation_floor`]).
+fn white_variance(table: &Table, poses: &[PoseData]) -> Result<(V3, V3), DiagnoseError> {
     let white: V3 = std::array::from_fn(|a| median(&poses.iter().map(|p| p.var[a]).collect::<Vec<_>>()));
     if !white.iter().all(|v| v.is_finite()) || white.iter().all(|v| *v <= 0.0) {
         return Err(err(format!(
@@ -256,7 +259,28 @@ fn white_variance(table: &Table, poses: &[PoseData]) -> Result<V3, DiagnoseError
         )));
     }
     let q = quantisation_step(table);
-    Ok(std::array::from_fn(|a| white[a].max(q[a] * q[a] / 12.0)))
+    let floor = std::array::from_fn(|a| quantisation_floor(q[a], white[a]));
+    Ok((std::array::from_fn(|a| white[a].max(q[a] * q[a] / 12.0)), floor))
+}
+
+/// Variance of a pose mean's quantisation error that averaging does not remove (input unit
+/// squared). A reading with Gaussian noise `sigma` rounded to a step `q` is biased by a periodic
+/// function of its true value; over a uniformly placed true value its variance is
+/// `sum_k q^2 / (2 pi^2 k^2) exp(-4 pi^2 k^2 sigma^2 / q^2)`: `q^2 / 12` for a noise well below one
+/// step (the mean is stuck at a level), vanishing once `sigma` exceeds about `q / 2` (dither).
+/// `sigma^2` is the measured variance less the rounding's own `q^2 / 12`.
+pub(crate) fn quantisation_floor(q: f64, measured_variance: f64) -> f64 {
+    if q <= 0.0 || !q.is_finite() {
+        return 0.0;
+    }
+    let sigma_sq = (measured_variance - q * q / 12.0).max(0.0);
+    let pi_sq = std::f64::consts::PI * std::f64::consts::PI;
+    (1..=32)
+        .map(|k| {
+            let k_sq = f64::from(k * k);
+            q * q / (2.0 * pi_sq * k_sq) * (-4.0 * pi_sq * k_sq * sigma_sq / (q * q)).exp()
+        })
+        .sum()
 }
 
 /// The smallest non-zero difference between consecutive readings per axis (the quantisation step
@@ -284,14 +308,14 @@ pub(crate) fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Measured,
     let calibrated: Vec<V3> = means.iter().map(|m| model.apply(*m)).collect();
     let directions: Vec<V3> = calibrated.iter().map(|f| f.map(|c| c / norm(*f))).collect();
     let r = residuals(&model, &means, gravity);
-    let white = white_variance(table, &poses)?;
-    let white_noise = Noise { white, walk: [0.0; 3], floor: [0.0; 3] };
+    let (white, quantisation) = white_variance(table, &poses)?;
+    let white_noise = Noise { white, walk: [0.0; 3], floor: quantisation };
     let sims = simulate_gap(&model, &directions, &poses, &white_noise, gravity, opts.repeats, opts.seed);
     if sims.len() < 2 {
         return Err(err(format!("{}: the simulated experiment could not be calibrated", table.file)));
     }
     let gap = gap_before(rms(&r) / gravity * 1000.0, &sims);
-    Ok(Measured { rate, poses, params: cal.params, model, calibrated, directions, r, white, sims, gap, gravity })
+    Ok(Measured { rate, poses, params: cal.params, model, calibrated, directions, r, white, quantisation, sims, gap, gravity })
 }
 
 /// The gap of the nominal model (the "after" fields equal to "before" until a verdict).

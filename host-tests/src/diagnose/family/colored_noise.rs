@@ -25,7 +25,7 @@ impl Family for ColoredNoise {
         let longest = (0..n).max_by_key(|&i| ctx.poses[i].n).unwrap_or(0);
         let rows = ctx.poses[longest].rows.clone();
         let (walk, floor) = colored_noise_estimate(ctx.table, rows.start, rows.end, m.rate, m.white);
-        let noise = Noise { white: m.white, walk, floor };
+        let noise = Noise { white: m.white, walk, floor: std::array::from_fn(|a| floor[a] + m.quantisation[a]) };
         let applicable = walk.iter().chain(&floor).any(|w| *w > 0.0);
         let draws = residual_noise_draws(&m.model, &m.directions, &m.poses, &noise, CV_NOISE_DRAWS, ctx.opts.seed);
         let e_col = expected_cv_ms(&ctx.base_rows, &draws, &ctx.fold, ctx.folds, &ctx.none_dropped);

@@ -117,7 +117,7 @@ impl<'a> Context<'a> {
         let fold = assign_folds(n, folds, opts.seed);
         let base_rows: Vec<Vec<f64>> =
             m.poses.iter().zip(&m.directions).map(|(p, u)| jacobian_row(p.mean, *u).to_vec()).collect();
-        let white_noise = Noise { white: m.white, walk: [0.0; 3], floor: [0.0; 3] };
+        let white_noise = Noise { white: m.white, walk: [0.0; 3], floor: m.quantisation };
         let white_draws =
             residual_noise_draws(&m.model, &m.directions, &m.poses, &white_noise, CV_NOISE_DRAWS, opts.seed);
         let none_dropped = vec![false; n];

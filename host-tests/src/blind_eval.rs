@@ -1,0 +1,223 @@
+//! The blind test of the diagnosis: logs from the independent generator ([`crate::blindgen`], written
+//! without sight of the detectors) are written as CSV, read back and diagnosed; each answer is scored
+//! against the family the generator injected.
+//!
+//! Scoring: a catalogue family must be named (its verdict name, [`expected_verdict`]); a clean log
+//! must be `none`; an out-of-catalogue effect must be `none` or `unexplained`. A log's *visibility* is
+//! the gap ratio the diagnosis measures with the nominal model (real / simulated modulus RMSE): below
+//! about 1.5 an effect hides in the noise, above 2 it is clearly visible.
+
+use std::time::Instant;
+
+use crate::blindgen::{self, Family, LogSpec};
+use crate::csvio::{ReadOptions, read_csv_str};
+use crate::diagnose::{DiagnoseOptions, diagnose};
+
+/// Gap ratio from which an effect counts as clearly visible.
+pub const CLEARLY_VISIBLE: f64 = 2.0;
+
+/// Visibility thresholds at which the share of right answers is tabulated.
+pub const VISIBILITY_LADDER: [f64; 8] = [1.0, 1.25, 1.5, 2.0, 3.0, 5.0, 10.0, 30.0];
+
+/// What the diagnosis should answer for a family.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Expected {
+    /// `none` (a clean log).
+    Nothing,
+    /// This catalogue verdict.
+    Named(&'static str),
+    /// `none` or `unexplained` (an effect outside the catalogue).
+    Honest,
+}
+
+/// The expected answer for a generator family (by its manifest name).
+pub fn expected_verdict(family: Family) -> Expected {
+    match family.name() {
+        "clean" => Expected::Nothing,
+        "drift" => Expected::Named("drift"),
+        "temperature" => Expected::Named("temperature"),
+        "nonlinearity" => Expected::Named("scale-nonlinearity"),
+        "settling" => Expected::Named("settling"),
+        "motion" => Expected::Named("motion"),
+        "colored_noise" => Expected::Named("colored-noise"),
+        _ => Expected::Honest,
+    }
+}
+
+/// One diagnosed log.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Outcome {
+    /// Generator family and shape.
+    pub family: Family,
+    /// Shape within the family.
+    pub shape: String,
+    /// Generator seed.
+    pub seed: u64,
+    /// The effect's magnitude (generator units), 0 for none.
+    pub magnitude: f64,
+    /// Gap ratio before (the visibility); NaN when refused.
+    pub visibility: f64,
+    /// The verdict, or `refused: <error>`.
+    pub verdict: String,
+    /// The answer is the expected one.
+    pub right: bool,
+    /// Share of the gap the diagnosis removes (1 - ratio after / ratio before, as the report gives it).
+    pub shrink: f64,
+    /// Samples in the log.
+    pub samples: usize,
+    /// Seconds the diagnosis took (reading excluded).
+    pub seconds: f64,
+}
+
+impl Outcome {
+    /// The effect is clearly visible (gap ratio >= [`CLEARLY_VISIBLE`]).
+    pub fn visible(&self) -> bool {
+        self.visibility >= CLEARLY_VISIBLE
+    }
+}
+
+/// Generates, writes, reads back and diagnoses the log of `spec`.
+pub fn evaluate(spec: &LogSpec) -> Outcome {
+    let log = blindgen::generate(spec);
+    let name = format!("{}-{}-{}.csv", spec.family.name(), spec.shape, spec.seed);
+    let magnitude = spec.effect.as_ref().map_or(0.0, |e| e.model().magnitude().value);
+    let mut outcome = Outcome {
+        family: spec.family,
+        shape: spec.shape.clone(),
+        seed: spec.seed,
+        magnitude,
+        visibility: f64::NAN,
+        verdict: String::new(),
+        right: false,
+        shrink: f64::NAN,
+        samples: log.samples.len(),
+        seconds: 0.0,
+    };
+    let table = match read_csv_str(&name, &log.to_csv_string(), &ReadOptions::default()) {
+        Ok(t) => t,
+        Err(e) => {
+            outcome.verdict = format!("refused: {e}");
+            return outcome;
+        }
+    };
+    let started = Instant::now();
+    let result = diagnose(&table, &DiagnoseOptions { seed: spec.seed, ..DiagnoseOptions::DEFAULT });
+    outcome.seconds = started.elapsed().as_secs_f64();
+    match result {
+        Ok(d) => {
+            outcome.visibility = d.gap.ratio_before;
+            outcome.verdict = d.verdict.to_string();
+            outcome.shrink = d.shrink;
+            outcome.right = is_right(expected_verdict(spec.family), d.verdict);
+        }
+        Err(e) => outcome.verdict = format!("refused: {}", e.0),
+    }
+    outcome
+}
+
+/// `verdict` is the answer `expected` asks for.
+pub fn is_right(expected: Expected, verdict: &str) -> bool {
+    match expected {
+        Expected::Nothing => verdict == "none",
+        Expected::Named(name) => verdict == name,
+        Expected::Honest => matches!(verdict, "none" | "unexplained"),
+    }
+}
+
+/// Per-family figures of a set of outcomes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FamilySummary {
+    /// The family.
+    pub family: Family,
+    /// Logs.
+    pub logs: usize,
+    /// Right answers among all logs.
+    pub right: usize,
+    /// Logs clearly visible, and right among them.
+    pub visible: (usize, usize),
+    /// Refused logs.
+    pub refused: usize,
+    /// Smallest ladder visibility from which >= 80 % of the logs at or above it are right (with at
+    /// least 3 logs there); `None` if none.
+    pub visibility_80: Option<f64>,
+    /// Median shrink of the right, visible answers.
+    pub median_shrink: f64,
+    /// Answers given, with counts.
+    pub answers: Vec<(String, usize)>,
+}
+
+/// Summaries per family, in the order of first appearance.
+pub fn summarize(outcomes: &[Outcome]) -> Vec<FamilySummary> {
+    let mut families: Vec<Family> = Vec::new();
+    for o in outcomes {
+        if !families.contains(&o.family) {
+            families.push(o.family);
+        }
+    }
+    families.into_iter().map(|f| summarize_family(f, outcomes)).collect()
+}
+
+fn summarize_family(family: Family, outcomes: &[Outcome]) -> FamilySummary {
+    let mine: Vec<&Outcome> = outcomes.iter().filter(|o| o.family == family).collect();
+    let visible: Vec<&&Outcome> = mine.iter().filter(|o| o.visible()).collect();
+    let mut shrinks: Vec<f64> = visible.iter().filter(|o| o.right).map(|o| o.shrink).filter(|s| s.is_finite()).collect();
+    let mut answers: Vec<(String, usize)> = Vec::new();
+    for o in &mine {
+        let key = if o.verdict.starts_with("refused") { "refused".to_string() } else { o.verdict.clone() };
+        match answers.iter_mut().find(|(a, _)| *a == key) {
+            Some((_, n)) => *n += 1,
+            None => answers.push((key, 1)),
+        }
+    }
+    answers.sort_by(|a, b| b.1.cmp(&a.1));
+    FamilySummary {
+        family,
+        logs: mine.len(),
+        right: mine.iter().filter(|o| o.right).count(),
+        visible: (visible.len(), visible.iter().filter(|o| o.right).count()),
+        refused: mine.iter().filter(|o| o.verdict.starts_with("refused")).count(),
+        visibility_80: visibility_80(&mine),
+        median_shrink: median(&mut shrinks),
+        answers,
+    }
+}
+
+/// The smallest ladder visibility from which >= 80 % of the logs at or above it are right.
+fn visibility_80(outcomes: &[&Outcome]) -> Option<f64> {
+    VISIBILITY_LADDER.into_iter().find(|&v| {
+        let above: Vec<&&Outcome> = outcomes.iter().filter(|o| o.visibility >= v).collect();
+        above.len() >= 3 && above.iter().filter(|o| o.right).count() * 5 >= above.len() * 4
+    })
+}
+
+fn median(values: &mut [f64]) -> f64 {
+    if values.is_empty() {
+        return f64::NAN;
+    }
+    values.sort_by(f64::total_cmp);
+    values[values.len() / 2]
+}
+
+/// The markdown table of the summaries.
+pub fn table(summaries: &[FamilySummary]) -> String {
+    let mut out = String::from(
+        "| family | logs | right | right where visible (ratio >= 2) | visibility for 80 % right | median shrink | refused | answers |\n|---|---:|---:|---:|---:|---:|---:|---|\n",
+    );
+    for s in summaries {
+        let v80 = s.visibility_80.map_or("never".to_string(), |v| format!(">= {v}"));
+        let answers: Vec<String> = s.answers.iter().map(|(a, n)| format!("{a} {n}")).collect();
+        out += &format!(
+            "| {} | {} | {} | {}/{} | {} | {:.2} | {} | {} |\n",
+            s.family.name(),
+            s.logs,
+            s.right,
+            s.visible.1,
+            s.visible.0,
+            v80,
+            s.median_shrink,
+            s.refused,
+            answers.join(", ")
+        );
+    }
+    out
+}
