@@ -588,3 +588,20 @@ fn the_csv_reads_back_through_the_cli_reader_in_its_unit() {
         }
     }
 }
+
+#[test]
+fn slow_bias_effects_come_with_a_steady_thermometer() {
+    for family in [Family::Drift, Family::ColoredNoise] {
+        for seed in 0..30 {
+            let spec = random_small_spec(family, seed);
+            if let Some(profile) = spec.session.temperature {
+                assert_eq!(profile.span_c(spec.session.total_s()), 0.0, "{family:?} seed {seed}: {profile:?}");
+            }
+        }
+    }
+    let varying = (0..30).filter(|&seed| {
+        let spec = random_small_spec(Family::Nonlinearity, seed);
+        spec.session.temperature.is_some_and(|p| p.span_c(spec.session.total_s()) > 0.1)
+    });
+    assert!(varying.count() > 0, "other families keep a drifting room thermometer");
+}

@@ -36,6 +36,7 @@ pub enum Colored {
 
 /// Sets a random coloured noise on `spec`; its deviation over the session is 0.3-30 mg.
 pub fn randomise(rng: &mut Rng, spec: &mut LogSpec) {
+    super::temperature::TempProfile::hold_steady(&mut spec.session.temperature);
     let total_s = spec.session.total_s();
     let sigma = rng.log_uniform(0.3, 30.0) * 1e-3 * G_MPS2;
     let effect = match rng.index(3) {

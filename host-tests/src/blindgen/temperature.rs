@@ -81,6 +81,15 @@ impl TempProfile {
         }
     }
 
+    /// Holds the thermometer `profile` (if any) at its starting value: logs whose effect is a slow
+    /// bias change keep the temperature steady, so that the effect cannot equally be read as a
+    /// temperature sensitivity.
+    pub fn hold_steady(profile: &mut Option<Self>) {
+        if let Some(p) = profile.as_mut() {
+            *p = Self::Constant { c: p.at(0.0) };
+        }
+    }
+
     /// The largest departure from the temperature at t = 0 over `[0, total_s]` (deg C).
     pub fn span_c(&self, total_s: f64) -> f64 {
         let t0 = self.at(0.0);
