@@ -1,6 +1,14 @@
 //! Writes a directory of generated calibration logs for blind tests of the diagnosis: for each log
 //! `NNNN.csv`, its twin without the effect `NNNN.twin.csv`, and one `manifest.json`.
 //!
+//! Manifest fields per log: `file`, `twin`, `family`, `shape`, `params` (the effect's parameters,
+//! SI units, body or sensor frame as named), `magnitude` with `magnitude_unit` and `magnitude_what`
+//! (the strength as drawn), `rms_effect_mg` (RMS of log minus twin over all samples) and
+//! `max_hold_effect_mg` (largest change of a calibrated hold mean), `seed`, `held_out` (seed >=
+//! 1 000 000), `units` (`m/s^2`, `g`, `counts`), `lsb_per_g`, `sample_rate_hz`, `noise_mg`, `truth`
+//! (`B` in the output unit, `B_mps2`, `S`, `M`; the sensor at t = 0), `pose_count`, `rest_s`,
+//! `duration_s`, `samples`, `temperature` (the thermometer profile, if the log has a column).
+//!
 //! ```text
 //! cargo run -p accelcal-host --example blindgen -- --out target/blind --count 40
 //! cargo run -p accelcal-host --example blindgen -- --out target/held --count 40 --held-out
@@ -26,6 +34,9 @@ struct Args {
     /// Draw from the held-out seed range (seeds offset by 1 000 000).
     #[arg(long)]
     held_out: bool,
+    /// Small logs (12 poses at 100 Hz) for quick runs.
+    #[arg(long)]
+    small: bool,
     /// Families, comma-separated (default: all), assigned round-robin.
     #[arg(long, value_delimiter = ',')]
     families: Vec<String>,
@@ -39,7 +50,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut entries = Vec::new();
     for i in 0..args.count {
         let family = families[(i % families.len() as u64) as usize];
-        let spec = blindgen::random_spec(family, offset + args.first_seed + i);
+        let seed = offset + args.first_seed + i;
+        let spec =
+            if args.small { blindgen::random_small_spec(family, seed) } else { blindgen::random_spec(family, seed) };
         let (file, twin_file) = (format!("{i:04}.csv"), format!("{i:04}.twin.csv"));
         let log = blindgen::generate(&spec);
         let twin = blindgen::generate(&spec.twin());

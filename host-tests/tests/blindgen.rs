@@ -248,24 +248,29 @@ fn settling_creep_decays_exponentially_within_each_hold() {
     let effect = Settling { creep: Some(creep.clone()), ringing: None, magnitude: magnitude() };
     let (_, log, twin) = with_effect(Family::Settling, 71, Effect::Settling(effect));
     let d = sensor_difference(&log, &twin);
+    let mut lagging = 0;
     for (p, h) in log.holds.iter().enumerate().skip(1) {
         let change = sub(h.up_body, log.holds[p - 1].up_body);
-        for (i, s) in log.samples.iter().enumerate().filter(|(_, s)| s.t_s >= h.start_s && s.t_s < h.end_s) {
-            for k in 0..3 {
-                let expected =
-                    -creep.lag_fraction[k] * change[k] * (-(s.t_s - h.start_s) / creep.tau_s[k]).exp() * G_MPS2;
+        let first = log.samples.iter().position(|s| s.t_s >= h.start_s).expect("a sample in the hold");
+        for k in 0..3 {
+            // The reading lags its input: the transient opposes the change.
+            if change[k].abs() > 0.5 && -creep.lag_fraction[k] * change[k] * d[first][k] > 0.0 {
+                lagging += 1;
+            }
+            for (i, s) in log.samples.iter().enumerate().filter(|(_, s)| s.t_s >= h.start_s && s.t_s < h.end_s) {
+                let expected = d[first][k] * (-(s.t_s - log.samples[first].t_s) / creep.tau_s[k]).exp();
                 assert!(
-                    (d[i][k] - expected).abs() < 1e-3 * MG,
-                    "hold {p} t {} axis {k}: {} vs {expected}",
+                    (d[i][k] - expected).abs() < 1e-4 * MG,
+                    "hold {p} axis {k} t {}: {} vs {expected}",
                     s.t_s,
                     d[i][k]
                 );
             }
         }
-        let late = log.window_mean_mps2(h.end_s - 1.0, h.end_s);
-        let late_twin = twin.window_mean_mps2(h.end_s - 1.0, h.end_s);
-        assert!(norm(sub(late, late_twin)) < 0.01 * MG, "hold {p}: the creep should be gone by the end of the hold");
+        let late = sub(log.window_mean_mps2(h.end_s - 1.0, h.end_s), twin.window_mean_mps2(h.end_s - 1.0, h.end_s));
+        assert!(norm(late) < 0.01 * MG, "hold {p}: the creep should be gone by the end of the hold");
     }
+    assert!(lagging >= 8, "only {lagging} transients oppose a change above 0.5 g");
 }
 
 #[test]
@@ -367,7 +372,9 @@ fn random_walk_variance_grows_linearly_with_lag() {
 fn gauss_markov_has_its_deviation_and_correlation_time() {
     let (sigma, tau_s) = (2.0 * MG, 0.5);
     let b = colored_bias(92, Colored::GaussMarkov { sigma_mps2: sigma, tau_s });
-    let variance = b.iter().map(|v| v.iter().map(|x| x * x).sum::<f64>()).sum::<f64>() / (3 * b.len()) as f64;
+    let mean = scale(b.iter().fold([0.0; 3], |s, v| [s[0] + v[0], s[1] + v[1], s[2] + v[2]]), 1.0 / b.len() as f64);
+    let variance =
+        b.iter().map(|v| sub(*v, mean).iter().map(|x| x * x).sum::<f64>()).sum::<f64>() / (3 * b.len()) as f64;
     assert!((variance.sqrt() / sigma - 1.0).abs() < 0.1, "std {} vs {sigma}", variance.sqrt());
     // Structure function 2 sigma^2 (1 - exp(-lag / tau)) at lag = tau.
     let at_tau = increment_variance(&b, 25) / (2.0 * sigma * sigma);
@@ -478,4 +485,123 @@ fn hand_rotations_are_smooth_with_no_jump_at_either_end() {
         .map(|i| norm(sub(spec.truth.apply(log.accel_mps2(i)), spec.truth.apply(log.accel_mps2(i - 1)))))
         .fold(0.0, f64::max);
     assert!(worst < 30.0 * MG, "largest step between 1 ms samples: {} mg", worst / MG);
+}
+
+#[test]
+fn a_face_aligned_session_points_each_body_axis_up_and_down_within_its_tilt() {
+    let mut spec = small(Family::Clean, 121);
+    let mut rng = accelcal_host::blindgen::noise::Rng::new(1, 2);
+    spec.session.align_to_faces(&mut rng);
+    let log = generate(&spec);
+    assert!([12, 18, 24].contains(&log.holds.len()), "{} poses", log.holds.len());
+    let mut faces = [0usize; 6];
+    for h in &log.holds {
+        let (k, v) = (0..3).map(|k| (k, h.up_body[k])).max_by(|a, b| a.1.abs().total_cmp(&b.1.abs())).unwrap();
+        let tilt_deg = v.abs().acos().to_degrees();
+        assert!((0.4..2.1).contains(&tilt_deg), "tilt {tilt_deg} deg");
+        faces[2 * k + usize::from(v < 0.0)] += 1;
+    }
+    assert!(faces.iter().all(|&n| n == log.holds.len() / 6), "faces {faces:?}");
+    for r in residuals(&spec, &log, 0.0) {
+        assert!(norm(r) < 1.0 * MG, "residual {r:?}");
+    }
+}
+
+#[test]
+fn quadratic_temperature_bias_grows_with_the_square_of_the_change() {
+    let profile = TempProfile::Cycling { mean_c: 25.0, amp_c: 8.0, period_s: 90.0 };
+    let b2 = [0.05 * MG, -0.1 * MG, 0.0];
+    let mut effect = temp_effect([0.0; 3], [0.0; 3], None);
+    effect.bias_per_c2 = b2;
+    let spec = temp_spec(44, profile, effect);
+    let log = generate(&spec);
+    for (i, r) in residuals(&spec, &log, 0.0).iter().enumerate() {
+        let h = log.holds[i];
+        let square = average(|t| [(profile.at(t) - 25.0).powi(2); 3], h.start_s, h.end_s)[0];
+        assert!(norm(sub(*r, scale(b2, square))) < 0.3 * MG, "hold {i}: {r:?} vs {:?}", scale(b2, square));
+    }
+}
+
+#[test]
+fn random_attitudes_are_uniform_on_the_sphere_of_up_directions() {
+    use accelcal_host::blindgen::orientation::Quat;
+    let mut rng = accelcal_host::blindgen::noise::Rng::new(3, 4);
+    let n = 4000;
+    let ups: Vec<V3> = (0..n).map(|_| Quat::random(&mut rng).rotate_inv([0.0, 0.0, 1.0])).collect();
+    for k in 0..3 {
+        let mean = ups.iter().map(|u| u[k]).sum::<f64>() / n as f64;
+        let second = ups.iter().map(|u| u[k] * u[k]).sum::<f64>() / n as f64;
+        // Uniform on the sphere: mean 0 (sd 1/sqrt(3n)), second moment 1/3 (sd sqrt(4/45/n)).
+        assert!(mean.abs() < 4.0 / (3.0 * n as f64).sqrt(), "axis {k}: mean {mean}");
+        assert!((second - 1.0 / 3.0).abs() < 4.0 * (4.0 / 45.0 / n as f64).sqrt(), "axis {k}: second moment {second}");
+    }
+    let faces = ups.iter().filter(|u| u.iter().any(|c| c.abs() > 0.9998)).count();
+    assert!(faces < 10, "{faces} of {n} attitudes within 1 deg of a face");
+}
+
+#[test]
+fn every_shape_of_every_family_is_drawn() {
+    let expected: [(Family, &[&str]); 8] = [
+        (Family::Clean, &["plain", "quantised", "face_aligned", "temperature_column"]),
+        (Family::Drift, &["linear", "quadratic", "warm_up", "wander"]),
+        (
+            Family::Temperature,
+            &["bias_linear", "bias_quadratic_lagged", "scale_linear", "scale_quadratic", "bias_and_scale_lagged"],
+        ),
+        (Family::Nonlinearity, &["square", "cube", "square_and_cube"]),
+        (Family::Settling, &["exponential", "ringing", "exponential_and_ringing"]),
+        (Family::Motion, &["taps", "sway", "bump"]),
+        (Family::ColoredNoise, &["random_walk", "gauss_markov", "flicker"]),
+        (Family::OutOfCatalogue, &["bad_pose", "mains", "hysteresis", "cross_axis"]),
+    ];
+    for (family, shapes) in expected {
+        let drawn: Vec<String> = (0..60).map(|seed| random_small_spec(family, seed).shape).collect();
+        for shape in shapes {
+            assert!(drawn.iter().any(|d| d == shape), "{family:?}: {shape} never drawn in 60 seeds");
+        }
+        let specs = (0..60).map(|seed| random_small_spec(family, seed));
+        assert!(specs.clone().all(|s| s.family == family && s.effect.is_some() == (family != Family::Clean)));
+        let with_temp = specs.filter(|s| s.session.temperature.is_some()).count();
+        assert!(
+            family == Family::Temperature || (10..50).contains(&with_temp),
+            "{family:?}: {with_temp}/60 with a thermometer"
+        );
+    }
+}
+
+#[test]
+fn the_csv_reads_back_through_the_cli_reader_in_its_unit() {
+    use accelcal_host::csvio::{self, ReadOptions};
+    let cases = [(Units::Mps2, csvio::Units::Mps2), (Units::G, csvio::Units::G), (Units::COARSE, csvio::Units::Counts)];
+    for (units, read_as) in cases {
+        let mut spec = small(Family::Temperature, 131);
+        spec.units = units;
+        let log = generate(&spec);
+        let table = csvio::read_csv_str("blind.csv", &log.to_csv_string(), &ReadOptions::default()).expect("readable");
+        assert_eq!(table.units, read_as);
+        assert_eq!(table.samples.len(), log.samples.len());
+        let temps = table.temps_c.expect("a temperature column");
+        let times = table.times_s.expect("a time column");
+        for (i, s) in log.samples.iter().enumerate().step_by(97) {
+            assert!(sub(table.samples[i], s.accel).iter().all(|d| d.abs() < 1e-5), "row {i}");
+            assert!((times[i] - s.t_s).abs() < 1e-6 && (temps[i] - s.temp_c.unwrap()).abs() < 0.006, "row {i}");
+        }
+    }
+}
+
+#[test]
+fn slow_bias_effects_come_with_a_steady_thermometer() {
+    for family in [Family::Drift, Family::ColoredNoise] {
+        for seed in 0..30 {
+            let spec = random_small_spec(family, seed);
+            if let Some(profile) = spec.session.temperature {
+                assert_eq!(profile.span_c(spec.session.total_s()), 0.0, "{family:?} seed {seed}: {profile:?}");
+            }
+        }
+    }
+    let varying = (0..30).filter(|&seed| {
+        let spec = random_small_spec(Family::Nonlinearity, seed);
+        spec.session.temperature.is_some_and(|p| p.span_c(spec.session.total_s()) > 0.1)
+    });
+    assert!(varying.count() > 0, "other families keep a drifting room thermometer");
 }

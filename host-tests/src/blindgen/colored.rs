@@ -36,6 +36,7 @@ pub enum Colored {
 
 /// Sets a random coloured noise on `spec`; its deviation over the session is 0.3-30 mg.
 pub fn randomise(rng: &mut Rng, spec: &mut LogSpec) {
+    super::temperature::TempProfile::hold_steady(&mut spec.session.temperature);
     let total_s = spec.session.total_s();
     let sigma = rng.log_uniform(0.3, 30.0) * 1e-3 * G_MPS2;
     let effect = match rng.index(3) {
@@ -89,17 +90,19 @@ impl EffectModel for Colored {
                 .map(|tau| GaussMarkov::new(sigma_each_mps2, tau, &mut rng))
                 .collect(),
         };
-        Box::new(ColoredInjector { effect: self, rng, processes, walk: [0.0; 3], bias: [0.0; 3] })
+        Box::new(ColoredInjector { effect: self, rng, processes, walk: [0.0; 3], bias: [0.0; 3], start: None })
     }
 }
 
-/// The processes' state; the bias is zero at the first sample for the random walk.
+/// The processes' state. The bias is counted from its value at the first sample (the truth is the
+/// sensor at t = 0), so the slow components of flicker appear as slow drift.
 struct ColoredInjector<'a> {
     effect: &'a Colored,
     rng: Rng,
     processes: Vec<GaussMarkov>,
     walk: V3,
     bias: V3,
+    start: Option<V3>,
 }
 
 impl Injector for ColoredInjector<'_> {
@@ -117,7 +120,8 @@ impl Injector for ColoredInjector<'_> {
         for (i, p) in self.processes.iter_mut().enumerate() {
             bias[i / per_axis] += p.step(ctx.dt_s, &mut self.rng);
         }
-        self.bias = bias;
+        let start = *self.start.get_or_insert(bias);
+        self.bias = core::array::from_fn(|k| bias[k] - start[k]);
     }
 
     fn bias_mps2(&mut self, _ctx: &Ctx) -> V3 {

@@ -51,6 +51,7 @@ pub struct Drift {
 
 /// Sets a random drift on `spec`.
 pub fn randomise(rng: &mut Rng, spec: &mut LogSpec) {
+    super::temperature::TempProfile::hold_steady(&mut spec.session.temperature);
     let total_s = spec.session.total_s();
     let peak_mg = rng.log_uniform(0.5, 50.0);
     let peak = peak_mg * 1e-3 * G_MPS2;

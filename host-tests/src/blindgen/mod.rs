@@ -284,14 +284,19 @@ fn randomise_effect(rng: &mut Rng, spec: &mut LogSpec) {
     }
 }
 
-/// Clean logs: plain, coarsely quantised (noise below one LSB), or with a varying thermometer.
+/// Clean logs: plain, coarsely quantised (noise below one LSB), with a varying thermometer, or
+/// deliberately face-aligned.
 fn clean_shape(rng: &mut Rng, spec: &mut LogSpec) {
-    match rng.index(3) {
+    match rng.index(4) {
         0 => spec.shape = "plain".into(),
         1 => {
             spec.shape = "quantised".into();
             spec.units = Units::COARSE;
             spec.noise_mg = rng.log_uniform(0.2, 3.0);
+        }
+        2 => {
+            spec.shape = "face_aligned".into();
+            spec.session.align_to_faces(rng);
         }
         _ => {
             spec.shape = "temperature_column".into();

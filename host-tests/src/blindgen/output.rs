@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use serde_json::{Value, json};
 
 use super::session::G_MPS2;
-use super::vec3::{V3, add, scale, sub};
+use super::vec3::{V3, add, norm, scale, sub};
 use super::{Log, LogSpec};
 
 impl Log {
@@ -61,6 +61,14 @@ impl Log {
     }
 }
 
+/// The largest change of a hold mean by the effect, calibrated with the truth (`|Ka (log - twin)|`,
+/// mg): how visible the effect is in the pose means.
+pub fn max_hold_effect_mg(spec: &LogSpec, log: &Log, twin: &Log) -> f64 {
+    let pairs = log.hold_means_mps2(0.0).into_iter().zip(twin.hold_means_mps2(0.0));
+    let largest = pairs.map(|(a, b)| norm(sub(spec.truth.apply(a), spec.truth.apply(b)))).fold(0.0, f64::max);
+    largest / G_MPS2 * 1e3
+}
+
 /// The manifest entry of a log written as `file` (its twin as `twin_file`); `log` and `twin` are
 /// the generated logs (for the measured difference).
 pub fn manifest_entry(spec: &LogSpec, file: &str, twin_file: &str, log: &Log, twin: &Log) -> Value {
@@ -76,6 +84,7 @@ pub fn manifest_entry(spec: &LogSpec, file: &str, twin_file: &str, log: &Log, tw
         "magnitude_unit": magnitude.map(|m| m.unit),
         "magnitude_what": magnitude.map(|m| m.what),
         "rms_effect_mg": log.rms_difference_mg(twin),
+        "max_hold_effect_mg": max_hold_effect_mg(spec, log, twin),
         "seed": spec.seed,
         "held_out": spec.held_out(),
         "units": spec.units.name(),

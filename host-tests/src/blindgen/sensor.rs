@@ -144,7 +144,8 @@ impl Units {
         match self {
             Self::Mps2 => format!("{value:.6}"),
             Self::G => format!("{value:.7}"),
-            Self::Counts { .. } => format!("{value:.0}"),
+            // `+ 0.0` turns a negative zero into zero.
+            Self::Counts { .. } => format!("{:.0}", value + 0.0),
         }
     }
 }

@@ -98,6 +98,25 @@ impl SessionSpec {
         Self { rate_hz, rest_s, poses, temperature: None }
     }
 
+    /// Re-orients the poses to the six faces (some body axis up or down), turned by multiples of
+    /// 90 deg about the vertical, each tilted by 0.5-2 deg, in random order: a deliberately
+    /// face-aligned session of 12, 18 or 24 poses.
+    pub fn align_to_faces(&mut self, rng: &mut Rng) {
+        let turns = (2 + rng.index(3)).min(self.poses.len() / 6);
+        self.poses.truncate(6 * turns);
+        let mut order: Vec<usize> = (0..self.poses.len()).collect();
+        for i in (1..order.len()).rev() {
+            order.swap(i, rng.index(i + 1));
+        }
+        for (pose, slot) in self.poses.iter_mut().zip(order) {
+            let turn = Quat::from_rotvec([0.0, 0.0, (slot / 6) as f64 * core::f64::consts::FRAC_PI_2]);
+            let tilt_axis = rng.range(0.0, core::f64::consts::TAU);
+            let tilt = rng.range(0.5, 2.0).to_radians();
+            let tilt = Quat::from_rotvec([tilt * tilt_axis.cos(), tilt * tilt_axis.sin(), 0.0]);
+            pose.attitude = tilt.then_after(turn.then_after(face_up(slot % 6)));
+        }
+    }
+
     /// The hold windows, in order (the first includes the rest).
     pub fn holds(&self) -> Vec<HoldWindow> {
         let mut t = 0.0;
@@ -137,6 +156,20 @@ fn random_pose(rng: &mut Rng) -> PoseSpec {
         travel_m: scale(rng.unit_vector(), rng.range(0.0, 0.15)),
         shake,
     }
+}
+
+/// The attitude that puts body axis `+z, -z, +x, -x, +y, -y` (for `face` 0..5) up.
+fn face_up(face: usize) -> Quat {
+    let h = core::f64::consts::FRAC_PI_2;
+    let rotvec = match face {
+        0 => [0.0; 3],
+        1 => [2.0 * h, 0.0, 0.0],
+        2 => [0.0, -h, 0.0],
+        3 => [0.0, h, 0.0],
+        4 => [h, 0.0, 0.0],
+        _ => [-h, 0.0, 0.0],
+    };
+    Quat::from_rotvec(rotvec)
 }
 
 /// The world's up direction seen in the body frame of `attitude`.

@@ -81,6 +81,15 @@ impl TempProfile {
         }
     }
 
+    /// Holds the thermometer `profile` (if any) at its starting value: logs whose effect is a slow
+    /// bias change keep the temperature steady, so that the effect cannot equally be read as a
+    /// temperature sensitivity.
+    pub fn hold_steady(profile: &mut Option<Self>) {
+        if let Some(p) = profile.as_mut() {
+            *p = Self::Constant { c: p.at(0.0) };
+        }
+    }
+
     /// The largest departure from the temperature at t = 0 over `[0, total_s]` (deg C).
     pub fn span_c(&self, total_s: f64) -> f64 {
         let t0 = self.at(0.0);
@@ -134,12 +143,15 @@ pub fn randomise(rng: &mut Rng, spec: &mut LogSpec) {
     spec.set_effect(Effect::Temperature(TempEffect::random(rng, span_c, lag_tau_s)));
 }
 
+/// The shapes of the sensitivity (the name gets `_lagged` when the sensor lags the thermometer).
+pub const TEMP_KINDS: [&str; 5] =
+    ["bias_linear", "bias_quadratic", "scale_linear", "scale_quadratic", "bias_and_scale"];
+
 impl TempEffect {
-    /// A random effect over a temperature span of `span_c`.
+    /// A random effect over a temperature span of `span_c`: a bias change of 0.5-50 mg and/or a
+    /// scale change of 1000-30 000 ppm across the span.
     pub fn random(rng: &mut Rng, span_c: f64, lag_tau_s: Option<f64>) -> Self {
-        let kind = ["bias_linear", "bias_quadratic", "scale_linear", "bias_and_scale"][rng.index(4)];
-        let bias_mg = rng.log_uniform(0.5, 50.0);
-        let scale_ppm = rng.log_uniform(300.0, 20_000.0);
+        let kind = TEMP_KINDS[rng.index(TEMP_KINDS.len())];
         let mut e = Self {
             shape: format!("{kind}{}", if lag_tau_s.is_some() { "_lagged" } else { "" }),
             bias_per_c: [0.0; 3],
@@ -147,20 +159,41 @@ impl TempEffect {
             scale_per_c: [0.0; 3],
             scale_per_c2: [0.0; 3],
             lag_tau_s,
-            magnitude: Magnitude { value: bias_mg, unit: "mg", what: "bias change over the temperature span" },
+            magnitude: Magnitude { value: 0.0, unit: "mg", what: "" },
         };
-        let bias_dir = scale(rng.unit_vector(), bias_mg * 1e-3 * G_MPS2);
-        match kind {
-            "bias_linear" => e.bias_per_c = scale(bias_dir, 1.0 / span_c),
-            "bias_quadratic" => e.bias_per_c2 = scale(bias_dir, 1.0 / (span_c * span_c)),
-            "bias_and_scale" => e.bias_per_c = scale(bias_dir, 1.0 / span_c),
-            _ => {}
-        }
         if kind.contains("scale") {
-            e.scale_per_c = core::array::from_fn(|_| rng.sign() * rng.range(0.5, 1.0) * scale_ppm * 1e-6 / span_c);
-            e.magnitude = Magnitude { value: scale_ppm, unit: "ppm", what: "scale change over the temperature span" };
+            e.set_scale(rng, kind.ends_with("quadratic"), span_c);
+        }
+        if kind.contains("bias") {
+            e.set_bias(rng, kind.ends_with("quadratic"), span_c);
         }
         e
+    }
+
+    /// A bias change of 0.5-50 mg across `span_c`, linear or quadratic in temperature.
+    fn set_bias(&mut self, rng: &mut Rng, quadratic: bool, span_c: f64) {
+        let bias_mg = rng.log_uniform(0.5, 50.0);
+        let change = scale(rng.unit_vector(), bias_mg * 1e-3 * G_MPS2);
+        if quadratic {
+            self.bias_per_c2 = scale(change, 1.0 / (span_c * span_c));
+        } else {
+            self.bias_per_c = scale(change, 1.0 / span_c);
+        }
+        self.magnitude = Magnitude { value: bias_mg, unit: "mg", what: "bias change over the temperature span" };
+    }
+
+    /// A relative scale change of 1000-30 000 ppm across `span_c`, random sign per axis.
+    fn set_scale(&mut self, rng: &mut Rng, quadratic: bool, span_c: f64) {
+        let scale_ppm = rng.log_uniform(1000.0, 30_000.0);
+        let power = if quadratic { 2 } else { 1 };
+        let per: V3 =
+            core::array::from_fn(|_| rng.sign() * rng.range(0.5, 1.0) * scale_ppm * 1e-6 / span_c.powi(power));
+        if quadratic {
+            self.scale_per_c2 = per;
+        } else {
+            self.scale_per_c = per;
+        }
+        self.magnitude = Magnitude { value: scale_ppm, unit: "ppm", what: "scale change over the temperature span" };
     }
 }
 
