@@ -252,13 +252,16 @@ fn read_poses(table: &Table) -> Result<(Vec<Pose>, Vec<PoseData>, f64), Diagnose
 /// Also returns the quantisation floor of a pose mean per axis ([`quantisation_floor`]).
 fn white_variance(table: &Table, poses: &[PoseData]) -> Result<(V3, V3), DiagnoseError> {
     let white: V3 = std::array::from_fn(|a| median(&poses.iter().map(|p| p.var[a]).collect::<Vec<_>>()));
-    if !white.iter().all(|v| v.is_finite()) || white.iter().all(|v| *v <= 0.0) {
+    let q = quantisation_step(table);
+    // Readings that never change within a pose are a quantised sensor whose noise is below one step:
+    // the rounding (q^2 / 12) is then the whole noise.
+    let measurable = |a: usize| white[a] > 0.0 || q[a] > 0.0;
+    if !white.iter().all(|v| v.is_finite()) || !(0..3).any(measurable) {
         return Err(err(format!(
             "{}: the poses show no noise (zero within-pose variance): the gap cannot be measured",
             table.file
         )));
     }
-    let q = quantisation_step(table);
     let floor = std::array::from_fn(|a| quantisation_floor(q[a], white[a]));
     Ok((std::array::from_fn(|a| white[a].max(q[a] * q[a] / 12.0)), floor))
 }

@@ -4,11 +4,25 @@
 
 use super::{Candidate, Context, Evaluation, Family, Variant};
 use crate::csvio::Table;
+use crate::diagnose::gap::PoseData;
 use crate::diagnose::gap::{Noise, expected_cv_ms, residual_noise_draws, row_time, simulate_gap};
 use crate::diagnose::math::{V3, lstsq, mean, predict};
 use crate::diagnose::{CV_NOISE_DRAWS, PARAMETER_PENALTY, WALK_EXCESS};
 
 pub(crate) struct ColoredNoise;
+
+impl ColoredNoise {
+    /// Penalised held-out ratio of the pose means under white noise plus this walk and floor.
+    fn heldout_ratio(&self, ctx: &Context<'_>, walk: V3, floor: V3) -> f64 {
+        let m = ctx.m;
+        let noise = Noise { white: m.white, walk, floor: std::array::from_fn(|a| floor[a] + m.quantisation[a]) };
+        let draws = residual_noise_draws(&m.model, &m.directions, &m.poses, &noise, CV_NOISE_DRAWS, ctx.opts.seed);
+        let e_col = expected_cv_ms(&ctx.base_rows, &draws, &ctx.fold, ctx.folds, &ctx.none_dropped);
+        let ms =
+            (crate::diagnose::math::sum_sq(&ctx.nominal_cv).0 + PARAMETER_PENALTY * ctx.e_white) / m.poses.len() as f64;
+        (ms / e_col).sqrt()
+    }
+}
 
 impl Family for ColoredNoise {
     fn name(&self) -> &'static str {
@@ -24,13 +38,26 @@ impl Family for ColoredNoise {
         let n = ctx.poses.len();
         let longest = (0..n).max_by_key(|&i| ctx.poses[i].n).unwrap_or(0);
         let rows = ctx.poses[longest].rows.clone();
-        let (walk, floor) = colored_noise_estimate(ctx.table, rows.start, rows.end, m.rate, m.white);
+        let (mut walk, mut floor) = colored_noise_estimate(ctx.table, rows.start, rows.end, m.rate, m.white);
+        if walk.iter().chain(&floor).all(|v| *v == 0.0) {
+            (walk, floor) = pooled_estimate(ctx.table, ctx.poses, m.rate, m.white);
+        }
+        // The measured random walk and floor, and each alone: the one the withheld poses' scatter
+        // agrees with best (their levels come from the holds, not from the pose means).
+        let zero = [0.0; 3];
+        let mut best: Option<(f64, V3, V3)> = None;
+        for (w, f) in [(walk, floor), (walk, zero), (zero, floor)] {
+            if !(ctx.pose_level && w.iter().chain(&f).any(|v| *v > 0.0)) {
+                continue;
+            }
+            let ratio = self.heldout_ratio(ctx, w, f);
+            if best.is_none_or(|(b, _, _)| ctx.gain(ratio) > ctx.gain(b)) {
+                best = Some((ratio, w, f));
+            }
+        }
+        let applicable = best.is_some();
+        let (heldout_ratio, walk, floor) = best.unwrap_or((ctx.heldout_ratio_nominal, walk, floor));
         let noise = Noise { white: m.white, walk, floor: std::array::from_fn(|a| floor[a] + m.quantisation[a]) };
-        let applicable = ctx.pose_level && walk.iter().chain(&floor).any(|w| *w > 0.0);
-        let draws = residual_noise_draws(&m.model, &m.directions, &m.poses, &noise, CV_NOISE_DRAWS, ctx.opts.seed);
-        let e_col = expected_cv_ms(&ctx.base_rows, &draws, &ctx.fold, ctx.folds, &ctx.none_dropped);
-        let ms = (crate::diagnose::math::sum_sq(&ctx.nominal_cv).0 + PARAMETER_PENALTY * ctx.e_white) / n as f64;
-        let heldout_ratio = if applicable { (ms / e_col).sqrt() } else { ctx.heldout_ratio_nominal };
         let sim_after = if applicable {
             let sims =
                 simulate_gap(&m.model, &m.directions, &m.poses, &noise, m.gravity, ctx.opts.repeats, ctx.opts.seed);
@@ -91,6 +118,39 @@ pub(crate) fn colored_noise_estimate(table: &Table, first: usize, end: usize, ra
         (walk[a], floor[a]) = fit_walk_and_floor(&points);
     }
     (walk, floor)
+}
+
+/// [`colored_noise_estimate`] pooled over every hold (for a log without one long rest): each
+/// hold is cleared of its mean and slope, and the Allan excesses of all holds are fitted together;
+/// the excess test is on their weighted mean at each hold's longest `tau`.
+pub(crate) fn pooled_estimate(table: &Table, poses: &[PoseData], rate: f64, white: V3) -> (V3, V3) {
+    let mut walk = [0.0; 3];
+    let mut floor = [0.0; 3];
+    for a in 0..3 {
+        let (mut points, mut excess, mut holds) = (Vec::new(), 0.0, 0usize);
+        for p in poses.iter().filter(|p| p.n >= 100) {
+            let y: Vec<f64> = table.samples[p.rows.clone()].iter().map(|s| s[a]).collect();
+            let (pose_points, last) = allan_excess(&detrend_linear(&y), rate, white[a]);
+            points.extend(pose_points);
+            excess += last;
+            holds += 1;
+        }
+        if holds >= 3 && excess / holds as f64 > WALK_EXCESS {
+            (walk[a], floor[a]) = fit_walk_and_floor(&points);
+        }
+    }
+    (walk, floor)
+}
+
+/// `y` less its least-squares line over the sample index.
+fn detrend_linear(y: &[f64]) -> Vec<f64> {
+    let n = y.len() as f64;
+    let x_mean = (n - 1.0) / 2.0;
+    let y_mean = y.iter().sum::<f64>() / n;
+    let sxx: f64 = (0..y.len()).map(|i| (i as f64 - x_mean).powi(2)).sum();
+    let sxy: f64 = y.iter().enumerate().map(|(i, v)| (i as f64 - x_mean) * (v - y_mean)).sum();
+    let slope = if sxx > 0.0 { sxy / sxx } else { 0.0 };
+    y.iter().enumerate().map(|(i, v)| v - y_mean - slope * (i as f64 - x_mean)).collect()
 }
 
 /// The trend a rest is cleared of: quadratic in time, linear in temperature when it varies.
