@@ -20,6 +20,9 @@ use super::within::{Within, WithinFit, WithinVariant};
 use super::{CV_NOISE_DRAWS, DiagnoseOptions, OVERSHOOT_WEIGHT, PARAMETER_PENALTY};
 use crate::csvio::Table;
 
+/// Logs of at most this many poses are cross-validated leaving one pose out.
+const LEAVE_ONE_OUT_BELOW: usize = 16;
+
 /// One parametrisation of a family: extra design columns per pose (the modulus residual's
 /// derivative in the effect's parameters), the parameters it costs and what it is.
 pub(crate) struct Variant {
@@ -130,7 +133,8 @@ impl<'a> Context<'a> {
     /// The cross-validation set-up; `None` when a fold leaves too few poses.
     pub(crate) fn new(table: &'a Table, m: &'a Measured, opts: &'a DiagnoseOptions) -> Option<Self> {
         let n = m.poses.len();
-        let folds = opts.folds.min(n);
+        // Few poses: leave one out (every fold keeps as many poses as it can).
+        let folds = if n <= LEAVE_ONE_OUT_BELOW { n } else { opts.folds.min(n) };
         let fold = assign_folds(n, folds, opts.seed);
         let base_rows: Vec<Vec<f64>> =
             m.poses.iter().zip(&m.directions).map(|(p, u)| jacobian_row(p.mean, *u).to_vec()).collect();
