@@ -99,6 +99,7 @@ impl Family for ColoredNoise {
             ),
             within_gain: f64::NAN,
             within_detail: String::new(),
+            variants: Vec::new(),
         };
         Evaluation { candidate, after: m.r.iter().map(|v| Some(*v)).collect() }
     }

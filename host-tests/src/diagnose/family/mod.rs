@@ -38,6 +38,8 @@ pub(crate) struct Fitted {
     pub(crate) score_ratio: f64,
     pub(crate) params: usize,
     pub(crate) detail: String,
+    /// Every parametrisation tried with its penalised held-out ratio.
+    pub(crate) tried: Vec<(String, f64)>,
 }
 
 /// A family's result: its candidate line and the pose residuals with it added (`None`: dropped).
@@ -203,16 +205,24 @@ impl<'a> Context<'a> {
             return None;
         }
         let mut best: Option<Fitted> = None;
+        let mut tried = Vec::new();
         for v in variants {
             let rows = self.rows_with(&v.extra);
             let dropped = self.none_dropped.clone();
-            if let Some(ratio) = self.heldout_ratio(&rows, &dropped, v.params)
-                && best.as_ref().is_none_or(|b| ratio < b.score_ratio)
-            {
-                best = Some(Fitted { rows, dropped, score_ratio: ratio, params: v.params, detail: v.detail });
+            let Some(ratio) = self.heldout_ratio(&rows, &dropped, v.params) else { continue };
+            tried.push((v.detail.clone(), ratio));
+            if best.as_ref().is_none_or(|b| ratio < b.score_ratio) {
+                best = Some(Fitted {
+                    rows,
+                    dropped,
+                    score_ratio: ratio,
+                    params: v.params,
+                    detail: v.detail,
+                    tried: Vec::new(),
+                });
             }
         }
-        best
+        best.map(|b| Fitted { tried, ..b })
     }
 
     /// `1 - ln(ratio) / ln(nominal ratio)`; predicting more scatter than there is counts
@@ -241,6 +251,7 @@ impl<'a> Context<'a> {
             detail: f.detail,
             within_gain: f64::NAN,
             within_detail: String::new(),
+            variants: f.tried,
         };
         Evaluation { candidate, after }
     }
@@ -256,6 +267,7 @@ impl<'a> Context<'a> {
             detail: "not testable on this data".into(),
             within_gain: f64::NAN,
             within_detail: String::new(),
+            variants: Vec::new(),
         };
         Evaluation { candidate, after: self.m.r.iter().map(|v| Some(*v)).collect() }
     }

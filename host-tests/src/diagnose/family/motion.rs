@@ -36,6 +36,7 @@ impl Family for Motion {
             score_ratio: ratio,
             params: count,
             detail: format!("moving poses dropped: {}", list.join(" ")),
+            tried: Vec::new(),
         })
     }
 }
