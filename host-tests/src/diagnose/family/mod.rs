@@ -69,17 +69,23 @@ pub(crate) trait Family {
 
     /// The candidate line: held-out evidence on both channels and the gap with the family added.
     fn evaluate(&self, ctx: &Context<'_>) -> Evaluation {
-        let mut e = match self.fit(ctx) {
-            Some(f) => ctx.evaluate_fitted(self.name(), f),
-            None => ctx.not_testable(self.name()),
-        };
-        if let Some(w) = ctx.within.as_ref().filter(|w| w.significant)
-            && let Some(fit) = w.best_of(self.within_variants(ctx, w))
-        {
-            ctx.add_within(&mut e, w, fit);
-        }
-        e
+        standard_evaluation(self, ctx)
     }
+}
+
+/// [`Family::evaluate`]'s default: the best pose-level parametrisation, then the within-pose
+/// channel's.
+pub(crate) fn standard_evaluation<F: Family + ?Sized>(family: &F, ctx: &Context<'_>) -> Evaluation {
+    let mut e = match family.fit(ctx) {
+        Some(f) => ctx.evaluate_fitted(family.name(), f),
+        None => ctx.not_testable(family.name()),
+    };
+    if let Some(w) = ctx.within.as_ref().filter(|w| w.significant)
+        && let Some(fit) = w.best_of(family.within_variants(ctx, w))
+    {
+        ctx.add_within(&mut e, w, fit);
+    }
+    e
 }
 
 /// Every family, in report order.
