@@ -2,7 +2,7 @@
 //!
 //! Only when the target is bare metal (`target_os = "none"`, e.g. `thumbv7em-none-eabihf`): copies
 //! `memory.x` to `OUT_DIR` and passes `-L OUT_DIR -Tlink.x --nmagic` to the linker, for this package's
-//! examples only. Link arguments rather than `rustc-link-search`, which would leak this crate's
+//! examples only; with the `defmt` feature also `-Tdefmt.x` (see below). Link arguments rather than `rustc-link-search`, which would leak this crate's
 //! `memory.x` into the link of every firmware that depends on the library. The host build is untouched,
 //! and nothing relies on `RUSTFLAGS` (which would replace `.cargo/config.toml`'s flags).
 
@@ -23,4 +23,11 @@ fn main() {
     println!("cargo:rustc-link-arg-examples=-L{}", out.display());
     println!("cargo:rustc-link-arg-examples=-Tlink.x");
     println!("cargo:rustc-link-arg-examples=--nmagic");
+    // defmt's linker script (`defmt.x`, on the search path from defmt's own build script) places the
+    // interned log strings. Only with the `defmt` feature, which the defmt example requires; the other
+    // examples then link it too and stay defmt-free (its `EXTERN` symbols only pull a logger in when
+    // one is linked, and nothing references them otherwise).
+    if std::env::var_os("CARGO_FEATURE_DEFMT").is_some() {
+        println!("cargo:rustc-link-arg-examples=-Tdefmt.x");
+    }
 }
