@@ -40,7 +40,7 @@ mod firmware {
     use core::mem::discriminant;
     use core::ops::ControlFlow;
 
-    use accelcal::{ImuSession, RunError, RunLimits, SessionConfig, State, seeded_rng};
+    use accelcal::{ImuSession, RunLimits, SessionConfig, State, seeded_rng};
     use defmt::{Display2Format, error, info, warn};
     use lis3dh::{Configuration, DataRate, Lis3dh, Mode, Range, SlaveAddr};
     use stm32f4xx_hal::{block, i2c::I2c, pac, prelude::*, rcc::Config};
@@ -48,8 +48,10 @@ mod firmware {
 
     use super::{HOLD_S, MIN_STILL_S, RATE_HZ};
 
-    /// The GA's first seed (logged with the verdict, so a run can be repeated from the same poses).
+    /// The GA's seed (fixed, so a run can be repeated from the same poses).
     const GA_SEED: u64 = 2020;
+    /// Poses an [`ImuSession`] holds (`Session<i16, 24, ..>`): once full, a failed verdict is final.
+    const SESSION_POSES: usize = 24;
     /// Saturation, raw counts: high-resolution mode is 12 bits left-justified in an `i16`, so the
     /// largest reading at +-2 g is 2047 * 16 (not `i16::MAX`).
     const FULL_SCALE_LSB: f32 = 32_752.0;
@@ -81,33 +83,24 @@ mod firmware {
         info!("LIS3DH ready: +-2 g, {} Hz; follow the guidance", RATE_HZ);
 
         let mut session = ImuSession::new(config).map_err(|_| "bad session configuration")?;
-        let (mut seed, mut last) = (GA_SEED, discriminant(&State::Done));
+        let mut last = discriminant(&State::Done);
         let result = loop {
-            let run = session.run_with_sensor(&mut imu, seeded_rng(seed), &RunLimits::DEFAULT, |p| {
+            let run = session.run_with_sensor(&mut imu, seeded_rng(GA_SEED), &RunLimits::DEFAULT, |p| {
                 if core::mem::replace(&mut last, discriminant(&p.state)) != discriminant(&p.state) {
-                    info!("{} ({} poses, {}/6 faces, ready {})", p.state, p.poses, p.faces_done, p.ready);
+                    let next = Display2Format(&p.guidance.next);
+                    info!("{}: {} poses, next turn {} up, ready {}", p.state, p.poses, next, p.ready);
                 }
-                if let State::PoseCaptured { .. } = p.state {
-                    info!(
-                        "next: turn {} up (worst std/bound {})",
-                        Display2Format(&p.guidance.next),
-                        p.guidance.worst_std
-                    );
-                }
-                let _ = block!(ticker.wait());
+                let _ = block!(ticker.wait()); // paces the reads at RATE_HZ
                 if p.ready { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
             });
             match run {
-                Ok(result) => break result,
-                Err(RunError::Session(e)) => warn!("{} (GA seed {}): capture more poses", e, seed),
-                Err(e) => {
-                    error!("{}", Display2Format(&e));
-                    return Err("the sensor failed");
-                }
+                // A failed verdict or a loose wire: the poses are kept, capture more and finish again.
+                Err(e) if session.poses().len() < SESSION_POSES => warn!("{}: capture more", Display2Format(&e)),
+                run => break run.map_err(|e| error!("{}: no room for more poses", Display2Format(&e))),
             }
-            seed += 1;
         };
-        info!("GA seed {}, verdict {}", seed, result.calibration.verdict);
+        let result = result.map_err(|()| "no calibration")?;
+        info!("verdict {}", result.calibration.verdict);
         info!("blob ({} bytes, store in flash): {=[u8]:02x}", result.blob.len(), result.blob);
         Ok(())
     }
