@@ -15,11 +15,12 @@
 //! The session asks for the next orientation (any start, any order): turn the board until that
 //! direction points up, hold it still [`HOLD_S`] seconds, turn it on to the next one when the log says
 //! `MoveOn`. When the predicted parameter uncertainties are within the verdict's bounds it calibrates
-//! (TAGA + LM, about half a second of solving) and logs the verdict and the blob to store in flash. A
-//! failed verdict keeps every pose: the loop captures more and finishes again.
+//! (TAGA + LM) and logs the verdict and the blob to store in flash. A failed verdict (or a sensor that
+//! stopped answering) keeps every pose: the loop captures more and finishes again, until the session's
+//! 24 poses are full. Not yet run on hardware here: built for the target and linked with defmt only.
 //!
-//! The calibration loop in [`run`] is 20 lines, counted from `let mut session` to the blob's log line
-//! (rustfmt's layout); the rest of the file is board and sensor set-up.
+//! The calibration loop in `calibrate` is 20 lines, counted from `let mut session` to the blob's log
+//! line (rustfmt's layout); `board` is the board and sensor set-up.
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
 #[cfg(not(target_os = "none"))]
@@ -37,13 +38,15 @@ const MIN_STILL_S: f32 = 0.5;
 
 #[cfg(target_os = "none")]
 mod firmware {
+    use core::fmt::Debug;
     use core::mem::discriminant;
     use core::ops::ControlFlow;
 
+    use accelcal::sensor::AccelSensor;
     use accelcal::{ImuSession, RunLimits, SessionConfig, State, seeded_rng};
     use defmt::{Display2Format, error, info, warn};
     use lis3dh::{Configuration, DataRate, Lis3dh, Mode, Range, SlaveAddr};
-    use stm32f4xx_hal::{block, i2c::I2c, pac, prelude::*, rcc::Config};
+    use stm32f4xx_hal::{block, i2c::I2c, pac, prelude::*, rcc::Config, timer::SysCounterHz};
     use {defmt_rtt as _, panic_probe as _};
 
     use super::{HOLD_S, MIN_STILL_S, RATE_HZ};
@@ -58,7 +61,7 @@ mod firmware {
 
     #[cortex_m_rt::entry]
     fn main() -> ! {
-        if let Err(message) = run() {
+        if let Err(message) = board().and_then(|(mut imu, mut tick)| calibrate(&mut imu, &mut tick)) {
             error!("{}", message);
         }
         loop {
@@ -66,31 +69,37 @@ mod firmware {
         }
     }
 
-    fn run() -> Result<(), &'static str> {
+    /// The LIS3DH on I2C1 (+-2 g, high resolution, [`RATE_HZ`]) and the tick that paces its reads.
+    fn board() -> Result<(impl AccelSensor<Error: Debug>, SysCounterHz), &'static str> {
         let dp = pac::Peripherals::take().ok_or("device peripherals already taken")?;
         let cp = cortex_m::Peripherals::take().ok_or("core peripherals already taken")?;
         let mut rcc = dp.RCC.freeze(Config::hse(25.MHz()).sysclk(100.MHz()));
         let gpiob = dp.GPIOB.split(&mut rcc);
         let i2c = I2c::new(dp.I2C1, (gpiob.pb8, gpiob.pb9), 400.kHz(), &mut rcc);
-        let mut ticker = cp.SYST.counter_hz(&rcc.clocks);
-        ticker.start(RATE_HZ.Hz()).map_err(|_| "cannot start the sample tick")?;
+        let mut tick = cp.SYST.counter_hz(&rcc.clocks);
+        tick.start(RATE_HZ.Hz()).map_err(|_| "cannot start the sample tick")?;
         let lis3dh = Configuration { mode: Mode::HighResolution, datarate: DataRate::Hz_200, ..Default::default() };
         let mut imu = Lis3dh::new_i2c_with_config(i2c, SlaveAddr::Default, lis3dh)
             .map_err(|_| "no LIS3DH at 0x19 on I2C1 (PB8/PB9)")?;
         imu.set_range(Range::G2).map_err(|_| "cannot set the LIS3DH's range")?;
+        info!("LIS3DH ready: +-2 g, {} Hz; follow the guidance", RATE_HZ);
+        Ok((imu, tick))
+    }
+
+    /// The guided session on any sensor (here the `lis3dh` driver itself), logged over defmt: the
+    /// calibration loop, from `let mut session` to the blob's log line.
+    fn calibrate<S: AccelSensor<Error: Debug>>(imu: &mut S, tick: &mut SysCounterHz) -> Result<(), &'static str> {
         let mut config = SessionConfig::at_rate(RATE_HZ as f32, HOLD_S, MIN_STILL_S);
         config.accumulator.full_scale = FULL_SCALE_LSB;
-        info!("LIS3DH ready: +-2 g, {} Hz; follow the guidance", RATE_HZ);
-
         let mut session = ImuSession::new(config).map_err(|_| "bad session configuration")?;
         let mut last = discriminant(&State::Done);
         let result = loop {
-            let run = session.run_with_sensor(&mut imu, seeded_rng(GA_SEED), &RunLimits::DEFAULT, |p| {
+            let run = session.run_with_sensor(imu, seeded_rng(GA_SEED), &RunLimits::DEFAULT, |p| {
                 if core::mem::replace(&mut last, discriminant(&p.state)) != discriminant(&p.state) {
                     let next = Display2Format(&p.guidance.next);
                     info!("{}: {} poses, next turn {} up, ready {}", p.state, p.poses, next, p.ready);
                 }
-                let _ = block!(ticker.wait()); // paces the reads at RATE_HZ
+                let _ = block!(tick.wait()); // paces the reads at RATE_HZ
                 if p.ready { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
             });
             match run {
