@@ -336,6 +336,49 @@ mod tests {
         }
     }
 
+    /// A symmetric positive definite 4x4 with spread-out entries (Gram matrix plus a ridge).
+    fn spd4() -> Matrix<4> {
+        let g = [[1.0, 0.3, -0.2, 0.7], [0.1, 2.0, 0.5, -0.4], [-0.6, 0.2, 1.5, 0.3], [0.4, -0.9, 0.1, 0.8]];
+        core::array::from_fn(|i| {
+            core::array::from_fn(|j| (0..4).map(|k| g[i][k] * g[j][k]).sum::<f32>() + if i == j { 0.1 } else { 0.0 })
+        })
+    }
+
+    #[test]
+    fn in_place_forms_equal_the_copying_ones_bit_for_bit() {
+        let a = spd4();
+        let mut l = a;
+        cholesky_in_place(&mut l).unwrap();
+        let copied = cholesky(&a).unwrap();
+        for i in 0..4 {
+            assert_eq!(l[i][..=i], copied[i][..=i], "row {i}");
+            assert!(copied[i][i + 1..].iter().all(|&v| v == 0.0));
+        }
+        let (b, held) = ([1.0, -2.0, 0.5, 3.0], [false, true, false, false]);
+        let (mut m, mut x) = (a, b);
+        solve_spd_holding_in_place(&mut m, &mut x, &held).unwrap();
+        assert_eq!(x, solve_spd_holding(&a, &b, &held).unwrap());
+        assert_eq!(x[1], 0.0);
+        for i in [0, 2, 3] {
+            let r: f32 = [0, 2, 3].iter().map(|&k| a[i.max(k)][i.min(k)] * x[k]).sum();
+            assert!((r - b[i]).abs() < 1e-4, "{i}: {r}");
+        }
+    }
+
+    #[test]
+    fn in_place_inverse_leaves_a_singular_matrix_unchanged() {
+        let mut a = spd4();
+        a[3] = [0.0; 4];
+        let before = a;
+        assert_eq!(spd_inverse_in_place(&mut a), Err(LinalgError::Singular));
+        assert_eq!(a, before);
+        // Positive diagonal, indefinite: the factorisation (not the diagonal check) fails.
+        let mut a = [[1.0, 2.0, 0.0, 0.0], [2.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
+        let before = a;
+        assert_eq!(spd_inverse_in_place(&mut a), Err(LinalgError::Singular));
+        assert_eq!(a, before);
+    }
+
     #[test]
     fn singular_is_an_error() {
         let a = [[1.0, 2.0], [2.0, 4.0]];
