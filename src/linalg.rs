@@ -44,8 +44,13 @@ pub fn solve_lu<const N: usize>(mut a: Matrix<N>, mut b: [f32; N]) -> Result<[f3
         if !(a[pivot][col].abs() > tiny) {
             return Err(LinalgError::Singular);
         }
-        a.swap(col, pivot);
-        b.swap(col, pivot);
+        if pivot != col {
+            // Element by element: a row swap of the array links the library's large `memmove`.
+            for k in 0..N {
+                (a[col][k], a[pivot][k]) = (a[pivot][k], a[col][k]);
+            }
+            b.swap(col, pivot);
+        }
         for row in col + 1..N {
             let factor = a[row][col] / a[col][col];
             for k in col..N {
