@@ -1,0 +1,128 @@
+//! `calibrate --report DIR` on a real recording: the page exists, is self-contained (no script to
+//! run, nothing fetched), carries the same JSON document as `--json` of the same run, every figure
+//! draws data, and every number shown equals the JSON value it is tagged with (to the digits shown).
+//!
+//! Needs `../shared/data/real` beside the workspace: without it the tests fail, naming the folder.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use serde_json::Value;
+
+/// Significant digits the page shows (`accelcal_host::report_html::SIGNIFICANT_DIGITS`).
+const DIGITS: i32 = accelcal_host::report_html::SIGNIFICANT_DIGITS as i32;
+
+fn real_file(relative: &str) -> PathBuf {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/real");
+    let file = root.join(relative);
+    assert!(
+        file.is_file(),
+        "{} is missing: the real recordings (../shared/data/real beside the workspace) are needed by this test",
+        file.display()
+    );
+    file
+}
+
+/// Runs `calibrate FILE EXTRA --json --report DIR`; returns the stdout document and the page.
+fn calibrate_with_report(name: &str, file: &Path, extra: &[&str]) -> (Value, String) {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("html_report").join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = Command::new(env!("CARGO_BIN_EXE_accelcal"))
+        .arg("calibrate")
+        .arg(file)
+        .args(extra)
+        .arg("--json")
+        .arg("--report")
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(matches!(out.status.code(), Some(0 | 1)), "exit {:?}: {stderr}", out.status.code());
+    let page_path = dir.join("index.html");
+    assert!(page_path.is_file(), "{} not written: {stderr}", page_path.display());
+    let document: Value = serde_json::from_slice(&out.stdout).expect("stdout is the JSON document");
+    (document, std::fs::read_to_string(page_path).unwrap())
+}
+
+/// The text between `start` (after it) and the next `end`, for every occurrence.
+fn between<'a>(text: &'a str, start: &str, end: &str) -> Vec<&'a str> {
+    let mut found = Vec::new();
+    let mut rest = text;
+    while let Some(i) = rest.find(start) {
+        let after = &rest[i + start.len()..];
+        let Some(j) = after.find(end) else { break };
+        found.push(&after[..j]);
+        rest = &after[j..];
+    }
+    found
+}
+
+/// The JSON embedded in the page.
+fn embedded_json(page: &str) -> Value {
+    let blocks = between(page, r#"<script type="application/json" id="data">"#, "</script>");
+    assert_eq!(blocks.len(), 1, "one JSON block expected");
+    serde_json::from_str(blocks[0]).expect("the embedded block is JSON")
+}
+
+/// Every `data-key="POINTER">TEXT<`: (pointer, shown text).
+fn tagged_numbers(page: &str) -> Vec<(&str, &str)> {
+    between(page, r#"data-key=""#, "<")
+        .into_iter()
+        .map(|s| s.split_once("\">").unwrap_or_else(|| panic!("malformed tagged element: {s}")))
+        .collect()
+}
+
+/// `shown` is `value` rounded to [`DIGITS`] significant digits.
+fn assert_shown_equals(key: &str, shown: &str, value: f64) {
+    let parsed: f64 = shown.parse().unwrap_or_else(|_| panic!("{key}: '{shown}' is not a number"));
+    let half_unit = 0.5 * 10f64.powi(value.abs().log10().floor() as i32 - (DIGITS - 1));
+    assert!((parsed - value).abs() <= half_unit * (1.0 + 1e-9), "{key}: the page shows {shown}, the JSON has {value}");
+}
+
+fn check_numbers(page: &str, document: &Value) -> usize {
+    let tagged = tagged_numbers(page);
+    for (key, shown) in &tagged {
+        let value = document.pointer(key).and_then(Value::as_f64);
+        let value = value.unwrap_or_else(|| panic!("{key} is not a number in the JSON"));
+        assert_shown_equals(key, shown, value);
+    }
+    tagged.len()
+}
+
+/// Every `<svg>` has at least one data mark; returns the count of marks per figure.
+fn check_figures(page: &str) -> Vec<usize> {
+    let figures = between(page, "<svg", "</svg>");
+    assert!(figures.len() >= 3, "{} figures", figures.len());
+    let marks: Vec<usize> = figures.iter().map(|f| f.matches("datum\"").count()).collect();
+    for (i, (figure, count)) in figures.iter().zip(&marks).enumerate() {
+        let label = between(figure, "aria-label=\"", "\"").first().copied().unwrap_or("?");
+        assert!(*count > 0, "figure {i} ({label}) draws nothing");
+    }
+    marks
+}
+
+fn check_self_contained(page: &str) {
+    assert_eq!(page.matches("<script").count(), 1, "only the JSON data block may be a script");
+    let external = page.replace("http://www.w3.org/2000/svg", "");
+    for needle in ["http://", "https://", " src=", "<link", "@import"] {
+        assert!(!external.contains(needle), "the page refers to something outside it: '{needle}'");
+    }
+}
+
+#[test]
+fn xsens_report_matches_its_json() {
+    let file = real_file("imu_tk_xsens_mti/xsens_acc.csv");
+    let (document, page) = calibrate_with_report("xsens", &file, &[]);
+    assert_eq!(embedded_json(&page), document, "the page's JSON differs from --json of the same run");
+    check_self_contained(&page);
+    let poses = document["poses"].as_array().unwrap().len();
+    assert!(poses >= 9, "{poses} poses");
+    let marks = check_figures(&page);
+    assert_eq!(marks[0], 2 * poses, "one stem before and one after per pose: {marks:?}");
+    assert_eq!(marks[1], poses, "one dot per pose on the sphere: {marks:?}");
+    let params: Vec<(&str, &str)> =
+        tagged_numbers(&page).into_iter().filter(|(k, _)| k.starts_with("/param")).collect();
+    assert_eq!(params.len(), 18, "nine parameters and nine standard deviations: {params:?}");
+    let numbers = check_numbers(&page, &document);
+    assert!(numbers >= 18 + 5 * poses, "{numbers} numbers tagged");
+}
