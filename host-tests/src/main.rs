@@ -515,6 +515,7 @@ fn calibrate_json(
                 "mean": p.mean,
                 "std": p.variance.map(f32::sqrt),
                 "temp_c": temps.get(i).copied().flatten(),
+                "direction": report_html::calibrated_direction(&cal.params, p.mean),
                 "residual_before_mg": residuals.get(i).map(|r| num(r.before_mg)),
                 "residual_after_mg": residuals.get(i).map(|r| num(r.after_mg)),
             })

@@ -3,6 +3,8 @@
 //! draws data, and every number shown equals the JSON value it is tagged with (to the digits shown).
 //!
 //! Needs `../shared/data/real` beside the workspace: without it the tests fail, naming the folder.
+//! The headless-browser test needs `chromium` (the OS package): it is `#[ignore]`d in a plain
+//! `cargo test` and run by `.ci/run` with `--include-ignored`; run without chromium it fails, saying so.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -75,6 +77,10 @@ fn tagged_numbers(page: &str) -> Vec<(&str, &str)> {
 /// `shown` is `value` rounded to [`DIGITS`] significant digits.
 fn assert_shown_equals(key: &str, shown: &str, value: f64) {
     let parsed: f64 = shown.parse().unwrap_or_else(|_| panic!("{key}: '{shown}' is not a number"));
+    if value == 0.0 {
+        assert_eq!(parsed, 0.0, "{key}: the page shows {shown}, the JSON has 0");
+        return;
+    }
     let half_unit = 0.5 * 10f64.powi(value.abs().log10().floor() as i32 - (DIGITS - 1));
     assert!((parsed - value).abs() <= half_unit * (1.0 + 1e-9), "{key}: the page shows {shown}, the JSON has {value}");
 }
@@ -109,20 +115,82 @@ fn check_self_contained(page: &str) {
     }
 }
 
+/// Checks common to every report: the JSON, self-containment, figures, tagged numbers; returns the
+/// data marks per figure.
+fn check_report(document: &Value, page: &str) -> Vec<usize> {
+    assert_eq!(&embedded_json(page), document, "the page's JSON differs from --json of the same run");
+    check_self_contained(page);
+    let marks = check_figures(page);
+    let params: Vec<(&str, &str)> = tagged_numbers(page).into_iter().filter(|(k, _)| k.starts_with("/param")).collect();
+    let known_std = document["param_std"].as_array().unwrap().iter().filter(|v| v.is_number()).count();
+    assert_eq!(params.len(), 9 + known_std, "nine parameters and the standard deviations known: {params:?}");
+    check_numbers(page, document);
+    marks
+}
+
+#[test]
+fn means_with_temperature_report_draws_against_temperature_and_says_why_it_fails() {
+    let file = real_file("avrlabs_mpu6050/derived_notebook_26pos_means.csv");
+    let (document, page) = calibrate_with_report("avrlabs", &file, &["--means"]);
+    let marks = check_report(&document, &page);
+    let poses = document["poses"].as_array().unwrap().len();
+    assert_eq!(poses, 26);
+    assert!(document["poses"][0]["temp_c"].is_number(), "the means file has a temperature column");
+    assert!(page.contains("No time column"), "a means file has no time column");
+    assert_eq!(marks.len(), 4, "two stem figures, the sphere, residual against temperature: {marks:?}");
+    assert_eq!(marks[3], 2 * poses, "a dot before and after per pose against temperature: {marks:?}");
+    assert_eq!(document["verdict"]["pass"], Value::Bool(false));
+    assert!(
+        page.contains(r#"id="verdict">FAIL"#) && page.contains("poorly determined by the poses: Bx"),
+        "reasons missing"
+    );
+    assert!(page.contains("held at nominal (the orientations do not determine them): Mxx"));
+    assert!(page.contains("&plusmn; held"), "a held parameter's deviation is shown as held");
+}
+
 #[test]
 fn xsens_report_matches_its_json() {
     let file = real_file("imu_tk_xsens_mti/xsens_acc.csv");
     let (document, page) = calibrate_with_report("xsens", &file, &[]);
-    assert_eq!(embedded_json(&page), document, "the page's JSON differs from --json of the same run");
-    check_self_contained(&page);
+    let marks = check_report(&document, &page);
     let poses = document["poses"].as_array().unwrap().len();
     assert!(poses >= 9, "{poses} poses");
-    let marks = check_figures(&page);
     assert_eq!(marks[0], 2 * poses, "one stem before and one after per pose: {marks:?}");
-    assert_eq!(marks[1], poses, "one dot per pose on the sphere: {marks:?}");
-    let params: Vec<(&str, &str)> =
-        tagged_numbers(&page).into_iter().filter(|(k, _)| k.starts_with("/param")).collect();
-    assert_eq!(params.len(), 18, "nine parameters and nine standard deviations: {params:?}");
+    assert_eq!(marks[1], poses, "one stem after per pose, zoomed: {marks:?}");
+    assert_eq!(marks[2], poses, "one dot per pose on the sphere: {marks:?}");
+    assert_eq!(marks[3], 2 * poses, "a dot before and after per pose against time: {marks:?}");
+    assert!(page.contains("No temperature column"));
     let numbers = check_numbers(&page, &document);
     assert!(numbers >= 18 + 5 * poses, "{numbers} numbers tagged");
+}
+
+/// `chromium --headless --dump-dom` of `page`: the DOM as the browser built it, and its log.
+fn browser_dom(page: &Path) -> (String, String) {
+    let out = Command::new("chromium")
+        .args(["--headless", "--no-sandbox", "--disable-gpu", "--enable-logging=stderr", "--dump-dom"])
+        .arg(format!("file://{}", page.display()))
+        .output()
+        .unwrap_or_else(|e| {
+            panic!("cannot run chromium ({e}): install the OS package (apt-get install chromium); .ci/run does")
+        });
+    assert!(out.status.success(), "chromium failed: {}", String::from_utf8_lossy(&out.stderr));
+    (String::from_utf8(out.stdout).unwrap(), String::from_utf8_lossy(&out.stderr).into_owned())
+}
+
+#[test]
+#[ignore = "needs chromium (apt-get install chromium); .ci/run runs it"]
+fn report_opens_in_a_headless_browser_with_every_figure_drawn() {
+    let file = real_file("imu_tk_xsens_mti/xsens_acc.csv");
+    let (document, page) = calibrate_with_report("browser", &file, &[]);
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("html_report/browser/index.html");
+    let (dom, log) = browser_dom(&path.canonicalize().unwrap());
+    let console: Vec<&str> = log.lines().filter(|l| l.contains(":CONSOLE")).collect();
+    assert!(console.is_empty(), "console messages: {console:?}");
+    assert!(
+        dom.contains("<h1>accelcal calibration report</h1>"),
+        "the DOM lacks the page: {}",
+        &dom[..dom.len().min(400)]
+    );
+    let marks_in_browser = check_report(&document, &dom);
+    assert_eq!(marks_in_browser, check_figures(&page), "the browser's DOM draws other marks than the file");
 }

@@ -14,7 +14,8 @@ struct PosePoint {
     /// Pose number from 1.
     number: usize,
     left_out: bool,
-    mean: [f64; 3],
+    /// Unit vector of the calibrated reading.
+    direction: Option<[f64; 3]>,
     /// Middle of the pose, s (with a time column).
     t_mid_s: Option<f64>,
     temp_c: Option<f64>,
@@ -29,7 +30,12 @@ pub fn body(doc: &Value) -> String {
     summary(&mut out, doc);
     verdict(&mut out, doc);
     params_table(&mut out, doc);
-    stems_figure(&mut out, &points);
+    out.push_str(
+        "<h2>Residual per pose</h2>\n<p class=\"note\">Before: the readings at face value (g, m/s<sup>2</sup>) or \
+         the initial estimate (counts, whose scale is unknown).</p>\n",
+    );
+    stems_figure(&mut out, &points, true);
+    stems_figure(&mut out, &points, false);
     sphere_figure(&mut out, &points);
     against_figure(&mut out, &points, "time", "pose middle time (s)", |p| p.t_mid_s);
     against_figure(&mut out, &points, "temperature", "pose mean temperature (deg C)", |p| p.temp_c);
@@ -49,7 +55,10 @@ fn pose_points(doc: &Value) -> Vec<PosePoint> {
         .map(|(i, p)| PosePoint {
             number: i + 1,
             left_out: left_out.contains(&(i as u64)),
-            mean: [0, 1, 2].map(|k| f(&p["mean"][k]).unwrap_or(f64::NAN)),
+            direction: p["direction"]
+                .as_array()
+                .filter(|d| d.len() == 3)
+                .map(|d| [0, 1, 2].map(|k| d[k].as_f64().unwrap_or(f64::NAN))),
             t_mid_s: f(&p["t_start"]).zip(f(&p["t_end"])).map(|(a, b)| 0.5 * (a + b)),
             temp_c: f(&p["temp_c"]),
             before_mg: f(&p["residual_before_mg"]),
@@ -136,7 +145,7 @@ fn params_table(out: &mut String, doc: &Value) {
                 out,
                 "<td>{} &plusmn; {}</td>",
                 number_span(&format!("/params/{key}/{axis}"), doc),
-                number_span(&format!("/param_std/{}", 3 * row + axis), doc)
+                std_span(doc, 3 * row + axis)
             );
         }
         out.push_str("</tr>\n");
@@ -144,15 +153,24 @@ fn params_table(out: &mut String, doc: &Value) {
     out.push_str("</table>\n");
 }
 
-fn stems_figure(out: &mut String, points: &[PosePoint]) {
+/// The standard deviation of parameter `index`, or "held" for a parameter held at nominal.
+fn std_span(doc: &Value, index: usize) -> String {
+    let key = format!("/param_std/{index}");
+    let name = accelcal::model::PARAM_NAMES.get(index).copied().unwrap_or("?");
+    let held = doc["verdict"]["held_at_nominal"].as_array().is_some_and(|a| a.iter().any(|n| n.as_str() == Some(name)));
+    if held && doc.pointer(&key).is_none_or(Value::is_null) { "held".into() } else { number_span(&key, doc) }
+}
+
+fn stems_figure(out: &mut String, points: &[PosePoint], with_before: bool) {
     let xs: Vec<f64> = points.iter().map(|p| p.number as f64).collect();
-    let ys: Vec<f64> = points.iter().flat_map(|p| [p.before_mg, p.after_mg]).flatten().collect();
+    let ys: Vec<f64> =
+        points.iter().flat_map(|p| [p.before_mg.filter(|_| with_before), p.after_mg]).flatten().collect();
     let axes = Axes::fit(&xs, &ys);
-    out.push_str("<h2>Residual per pose</h2>\n");
-    axes.open(out, "modulus residual (|f| - g) / g per pose", "pose", "residual (mg)");
+    let title = if with_before { "before and after calibration" } else { "after calibration (zoomed)" };
+    axes.open(out, &format!("modulus residual (|f| - g) / g per pose, {title}"), "pose", "residual (mg)");
     for p in points {
         let x = p.number as f64;
-        if let Some(b) = p.before_mg {
+        if let Some(b) = p.before_mg.filter(|_| with_before) {
             axes.stem(out, x - 0.18, b, BEFORE, &format!("pose #{} before: {} mg", p.number, sig(b)));
         }
         if let Some(a) = p.after_mg {
@@ -160,7 +178,9 @@ fn stems_figure(out: &mut String, points: &[PosePoint]) {
             axes.stem(out, x + 0.18, a, colour, &format!("pose #{} after: {} mg", p.number, sig(a)));
         }
     }
-    legend(out, 0, BEFORE, "before calibration");
+    if with_before {
+        legend(out, 0, BEFORE, "before calibration");
+    }
     legend(out, 1, AFTER, "after calibration");
     legend(out, 2, LEFT_OUT, "after, pose left out");
     out.push_str("</svg>\n");
@@ -170,22 +190,15 @@ fn sphere_figure(out: &mut String, points: &[PosePoint]) {
     let directions: Vec<Direction> = points
         .iter()
         .filter_map(|p| {
-            let norm = p.mean.iter().map(|v| v * v).sum::<f64>().sqrt();
-            (norm > 0.0 && norm.is_finite()).then(|| Direction {
-                unit: p.mean.map(|v| v / norm),
+            p.direction.map(|unit| Direction {
+                unit,
                 colour: if p.left_out { LEFT_OUT } else { AFTER },
-                tip: format!(
-                    "pose #{}: ({:.3}, {:.3}, {:.3})",
-                    p.number,
-                    p.mean[0] / norm,
-                    p.mean[1] / norm,
-                    p.mean[2] / norm
-                ),
+                tip: format!("pose #{}: ({:.3}, {:.3}, {:.3})", p.number, unit[0], unit[1], unit[2]),
             })
         })
         .collect();
     out.push_str("<h2>Pose directions (coverage)</h2>\n");
-    hemispheres(out, "direction of each pose's mean reading", &directions);
+    hemispheres(out, "direction of each pose's calibrated reading", &directions);
 }
 
 fn against_figure(

@@ -33,6 +33,13 @@ pub fn modulus_residual_mg(params: &Params, mean: [f32; 3], gravity: f32) -> f32
     (norm_squared(params.apply(mean)).sqrt() - gravity) / gravity * 1000.0
 }
 
+/// Direction of the calibrated reading of a pose (unit vector; `None` for a zero or non-finite one).
+pub fn calibrated_direction(params: &Params, mean: [f32; 3]) -> Option<[f32; 3]> {
+    let f = params.apply(mean);
+    let norm = norm_squared(f).sqrt();
+    (norm > 0.0 && norm.is_finite()).then(|| f.map(|v| v / norm))
+}
+
 /// The residual of every pose before and after calibration with `params` (the "before" residual is
 /// NaN when no "before" model exists).
 pub fn pose_residuals_mg(poses: &[Pose], config: &CalibrationConfig, params: &Params) -> Vec<PoseResidual> {
@@ -80,6 +87,13 @@ mod tests {
         assert!(modulus_residual_mg(&p, [0.0, 0.0, 1.0], 1.0).abs() < 1e-4);
         assert!((modulus_residual_mg(&p, [0.0, 0.0, 1.002], 1.0) - 2.0).abs() < 1e-3);
         assert!((modulus_residual_mg(&p, [0.6, 0.0, -0.8 * 0.999], 1.0) + 0.64).abs() < 0.01);
+    }
+
+    #[test]
+    fn direction_is_the_unit_calibrated_reading() {
+        let p = Params { bias: [1.0, 0.0, 0.0], ..Params::IDENTITY };
+        assert_eq!(calibrated_direction(&p, [1.0, 0.0, 2.0]), Some([0.0, 0.0, 1.0]));
+        assert_eq!(calibrated_direction(&p, [1.0, 0.0, 0.0]), None);
     }
 
     #[test]

@@ -18,7 +18,7 @@ mod svg;
 
 use std::path::{Path, PathBuf};
 
-pub use data::{PoseResidual, pose_residuals_mg, pose_temperatures_c};
+pub use data::{PoseResidual, calibrated_direction, pose_residuals_mg, pose_temperatures_c};
 
 /// Significant digits of the numbers shown.
 pub const SIGNIFICANT_DIGITS: usize = 6;
@@ -28,8 +28,7 @@ pub const SIGNIFICANT_DIGITS: usize = 6;
 /// # Errors
 /// A message naming the directory or file that could not be written.
 pub fn write_calibrate_report(dir: &Path, document: &serde_json::Value) -> Result<PathBuf, String> {
-    let title = format!("accelcal calibration: {}", document["file"].as_str().unwrap_or("?"));
-    let html = page(&title, &calibrate::body(document), document);
+    let html = page("accelcal calibration report", &calibrate::body(document), document);
     write_page(dir, &html)
 }
 
