@@ -96,6 +96,9 @@ enum Command {
         /// Directory for the SVG plots.
         #[arg(long)]
         plots: Option<PathBuf>,
+        /// Write a self-contained HTML report (DIR/index.html: inline SVG, no network).
+        #[arg(long, value_name = "DIR")]
+        report: Option<PathBuf>,
         /// Seed of the GA and of the simulations.
         #[arg(long, default_value_t = 1)]
         seed: u64,
@@ -213,7 +216,9 @@ fn main() -> ExitCode {
         Command::Calibrate { input, method, json, seed, bench, report } => {
             calibrate_file(&input, &method, seed, CalibrateOutput { json, bench, report })
         }
-        Command::Diagnose { input, json, plots, seed } => diagnose_file(&input, json, plots.as_deref(), seed),
+        Command::Diagnose { input, json, plots, report, seed } => {
+            diagnose_file(&input, json, plots.as_deref(), report.as_deref(), seed)
+        }
         Command::Report { json, check } => match accelcal_host::report::run(json, check) {
             Ok(true) => Ok(()),
             Ok(false) => Err(Failure::Verdict),
@@ -596,7 +601,13 @@ fn calibrate_file(input: &InputArgs, method: &str, seed: u64, output: CalibrateO
     if v.pass() { Ok(()) } else { Err(Failure::Verdict) }
 }
 
-fn diagnose_file(input: &InputArgs, as_json: bool, plots: Option<&std::path::Path>, seed: u64) -> Result<(), Failure> {
+fn diagnose_file(
+    input: &InputArgs,
+    as_json: bool,
+    plots: Option<&std::path::Path>,
+    report_dir: Option<&std::path::Path>,
+    seed: u64,
+) -> Result<(), Failure> {
     if input.means {
         let msg = "diagnose needs raw samples (within-pose noise, time, settling), not per-pose means";
         return Err(msg.to_string().into());
@@ -615,11 +626,15 @@ fn diagnose_file(input: &InputArgs, as_json: bool, plots: Option<&std::path::Pat
     if let Some(dir) = plots {
         report.write_plots(dir)?;
     }
+    let mut json = report.to_json();
+    if let Some(object) = json.as_object_mut() {
+        object.insert("rows_dropped".into(), calib::rows_dropped_json(&table.dropped, stale_repeats));
+    }
+    if let Some(dir) = report_dir {
+        let page = report_html::write_diagnose_report(dir, &json)?;
+        eprintln!("accelcal: report written to {}", page.display());
+    }
     if as_json {
-        let mut json = report.to_json();
-        if let Some(object) = json.as_object_mut() {
-            object.insert("rows_dropped".into(), calib::rows_dropped_json(&table.dropped, stale_repeats));
-        }
         println!("{json}");
     } else {
         print!("{}", report.to_text());

@@ -27,10 +27,15 @@ fn real_file(relative: &str) -> PathBuf {
 
 /// Runs `calibrate FILE EXTRA --json --report DIR`; returns the stdout document and the page.
 fn calibrate_with_report(name: &str, file: &Path, extra: &[&str]) -> (Value, String) {
+    run_with_report("calibrate", name, file, extra)
+}
+
+/// Runs `COMMAND FILE EXTRA --json --report DIR`; returns the stdout document and the page.
+fn run_with_report(command: &str, name: &str, file: &Path, extra: &[&str]) -> (Value, String) {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("html_report").join(name);
     let _ = std::fs::remove_dir_all(&dir);
     let out = Command::new(env!("CARGO_BIN_EXE_accelcal"))
-        .arg("calibrate")
+        .arg(command)
         .arg(file)
         .args(extra)
         .arg("--json")
@@ -118,14 +123,43 @@ fn check_self_contained(page: &str) {
 /// Checks common to every report: the JSON, self-containment, figures, tagged numbers; returns the
 /// data marks per figure.
 fn check_report(document: &Value, page: &str) -> Vec<usize> {
-    assert_eq!(&embedded_json(page), document, "the page's JSON differs from --json of the same run");
-    check_self_contained(page);
-    let marks = check_figures(page);
+    let marks = check_common(document, page);
     let params: Vec<(&str, &str)> = tagged_numbers(page).into_iter().filter(|(k, _)| k.starts_with("/param")).collect();
     let known_std = document["param_std"].as_array().unwrap().iter().filter(|v| v.is_number()).count();
     assert_eq!(params.len(), 9 + known_std, "nine parameters and the standard deviations known: {params:?}");
     check_numbers(page, document);
     marks
+}
+
+/// The JSON, self-containment, figures and tagged numbers; returns the data marks per figure.
+fn check_common(document: &Value, page: &str) -> Vec<usize> {
+    assert_eq!(&embedded_json(page), document, "the page's JSON differs from --json of the same run");
+    check_self_contained(page);
+    let marks = check_figures(page);
+    check_numbers(page, document);
+    marks
+}
+
+#[test]
+fn diagnosis_report_shows_candidates_and_allan_deviation_on_log_axes() {
+    let file = real_file("imu_tk_xsens_mti/xsens_acc.csv");
+    let (document, page) = run_with_report("diagnose", "diagnose", &file, &[]);
+    let marks = check_common(&document, &page);
+    let gains = document["candidates"].as_array().unwrap().iter().filter(|c| c["heldout_gain"].is_number()).count();
+    assert!(gains >= 2, "{gains} candidates with a held-out gain");
+    assert_eq!(marks[0], gains, "one stem per candidate's held-out gain: {marks:?}");
+    assert_eq!(marks[1], 2, "measured and white-noise Allan curves: {marks:?}");
+    let allan = between(&page, "<svg", "</svg>")[1];
+    for decade in [">0.01<", ">0.1<", ">1<", ">10<"] {
+        assert!(allan.contains(decade), "Allan axes lack the decade tick {decade}");
+    }
+    let poses = document["where"]["per_pose"].as_array().unwrap().len();
+    assert_eq!(&marks[2..], &[poses, poses, poses], "stems, sphere, against time: {marks:?}");
+    let tagged = tagged_numbers(&page);
+    for c in 0..document["candidates"].as_array().unwrap().len() {
+        let key = format!("/candidates/{c}/heldout_gain");
+        assert!(tagged.iter().any(|(k, _)| *k == key), "{key} not shown");
+    }
 }
 
 #[test]
@@ -179,18 +213,19 @@ fn browser_dom(page: &Path) -> (String, String) {
 
 #[test]
 #[ignore = "needs chromium (apt-get install chromium); .ci/run runs it"]
-fn report_opens_in_a_headless_browser_with_every_figure_drawn() {
+fn reports_open_in_a_headless_browser_with_every_figure_drawn() {
     let file = real_file("imu_tk_xsens_mti/xsens_acc.csv");
-    let (document, page) = calibrate_with_report("browser", &file, &[]);
-    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("html_report/browser/index.html");
-    let (dom, log) = browser_dom(&path.canonicalize().unwrap());
-    let console: Vec<&str> = log.lines().filter(|l| l.contains(":CONSOLE")).collect();
-    assert!(console.is_empty(), "console messages: {console:?}");
-    assert!(
-        dom.contains("<h1>accelcal calibration report</h1>"),
-        "the DOM lacks the page: {}",
-        &dom[..dom.len().min(400)]
-    );
-    let marks_in_browser = check_report(&document, &dom);
-    assert_eq!(marks_in_browser, check_figures(&page), "the browser's DOM draws other marks than the file");
+    for (command, heading) in [("calibrate", "accelcal calibration report"), ("diagnose", "accelcal diagnosis report")]
+    {
+        let name = format!("browser_{command}");
+        let (document, page) = run_with_report(command, &name, &file, &[]);
+        let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("html_report").join(&name).join("index.html");
+        let (dom, log) = browser_dom(&path.canonicalize().unwrap());
+        let console: Vec<&str> = log.lines().filter(|l| l.contains(":CONSOLE")).collect();
+        assert!(console.is_empty(), "{command}: console messages: {console:?}");
+        let start = &dom[..dom.len().min(400)];
+        assert!(dom.contains(&format!("<h1>{heading}</h1>")), "{command}: the DOM lacks the page: {start}");
+        let marks_in_browser = check_common(&document, &dom);
+        assert_eq!(marks_in_browser, check_figures(&page), "{command}: the browser's DOM draws other marks");
+    }
 }

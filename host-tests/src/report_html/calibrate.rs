@@ -10,17 +10,17 @@ use super::svg::{AFTER, Axes, BEFORE, Direction, LEFT_OUT, hemispheres, legend};
 use super::{escape, number_cell, number_span, sig};
 
 /// One pose as the page draws it.
-struct PosePoint {
+pub(super) struct PosePoint {
     /// Pose number from 1.
-    number: usize,
-    left_out: bool,
+    pub(super) number: usize,
+    pub(super) left_out: bool,
     /// Unit vector of the calibrated reading.
-    direction: Option<[f64; 3]>,
+    pub(super) direction: Option<[f64; 3]>,
     /// Middle of the pose, s (with a time column).
-    t_mid_s: Option<f64>,
-    temp_c: Option<f64>,
-    before_mg: Option<f64>,
-    after_mg: Option<f64>,
+    pub(super) t_mid_s: Option<f64>,
+    pub(super) temp_c: Option<f64>,
+    pub(super) before_mg: Option<f64>,
+    pub(super) after_mg: Option<f64>,
 }
 
 /// The page body for a `calibrate --json` document.
@@ -34,8 +34,8 @@ pub fn body(doc: &Value) -> String {
         "<h2>Residual per pose</h2>\n<p class=\"note\">Before: the readings at face value (g, m/s<sup>2</sup>) or \
          the initial estimate (counts, whose scale is unknown).</p>\n",
     );
-    stems_figure(&mut out, &points, true);
-    stems_figure(&mut out, &points, false);
+    stems_figure(&mut out, &points, true, "before and after calibration");
+    stems_figure(&mut out, &points, false, "after calibration (zoomed)");
     sphere_figure(&mut out, &points);
     against_figure(&mut out, &points, "time", "pose middle time (s)", |p| p.t_mid_s);
     against_figure(&mut out, &points, "temperature", "pose mean temperature (deg C)", |p| p.temp_c);
@@ -130,23 +130,25 @@ fn verdict(out: &mut String, doc: &Value) {
     out.push_str("</ul>\n");
 }
 
-fn params_table(out: &mut String, doc: &Value) {
-    out.push_str(
-        "<h2>Parameters</h2><p class=\"note\">f<sub>b</sub> = K<sub>a</sub> f<sub>s</sub> - B; value &plusmn; \
-         standard deviation (from the fit's information matrix).</p>\n<table id=\"params\">\
-         <tr><th></th><th>x</th><th>y</th><th>z</th></tr>\n",
+pub(super) fn params_table(out: &mut String, doc: &Value) {
+    let std_note = if doc.get("param_std").is_some() {
+        "; value &plusmn; standard deviation (from the fit's information matrix)"
+    } else {
+        ""
+    };
+    let _ = writeln!(
+        out,
+        "<h2>Parameters</h2><p class=\"note\">f<sub>b</sub> = K<sub>a</sub> f<sub>s</sub> - B{std_note}.</p>\n\
+         <table id=\"params\"><tr><th></th><th>x</th><th>y</th><th>z</th></tr>"
     );
     for (row, (key, label)) in
         [("bias", "bias B"), ("scale", "scale S"), ("nonorth", "non-orthogonality M")].iter().enumerate()
     {
         let _ = write!(out, "<tr><th>{label}</th>");
         for axis in 0..3 {
-            let _ = write!(
-                out,
-                "<td>{} &plusmn; {}</td>",
-                number_span(&format!("/params/{key}/{axis}"), doc),
-                std_span(doc, 3 * row + axis)
-            );
+            let value = number_span(&format!("/params/{key}/{axis}"), doc);
+            let std = doc.get("param_std").map(|_| format!(" &plusmn; {}", std_span(doc, 3 * row + axis)));
+            let _ = write!(out, "<td>{value}{}</td>", std.unwrap_or_default());
         }
         out.push_str("</tr>\n");
     }
@@ -161,12 +163,11 @@ fn std_span(doc: &Value, index: usize) -> String {
     if held && doc.pointer(&key).is_none_or(Value::is_null) { "held".into() } else { number_span(&key, doc) }
 }
 
-fn stems_figure(out: &mut String, points: &[PosePoint], with_before: bool) {
+pub(super) fn stems_figure(out: &mut String, points: &[PosePoint], with_before: bool, title: &str) {
     let xs: Vec<f64> = points.iter().map(|p| p.number as f64).collect();
     let ys: Vec<f64> =
         points.iter().flat_map(|p| [p.before_mg.filter(|_| with_before), p.after_mg]).flatten().collect();
     let axes = Axes::fit(&xs, &ys);
-    let title = if with_before { "before and after calibration" } else { "after calibration (zoomed)" };
     axes.open(out, &format!("modulus residual (|f| - g) / g per pose, {title}"), "pose", "residual (mg)");
     for p in points {
         let x = p.number as f64;
@@ -186,7 +187,7 @@ fn stems_figure(out: &mut String, points: &[PosePoint], with_before: bool) {
     out.push_str("</svg>\n");
 }
 
-fn sphere_figure(out: &mut String, points: &[PosePoint]) {
+pub(super) fn sphere_figure(out: &mut String, points: &[PosePoint]) {
     let directions: Vec<Direction> = points
         .iter()
         .filter_map(|p| {
@@ -201,7 +202,7 @@ fn sphere_figure(out: &mut String, points: &[PosePoint]) {
     hemispheres(out, "direction of each pose's calibrated reading", &directions);
 }
 
-fn against_figure(
+pub(super) fn against_figure(
     out: &mut String,
     points: &[PosePoint],
     what: &str,

@@ -14,6 +14,7 @@
 
 mod calibrate;
 pub mod data;
+mod diagnosis;
 mod svg;
 
 use std::path::{Path, PathBuf};
@@ -32,6 +33,15 @@ pub fn write_calibrate_report(dir: &Path, document: &serde_json::Value) -> Resul
     write_page(dir, &html)
 }
 
+/// Writes `dir/index.html` for a `diagnose --json` document; returns the page's path.
+///
+/// # Errors
+/// A message naming the directory or file that could not be written.
+pub fn write_diagnose_report(dir: &Path, document: &serde_json::Value) -> Result<PathBuf, String> {
+    let html = page("accelcal diagnosis report", &diagnosis::body(document), document);
+    write_page(dir, &html)
+}
+
 fn write_page(dir: &Path, html: &str) -> Result<PathBuf, String> {
     std::fs::create_dir_all(dir)
         .map_err(|e| format!("--report {}: cannot create the directory: {e}", dir.display()))?;
@@ -41,7 +51,7 @@ fn write_page(dir: &Path, html: &str) -> Result<PathBuf, String> {
 }
 
 const STYLE: &str = "body{font-family:system-ui,sans-serif;max-width:760px;margin:24px auto;color:#222}\
-table{border-collapse:collapse;margin:8px 0}td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}\
+table{border-collapse:collapse;margin:8px 0;font-size:90%}td.text{text-align:left}td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}\
 th{background:#f2f2f2}.pass{color:#1b7f2a}.fail{color:#c62828}svg{display:block;margin:12px 0}\
 svg text{font-size:12px;fill:#222}svg .title{font-size:14px;font-weight:bold}svg .tick{font-size:11px}\
 .note{color:#555;font-size:90%}";
@@ -83,8 +93,8 @@ pub fn sig(v: f64) -> String {
     if !v.is_finite() {
         return "-".into();
     }
-    if v == 0.0 {
-        return "0".into();
+    if v.fract() == 0.0 && v.abs() < 1e6 {
+        return format!("{v:.0}");
     }
     let magnitude = v.abs().log10().floor() as i32;
     if (-3..6).contains(&magnitude) {
@@ -121,6 +131,8 @@ mod tests {
     fn sig_keeps_six_significant_digits() {
         assert_eq!(sig(0.123456789), "0.123457");
         assert_eq!(sig(-1.5), "-1.50000");
+        assert_eq!(sig(6.0), "6");
+        assert_eq!(sig(0.0), "0");
         assert_eq!(sig(123456.7), "123457");
         assert_eq!(sig(1234567.8), "1.23457e6");
         assert_eq!(sig(2.5e-5), "2.50000e-5");

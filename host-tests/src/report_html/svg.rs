@@ -24,25 +24,40 @@ pub const LEFT_OUT: &str = "#c62828";
 pub struct Axes {
     x_range: (f64, f64),
     y_range: (f64, f64),
+    /// Both axes logarithmic (ranges are then in log10 units).
+    log_log: bool,
 }
 
 impl Axes {
+    /// Log-log axes spanning whole decades around the positive finite values of `xs` and `ys`.
+    pub fn fit_log_log(xs: &[f64], ys: &[f64]) -> Self {
+        let decades = |v: &[f64]| {
+            let (lo, hi) = span(v.iter().filter(|x| **x > 0.0).map(|x| x.log10()));
+            (lo.floor(), hi.ceil().max(lo.floor() + 1.0))
+        };
+        Self { x_range: decades(xs), y_range: decades(ys), log_log: true }
+    }
+
+    fn to_axis(&self, v: f64) -> f64 {
+        if self.log_log { v.log10() } else { v }
+    }
+
     /// Axes spanning the finite values of `xs` and `ys`, padded by 5 % (and `y` always including 0).
     pub fn fit(xs: &[f64], ys: &[f64]) -> Self {
         let y = span(ys.iter().copied().chain([0.0]));
-        Self { x_range: pad(span(xs.iter().copied())), y_range: pad(y) }
+        Self { x_range: pad(span(xs.iter().copied())), y_range: pad(y), log_log: false }
     }
 
     /// Pixel x of `x`.
     pub fn px(&self, x: f64) -> f64 {
         let (l, r, ..) = MARGIN_PX;
-        l + (x - self.x_range.0) / (self.x_range.1 - self.x_range.0) * (WIDTH_PX - l - r)
+        l + (self.to_axis(x) - self.x_range.0) / (self.x_range.1 - self.x_range.0) * (WIDTH_PX - l - r)
     }
 
     /// Pixel y of `y`.
     pub fn py(&self, y: f64) -> f64 {
         let (.., t, b) = MARGIN_PX;
-        HEIGHT_PX - b - (y - self.y_range.0) / (self.y_range.1 - self.y_range.0) * (HEIGHT_PX - t - b)
+        HEIGHT_PX - b - (self.to_axis(y) - self.y_range.0) / (self.y_range.1 - self.y_range.0) * (HEIGHT_PX - t - b)
     }
 
     /// Opens an `<svg>` with the frame, ticks, grid, axis labels and title.
@@ -74,7 +89,7 @@ impl Axes {
 
     fn ticks(&self, out: &mut String) {
         let (l, r, t, b) = MARGIN_PX;
-        for x in nice_ticks(self.x_range) {
+        for x in self.tick_values(self.x_range) {
             let px = self.px(x);
             let _ = writeln!(
                 out,
@@ -84,7 +99,7 @@ impl Axes {
                 x = tick_label(x),
             );
         }
-        for y in nice_ticks(self.y_range) {
+        for y in self.tick_values(self.y_range) {
             let py = self.py(y);
             let _ = writeln!(
                 out,
@@ -96,6 +111,30 @@ impl Axes {
                 y = tick_label(y),
             );
         }
+    }
+
+    /// Tick values in data units: round values, or every decade on log axes.
+    fn tick_values(&self, range: (f64, f64)) -> Vec<f64> {
+        if self.log_log {
+            (range.0 as i32..=range.1 as i32).map(|k| 10f64.powi(k)).collect()
+        } else {
+            nice_ticks(range)
+        }
+    }
+
+    /// A polyline through the points with positive coordinates (log axes) or finite ones.
+    pub fn polyline(&self, out: &mut String, points: &[(f64, f64)], colour: &str, dashed: bool) {
+        let coords: Vec<String> = points
+            .iter()
+            .filter(|(x, y)| x.is_finite() && y.is_finite() && (!self.log_log || (*x > 0.0 && *y > 0.0)))
+            .map(|(x, y)| format!("{:.1},{:.1}", self.px(*x), self.py(*y)))
+            .collect();
+        let dash = if dashed { r#" stroke-dasharray="5 4""# } else { "" };
+        let _ = writeln!(
+            out,
+            r#"<polyline class="datum" points="{}" fill="none" stroke="{colour}" stroke-width="2"{dash}/>"#,
+            coords.join(" ")
+        );
     }
 
     /// A vertical stem from 0 to `y` at `x`, with a dot at its tip.
@@ -158,8 +197,11 @@ pub fn nice_ticks((lo, hi): (f64, f64)) -> Vec<f64> {
     (first..=last).map(|k| k as f64 * step).collect()
 }
 
-/// A tick value without float noise (`0.30000000000000004` is `0.3`).
+/// A tick value without float noise (`0.30000000000000004` is `0.3`; decades far from 1 as `1e-4`).
 fn tick_label(v: f64) -> String {
+    if v != 0.0 && !(1e-3..1e5).contains(&v.abs()) {
+        return format!("{v:e}");
+    }
     let s = format!("{v:.6}");
     let s = s.trim_end_matches('0').trim_end_matches('.');
     if s == "-0" { "0".into() } else { s.into() }
@@ -235,6 +277,16 @@ mod tests {
         assert!(t.iter().all(|v| (-0.37..=0.52).contains(v)) && t.len() >= 4, "{t:?}");
         assert!(nice_ticks((1.0, 1.0)).is_empty());
         assert_eq!(tick_label(0.1 + 0.2), "0.3");
+        assert_eq!(tick_label(1e-4), "1e-4");
+    }
+
+    #[test]
+    fn log_log_axes_span_whole_decades_with_a_tick_each() {
+        let a = Axes::fit_log_log(&[0.02, 30.0], &[0.003, 0.8, -1.0]);
+        assert_eq!((a.x_range, a.y_range), ((-2.0, 2.0), (-3.0, 0.0)));
+        assert_eq!(a.tick_values(a.x_range), vec![0.01, 0.1, 1.0, 10.0, 100.0]);
+        let (p1, p10, p100) = (a.px(1.0), a.px(10.0), a.px(100.0));
+        assert!(((p10 - p1) - (p100 - p10)).abs() < 1e-9, "a decade is the same width everywhere");
     }
 
     #[test]
