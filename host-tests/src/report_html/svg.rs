@@ -38,7 +38,7 @@ impl Axes {
         Self { x_range: decades(xs), y_range: decades(ys), log_log: true }
     }
 
-    fn to_axis(&self, v: f64) -> f64 {
+    fn axis_value(&self, v: f64) -> f64 {
         if self.log_log { v.log10() } else { v }
     }
 
@@ -51,13 +51,13 @@ impl Axes {
     /// Pixel x of `x`.
     pub fn px(&self, x: f64) -> f64 {
         let (l, r, ..) = MARGIN_PX;
-        l + (self.to_axis(x) - self.x_range.0) / (self.x_range.1 - self.x_range.0) * (WIDTH_PX - l - r)
+        l + (self.axis_value(x) - self.x_range.0) / (self.x_range.1 - self.x_range.0) * (WIDTH_PX - l - r)
     }
 
     /// Pixel y of `y`.
     pub fn py(&self, y: f64) -> f64 {
         let (.., t, b) = MARGIN_PX;
-        HEIGHT_PX - b - (self.to_axis(y) - self.y_range.0) / (self.y_range.1 - self.y_range.0) * (HEIGHT_PX - t - b)
+        HEIGHT_PX - b - (self.axis_value(y) - self.y_range.0) / (self.y_range.1 - self.y_range.0) * (HEIGHT_PX - t - b)
     }
 
     /// Opens an `<svg>` with the frame, ticks, grid, axis labels and title.
