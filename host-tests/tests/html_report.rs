@@ -140,6 +140,38 @@ fn check_common(document: &Value, page: &str) -> Vec<usize> {
     marks
 }
 
+/// The per-pose residuals drawn are the library's: their RMS over the poses kept equals the
+/// RMSE before and after (to `f32` rounding).
+fn assert_residuals_match_rmse(document: &Value) {
+    let left_out: Vec<u64> =
+        document["verdict"]["poses_left_out"].as_array().unwrap().iter().filter_map(Value::as_u64).collect();
+    let poses = document["poses"].as_array().unwrap();
+    let kept: Vec<&Value> =
+        poses.iter().enumerate().filter(|(i, _)| !left_out.contains(&(*i as u64))).map(|(_, p)| p).collect();
+    for (key, rmse) in [("residual_before_mg", "before"), ("residual_after_mg", "after")] {
+        let sum: f64 = kept.iter().map(|p| p[key].as_f64().unwrap().powi(2)).sum();
+        let rms = (sum / kept.len() as f64).sqrt();
+        let expected = document["rmse_mg"][rmse].as_f64().unwrap();
+        assert!((rms - expected).abs() <= 1e-4 * expected, "{key}: RMS {rms} mg, rmse_mg.{rmse} {expected} mg");
+    }
+}
+
+#[test]
+fn poses_left_out_are_drawn_apart_and_left_out_of_the_rmse() {
+    let file = real_file("michaelwro_178pos/acceldata-example.csv");
+    let (document, page) = calibrate_with_report("michaelwro", &file, &["--means"]);
+    check_report(&document, &page);
+    let left_out = document["verdict"]["poses_left_out"].as_array().unwrap().len();
+    assert!(left_out > 0, "this set has poses left out");
+    assert_residuals_match_rmse(&document);
+    let figures = between(&page, "<svg", "</svg>");
+    let left_out_colour = r##"fill="#c62828"><title>pose"##;
+    assert_eq!(figures.len(), 3, "two stem figures and the sphere (no time or temperature column)");
+    assert_eq!(figures[2].matches(left_out_colour).count(), left_out, "the sphere's dots in the left-out colour");
+    assert_eq!(figures[1].matches(r##"stroke="#c62828" stroke-width"##).count(), left_out, "zoomed stems");
+    assert_eq!(page.matches("(left out)").count(), left_out, "pose table");
+}
+
 #[test]
 fn diagnosis_report_shows_candidates_and_allan_deviation_on_log_axes() {
     let file = real_file("imu_tk_xsens_mti/xsens_acc.csv");
@@ -194,6 +226,7 @@ fn xsens_report_matches_its_json() {
     assert_eq!(marks[2], poses, "one dot per pose on the sphere: {marks:?}");
     assert_eq!(marks[3], 2 * poses, "a dot before and after per pose against time: {marks:?}");
     assert!(page.contains("No temperature column"));
+    assert_residuals_match_rmse(&document);
     let numbers = check_numbers(&page, &document);
     assert!(numbers >= 18 + 5 * poses, "{numbers} numbers tagged");
 }
