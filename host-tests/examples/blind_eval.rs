@@ -26,6 +26,9 @@ struct Args {
     /// Families, comma-separated (default: all).
     #[arg(long, value_delimiter = ',')]
     families: Vec<String>,
+    /// Short logs (12 poses at 100 Hz: the CI size).
+    #[arg(long)]
+    small: bool,
     /// Print every log.
     #[arg(long)]
     verbose: bool,
@@ -46,7 +49,12 @@ fn main() -> Result<(), String> {
     for family in families {
         let k = Family::ALL.iter().position(|f| *f == family).unwrap_or(0) as u64;
         for i in 0..args.per_family {
-            let spec = blindgen::random_spec(family, offset + args.first_seed + 1000 * k + i);
+            let seed = offset + args.first_seed + 1000 * k + i;
+            let spec = if args.small {
+                blindgen::random_small_spec(family, seed)
+            } else {
+                blindgen::random_spec(family, seed)
+            };
             let o = blind_eval::evaluate(&spec);
             if args.verbose || (!o.right && o.visible()) {
                 eprintln!(
@@ -64,6 +72,7 @@ fn main() -> Result<(), String> {
         }
     }
     print!("{}", blind_eval::table(&blind_eval::summarize(&outcomes)));
+    print!("\n{}", blind_eval::overall(&outcomes).to_text());
     let slowest = outcomes.iter().map(|o| (o.seconds, o.samples)).fold((0.0, 0), |a, b| if b.0 > a.0 { b } else { a });
     println!(
         "\nslowest diagnosis: {:.2} s for {} samples (release build: these figures need --release)",

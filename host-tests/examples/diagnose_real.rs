@@ -32,6 +32,7 @@ fn main() {
         "| recording | poses | real / simulated RMSE (mg) | gap ratio (z) | where it lies | effect | gain on withheld poses | ratio after | shrink |"
     );
     println!("|---|---|---|---|---|---|---|---|---|");
+    let mut drift_shapes = Vec::new();
     for (file, columns) in SETS {
         let path = dir.join(file);
         let read = ReadOptions {
@@ -47,11 +48,8 @@ fn main() {
         };
         match diagnose(&table, &options) {
             Ok(r) => {
-                let best = r
-                    .candidates
-                    .iter()
-                    .filter(|c| c.applicable)
-                    .max_by(|a, b| a.heldout_gain.total_cmp(&b.heldout_gain));
+                let best =
+                    r.candidates.iter().filter(|c| c.applicable).max_by(|a, b| a.evidence().total_cmp(&b.evidence()));
                 let effect = if r.explained {
                     format!("**{}**", r.verdict)
                 } else if r.gap.significant {
@@ -63,7 +61,8 @@ fn main() {
                 } else {
                     "none (no significant gap)".to_string()
                 };
-                let gain = best.map_or("-".into(), |c| format!("{:.2} ({})", c.heldout_gain, c.effect));
+                let gain = best.map_or("-".into(), |c| format!("{:.2} ({})", c.evidence(), c.effect));
+                drift_shapes.push((file, curved_vs_exponential(&r)));
                 println!(
                     "| `{file}` | {} | {:.3} / {:.3} | {:.2} ({:.0}) | {} | {effect} | {gain} | {:.2} | {:.2} |",
                     r.poses.len(),
@@ -84,7 +83,25 @@ fn main() {
         }
     }
     println!(
-        "\nseed {}, {} simulated repeats, {}-fold cross-validation over the poses",
+        "\nseed {}, {} simulated repeats, {}-fold cross-validation over the poses (leave-one-out up to 16 poses)",
         options.seed, options.repeats, options.folds
     );
+    println!("\ndrift shape on withheld poses (penalised held-out ratio, smaller is better; 1 = explained):\n");
+    println!("| recording | best curved (polynomial) | best single exponential |\n|---|---|---|");
+    for (file, shapes) in drift_shapes {
+        if let Some(((curved, c), (exponential, e))) = shapes {
+            println!("| `{file}` | {c:.2} ({curved}) | {e:.2} ({exponential}) |");
+        }
+    }
+}
+
+/// The drift family's best polynomial and best single-exponential variants, with their ratios.
+type Shape = (String, f64);
+
+fn curved_vs_exponential(r: &accelcal_host::diagnose::Diagnosis) -> Option<(Shape, Shape)> {
+    let drift = r.candidates.iter().find(|c| c.effect == "drift")?;
+    let best = |pattern: &str| {
+        drift.variants.iter().filter(|(d, _)| d.contains(pattern)).min_by(|a, b| a.1.total_cmp(&b.1)).cloned()
+    };
+    Some((best("polynomial")?, best("(1 - exp")?))
 }

@@ -67,6 +67,8 @@ pub struct Outcome {
     pub samples: usize,
     /// Seconds the diagnosis took (reading excluded).
     pub seconds: f64,
+    /// For a refused log: `calibrate` accepts it (its poses calibrate), which a refusal must not be.
+    pub calibrate_accepts: bool,
 }
 
 impl Outcome {
@@ -92,6 +94,7 @@ pub fn evaluate(spec: &LogSpec) -> Outcome {
         shrink: f64::NAN,
         samples: log.samples.len(),
         seconds: 0.0,
+        calibrate_accepts: false,
     };
     let table = match read_csv_str(&name, &log.to_csv_string(), &ReadOptions::default()) {
         Ok(t) => t,
@@ -110,9 +113,19 @@ pub fn evaluate(spec: &LogSpec) -> Outcome {
             outcome.shrink = d.shrink;
             outcome.right = is_right(expected_verdict(spec.family), d.verdict);
         }
-        Err(e) => outcome.verdict = format!("refused: {}", e.0),
+        Err(e) => {
+            outcome.verdict = format!("refused: {}", e.0);
+            outcome.calibrate_accepts = calibrate_accepts(&table, spec.seed);
+        }
     }
     outcome
+}
+
+/// `calibrate`'s path (the reader's poses, the library's calibration) succeeds on `table`.
+fn calibrate_accepts(table: &crate::csvio::Table, seed: u64) -> bool {
+    let Ok(acc) = crate::csvio::accumulate(table, &crate::csvio::AccumulateOptions::default()) else { return false };
+    acc.poses.len() >= 6
+        && crate::calib::run(&acc.poses, &accelcal::calibrate::CalibrationConfig::DEFAULT, seed).is_ok()
 }
 
 /// `verdict` is the answer `expected` asks for.
@@ -135,8 +148,8 @@ pub struct FamilySummary {
     pub right: usize,
     /// Logs clearly visible, and right among them.
     pub visible: (usize, usize),
-    /// Refused logs.
-    pub refused: usize,
+    /// Refused logs, and among them logs `calibrate` accepts.
+    pub refused: (usize, usize),
     /// Smallest ladder visibility from which >= 80 % of the logs at or above it are right (with at
     /// least 3 logs there); `None` if none.
     pub visibility_80: Option<f64>,
@@ -176,7 +189,10 @@ fn summarize_family(family: Family, outcomes: &[Outcome]) -> FamilySummary {
         logs: mine.len(),
         right: mine.iter().filter(|o| o.right).count(),
         visible: (visible.len(), visible.iter().filter(|o| o.right).count()),
-        refused: mine.iter().filter(|o| o.verdict.starts_with("refused")).count(),
+        refused: (
+            mine.iter().filter(|o| o.verdict.starts_with("refused")).count(),
+            mine.iter().filter(|o| o.calibrate_accepts).count(),
+        ),
         visibility_80: visibility_80(&mine),
         median_shrink: median(&mut shrinks),
         answers,
@@ -202,13 +218,13 @@ fn median(values: &mut [f64]) -> f64 {
 /// The markdown table of the summaries.
 pub fn table(summaries: &[FamilySummary]) -> String {
     let mut out = String::from(
-        "| family | logs | right | right where visible (ratio >= 2) | visibility for 80 % right | median shrink | refused | answers |\n|---|---:|---:|---:|---:|---:|---:|---|\n",
+        "| family | logs | right | right where visible (ratio >= 2) | visibility for 80 % right | median shrink | refused (calibrate accepts) | answers |\n|---|---:|---:|---:|---:|---:|---:|---|\n",
     );
     for s in summaries {
         let v80 = s.visibility_80.map_or("never".to_string(), |v| format!(">= {v}"));
         let answers: Vec<String> = s.answers.iter().map(|(a, n)| format!("{a} {n}")).collect();
         out += &format!(
-            "| {} | {} | {} | {}/{} | {} | {:.2} | {} | {} |\n",
+            "| {} | {} | {} | {}/{} | {} | {:.2} | {} ({}) | {} |\n",
             s.family.name(),
             s.logs,
             s.right,
@@ -216,9 +232,68 @@ pub fn table(summaries: &[FamilySummary]) -> String {
             s.visible.0,
             v80,
             s.median_shrink,
-            s.refused,
+            s.refused.0,
+            s.refused.1,
             answers.join(", ")
         );
     }
     out
+}
+
+/// The figures the issue's targets are stated in, over every family.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Overall {
+    /// Catalogue-family logs clearly visible, and right among them.
+    pub visible: (usize, usize),
+    /// Clean logs, and those given an effect (false alarms).
+    pub clean: (usize, usize),
+    /// Out-of-catalogue logs, and those answered `none` or `unexplained`.
+    pub outside: (usize, usize),
+    /// Logs refused although `calibrate` accepts them.
+    pub wrongly_refused: usize,
+    /// Median shrink of the right, visible catalogue answers.
+    pub median_shrink: f64,
+}
+
+/// [`Overall`] of a set of outcomes.
+pub fn overall(outcomes: &[Outcome]) -> Overall {
+    let kind = |o: &&Outcome| expected_verdict(o.family);
+    let named: Vec<&Outcome> = outcomes.iter().filter(|o| matches!(kind(o), Expected::Named(_))).collect();
+    let visible: Vec<&&Outcome> = named.iter().filter(|o| o.visible()).collect();
+    let count = |e: Expected| outcomes.iter().filter(|o| expected_verdict(o.family) == e).count();
+    let right = |e: Expected| outcomes.iter().filter(|o| expected_verdict(o.family) == e && o.right).count();
+    let mut shrinks: Vec<f64> =
+        visible.iter().filter(|o| o.right).map(|o| o.shrink).filter(|s| s.is_finite()).collect();
+    Overall {
+        visible: (visible.len(), visible.iter().filter(|o| o.right).count()),
+        clean: (count(Expected::Nothing), count(Expected::Nothing) - right(Expected::Nothing)),
+        outside: (count(Expected::Honest), right(Expected::Honest)),
+        wrongly_refused: outcomes.iter().filter(|o| o.calibrate_accepts).count(),
+        median_shrink: median(&mut shrinks),
+    }
+}
+
+impl Overall {
+    /// One line per target, with the issue's goal beside the figure.
+    pub fn to_text(&self) -> String {
+        let pct = |a: usize, b: usize| if b == 0 { f64::NAN } else { 100.0 * a as f64 / b as f64 };
+        format!(
+            "right where clearly visible: {}/{} ({:.0} %, goal >= 90 %)\n\
+             false alarms on clean logs: {}/{} ({:.0} %, goal <= 5 %)\n\
+             out-of-catalogue answered none/unexplained: {}/{} ({:.0} %, goal >= 90 %)\n\
+             refused although calibrate accepts: {} (goal 0)\n\
+             median shrink when right: {:.2} (goal >= 0.7)\n",
+            self.visible.1,
+            self.visible.0,
+            pct(self.visible.1, self.visible.0),
+            self.clean.1,
+            self.clean.0,
+            pct(self.clean.1, self.clean.0),
+            self.outside.1,
+            self.outside.0,
+            pct(self.outside.1, self.outside.0),
+            self.wrongly_refused,
+            self.median_shrink
+        )
+    }
 }

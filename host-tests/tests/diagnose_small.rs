@@ -1,5 +1,5 @@
 //! `diagnose` answers every log `calibrate` accepts: a free-hand log of only ten poses (too few to
-//! withhold any at the pose level) gets its gap measured and a verdict, not a refusal.
+//! withhold more than one at a time) gets its gap measured and a verdict, not a refusal.
 
 use accelcal_host::csvio::{self, ReadOptions};
 use accelcal_host::diagnose::{DiagnoseOptions, diagnose};
@@ -17,13 +17,8 @@ fn a_ten_pose_free_hand_log_is_answered() {
         assert!(report.gap.ratio_before.is_finite(), "seed {seed}: {:?}", report.gap);
         // A clean simulated log: no significant gap, so `none`.
         assert_eq!(report.verdict, "none", "seed {seed}: {:?}", report.gap);
-        // Ten poses are too few to withhold some at the pose level; the within-pose channel (clean
-        // here) is not significant: no candidate is tested.
-        assert!(
-            report.candidates.iter().all(|c| !c.applicable && !c.within_gain.is_finite()),
-            "seed {seed}: {:?}",
-            report.candidates
-        );
+        // Ten poses leave one out at a time (one-parameter variants testable); nothing is claimed.
+        assert!(!report.explained, "seed {seed}: {:?}", report.candidates);
     }
 }
 

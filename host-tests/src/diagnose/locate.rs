@@ -35,12 +35,22 @@ pub(crate) fn allan(table: &Table, first: usize, end: usize, rate: f64, scale: V
 
 /// Chi-square of segment means 1.. (the first is left out: settling) about their mean, white noise.
 pub(crate) fn within_chi2(p: &PoseData, white: &V3) -> f64 {
-    if p.seg_n == 0 {
+    within_chi2_from(p, white, 1)
+}
+
+/// [`within_chi2`] of the segments from `first` on.
+pub(crate) fn within_chi2_from(p: &PoseData, white: &V3, first: usize) -> f64 {
+    within_chi2_of(p, white, first..p.seg.len())
+}
+
+/// [`within_chi2`] of the segments `range` about their own mean.
+pub(crate) fn within_chi2_of(p: &PoseData, white: &V3, range: std::ops::Range<usize>) -> f64 {
+    if p.seg_n == 0 || range.len() < 2 || range.end > p.seg.len() {
         return 0.0;
     }
-    let m = mean_of(&p.seg[1..]);
+    let m = mean_of(&p.seg[range.clone()]);
     let mut chi2 = 0.0;
-    for seg in &p.seg[1..] {
+    for seg in &p.seg[range] {
         for a in 0..3 {
             if white[a] > 0.0 {
                 chi2 += (seg[a] - m[a]).powi(2) / (white[a] / p.seg_n as f64);

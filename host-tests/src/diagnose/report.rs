@@ -92,6 +92,9 @@ pub struct Candidate {
     pub within_gain: f64,
     /// The variant chosen on the within-pose channel (empty when none).
     pub within_detail: String,
+    /// Every pose-level parametrisation tried, with its penalised held-out ratio (smaller is
+    /// better; the chosen one is the smallest).
+    pub variants: Vec<(String, f64)>,
 }
 
 impl Candidate {
@@ -231,6 +234,7 @@ impl Diagnosis {
                 "detail": c.detail,
                 "within_gain": finite(c.within_gain),
                 "within_detail": c.within_detail,
+                "variants": c.variants.iter().map(|(d, r)| json!({"detail": d, "heldout_ratio": finite(*r)})).collect::<Vec<_>>(),
             })).collect::<Vec<_>>(),
             "candidates_ranked": self.ranked().iter().map(|c| json!({"effect": c.effect, "heldout_gain": finite(c.heldout_gain), "within_gain": finite(c.within_gain), "evidence": finite(c.evidence())})).collect::<Vec<_>>(),
             "probes": self.probes.iter().map(|p| json!({"shape": p.shape, "heldout_gain": finite(p.heldout_gain), "detail": p.detail})).collect::<Vec<_>>(),

@@ -3,6 +3,9 @@
 //! family explains the withheld part; `none` when there is no significant gap.
 
 use super::MIN_GAIN;
+
+/// The noise family (see [`decide`]).
+const NOISE_FAMILY: &str = "colored-noise";
 use super::family::Evaluation;
 use super::gap::Measured;
 use super::math::rms;
@@ -26,11 +29,24 @@ pub(crate) fn decide(m: &Measured, evaluations: &[Evaluation], probes: &[Probe])
         .iter()
         .filter(|p| p.heldout_gain.is_finite() && p.heldout_gain >= MIN_GAIN)
         .max_by(|a, b| a.heldout_gain.total_cmp(&b.heldout_gain));
-    let best = evaluations
-        .iter()
-        .enumerate()
-        .filter(|(_, e)| e.candidate.applicable && e.candidate.evidence().is_finite())
-        .max_by(|a, b| a.1.candidate.evidence().total_cmp(&b.1.candidate.evidence()));
+    let usable = |e: &&Evaluation| e.candidate.applicable && e.candidate.evidence().is_finite();
+    let strongest = |noise: bool| {
+        evaluations
+            .iter()
+            .enumerate()
+            .filter(|(_, e)| usable(e) && (e.candidate.effect == NOISE_FAMILY) == noise)
+            .max_by(|a, b| a.1.candidate.evidence().total_cmp(&b.1.candidate.evidence()))
+    };
+    // A family that predicts the withheld values is stronger evidence than a noise model, which
+    // predicts only their spread: colored noise is named only when no other family explains.
+    let best = strongest(false).filter(|(_, e)| e.candidate.evidence() >= MIN_GAIN).or_else(|| {
+        let noise = strongest(true);
+        let other = strongest(false);
+        match (noise, other) {
+            (Some(n), Some(o)) => Some(if n.1.candidate.evidence() >= o.1.candidate.evidence() { n } else { o }),
+            (n, o) => n.or(o),
+        }
+    });
     // A family wins only if no out-of-catalogue probe explains the withheld poses better.
     let beaten = |gain: f64| best_probe.is_some_and(|p| p.heldout_gain > gain);
     let winner = best

@@ -20,6 +20,9 @@ use super::within::{Within, WithinFit, WithinVariant};
 use super::{CV_NOISE_DRAWS, DiagnoseOptions, OVERSHOOT_WEIGHT, PARAMETER_PENALTY};
 use crate::csvio::Table;
 
+/// Logs of at most this many poses are cross-validated leaving one pose out.
+const LEAVE_ONE_OUT_BELOW: usize = 16;
+
 /// One parametrisation of a family: extra design columns per pose (the modulus residual's
 /// derivative in the effect's parameters), the parameters it costs and what it is.
 pub(crate) struct Variant {
@@ -35,6 +38,8 @@ pub(crate) struct Fitted {
     pub(crate) score_ratio: f64,
     pub(crate) params: usize,
     pub(crate) detail: String,
+    /// Every parametrisation tried with its penalised held-out ratio.
+    pub(crate) tried: Vec<(String, f64)>,
 }
 
 /// A family's result: its candidate line and the pose residuals with it added (`None`: dropped).
@@ -64,17 +69,23 @@ pub(crate) trait Family {
 
     /// The candidate line: held-out evidence on both channels and the gap with the family added.
     fn evaluate(&self, ctx: &Context<'_>) -> Evaluation {
-        let mut e = match self.fit(ctx) {
-            Some(f) => ctx.evaluate_fitted(self.name(), f),
-            None => ctx.not_testable(self.name()),
-        };
-        if let Some(w) = ctx.within.as_ref().filter(|w| w.significant)
-            && let Some(fit) = w.best_of(self.within_variants(ctx, w))
-        {
-            ctx.add_within(&mut e, w, fit);
-        }
-        e
+        standard_evaluation(self, ctx)
     }
+}
+
+/// [`Family::evaluate`]'s default: the best pose-level parametrisation, then the within-pose
+/// channel's.
+pub(crate) fn standard_evaluation<F: Family + ?Sized>(family: &F, ctx: &Context<'_>) -> Evaluation {
+    let mut e = match family.fit(ctx) {
+        Some(f) => ctx.evaluate_fitted(family.name(), f),
+        None => ctx.not_testable(family.name()),
+    };
+    if let Some(w) = ctx.within.as_ref().filter(|w| w.significant)
+        && let Some(fit) = w.best_of(family.within_variants(ctx, w))
+    {
+        ctx.add_within(&mut e, w, fit);
+    }
+    e
 }
 
 /// Every family, in report order.
@@ -130,7 +141,8 @@ impl<'a> Context<'a> {
     /// The cross-validation set-up; `None` when a fold leaves too few poses.
     pub(crate) fn new(table: &'a Table, m: &'a Measured, opts: &'a DiagnoseOptions) -> Option<Self> {
         let n = m.poses.len();
-        let folds = opts.folds.min(n);
+        // Few poses: leave one out (every fold keeps as many poses as it can).
+        let folds = if n <= LEAVE_ONE_OUT_BELOW { n } else { opts.folds.min(n) };
         let fold = assign_folds(n, folds, opts.seed);
         let base_rows: Vec<Vec<f64>> =
             m.poses.iter().zip(&m.directions).map(|(p, u)| jacobian_row(p.mean, *u).to_vec()).collect();
@@ -199,16 +211,24 @@ impl<'a> Context<'a> {
             return None;
         }
         let mut best: Option<Fitted> = None;
+        let mut tried = Vec::new();
         for v in variants {
             let rows = self.rows_with(&v.extra);
             let dropped = self.none_dropped.clone();
-            if let Some(ratio) = self.heldout_ratio(&rows, &dropped, v.params)
-                && best.as_ref().is_none_or(|b| ratio < b.score_ratio)
-            {
-                best = Some(Fitted { rows, dropped, score_ratio: ratio, params: v.params, detail: v.detail });
+            let Some(ratio) = self.heldout_ratio(&rows, &dropped, v.params) else { continue };
+            tried.push((v.detail.clone(), ratio));
+            if best.as_ref().is_none_or(|b| ratio < b.score_ratio) {
+                best = Some(Fitted {
+                    rows,
+                    dropped,
+                    score_ratio: ratio,
+                    params: v.params,
+                    detail: v.detail,
+                    tried: Vec::new(),
+                });
             }
         }
-        best
+        best.map(|b| Fitted { tried, ..b })
     }
 
     /// `1 - ln(ratio) / ln(nominal ratio)`; predicting more scatter than there is counts
@@ -237,6 +257,7 @@ impl<'a> Context<'a> {
             detail: f.detail,
             within_gain: f64::NAN,
             within_detail: String::new(),
+            variants: f.tried,
         };
         Evaluation { candidate, after }
     }
@@ -252,6 +273,7 @@ impl<'a> Context<'a> {
             detail: "not testable on this data".into(),
             within_gain: f64::NAN,
             within_detail: String::new(),
+            variants: Vec::new(),
         };
         Evaluation { candidate, after: self.m.r.iter().map(|v| Some(*v)).collect() }
     }

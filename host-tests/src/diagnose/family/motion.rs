@@ -1,11 +1,16 @@
 //! Motion: poses whose own samples move (taps, sway): the chi-square of the segment means after
-//! the first is robustly compared with the median pose's; disturbed poses are dropped, each at the
+//! the first third of the hold (a transient at the start is settling, not motion) is robustly
+//! compared with the median pose's; disturbed poses are dropped, each at the
 //! cost of an expected noise variance plus the penalty, and the gain is measured on the rest.
 
 use accelcal::model::PARAM_COUNT;
 
 use super::{Context, Family, Fitted, Variant};
-use crate::diagnose::locate::within_chi2;
+use crate::diagnose::SEGMENTS;
+use crate::diagnose::locate::{within_chi2_from, within_chi2_of};
+
+/// Leading segments of a hold not looked at (a transient there is settling).
+const SKIPPED_SEGMENTS: usize = 2;
 use crate::diagnose::math::median;
 
 pub(crate) struct Motion;
@@ -20,11 +25,11 @@ impl Family for Motion {
     }
 
     fn fit(&self, ctx: &Context<'_>) -> Option<Fitted> {
-        let chi: Vec<f64> = ctx.poses.iter().map(|p| within_chi2(p, &ctx.m.white)).collect();
+        let chi: Vec<f64> = ctx.poses.iter().map(|p| within_chi2_from(p, &ctx.m.white, SKIPPED_SEGMENTS)).collect();
         let threshold = (6.0 * median(&chi)).max(40.0);
         let dropped: Vec<bool> = chi.iter().map(|c| *c > threshold).collect();
         let count = dropped.iter().filter(|d| **d).count();
-        if count == 0 || ctx.poses.len() - count < PARAM_COUNT + 3 {
+        if count == 0 || ctx.poses.len() - count < PARAM_COUNT + 3 || decays(ctx, &dropped) {
             return None;
         }
         let rows = ctx.base_rows.clone();
@@ -36,6 +41,26 @@ impl Family for Motion {
             score_ratio: ratio,
             params: count,
             detail: format!("moving poses dropped: {}", list.join(" ")),
+            tried: Vec::new(),
         })
     }
 }
+
+/// Most disturbed poses move far more in the first half of their hold than in the second: a
+/// transient that decays after each rotation (settling), not motion, which comes at any time.
+fn decays(ctx: &Context<'_>, dropped: &[bool]) -> bool {
+    let half = SEGMENTS / 2;
+    let (mut early, mut total) = (0, 0);
+    for (p, _) in ctx.poses.iter().zip(dropped).filter(|(_, d)| **d) {
+        let first = within_chi2_of(p, &ctx.m.white, 0..half);
+        let second = within_chi2_of(p, &ctx.m.white, half..SEGMENTS);
+        total += 1;
+        if first > DECAY_FACTOR * second.max(half as f64) {
+            early += 1;
+        }
+    }
+    total > 0 && early * 4 >= total * 3
+}
+
+/// How much more a decaying transient moves in the first half of a hold than in the second.
+const DECAY_FACTOR: f64 = 4.0;
