@@ -263,9 +263,13 @@ pub fn search_box(
         Intervals::Fixed(widths) => return widths.search_box(start),
         Intervals::Uncertainty { sigmas } => *sigmas,
     };
-    let info = information_matrix(start, frame, set, held, true);
-    let cov = info.and_then(|i| crate::verdict::covariance_holding(i, held));
-    let Some(cov) = cov else { return SearchWidths::DEFAULT.search_box(start) };
+    let mut cov = match information_matrix(start, frame, set, held, true) {
+        Some(info) => info,
+        None => return SearchWidths::DEFAULT.search_box(start),
+    };
+    if !crate::verdict::covariance_holding_in_place(&mut cov, held) {
+        return SearchWidths::DEFAULT.search_box(start);
+    }
     let mut lower = *start;
     let mut upper = *start;
     for i in 0..PARAM_COUNT {
@@ -341,7 +345,19 @@ pub struct Prepared<const MAX_POSES: usize> {
 impl<const MAX_POSES: usize> Prepared<MAX_POSES> {
     /// The initial estimate ([`CalibrationConfig::init`]), the parameters to hold, the start.
     pub fn new(poses: &[Pose], config: &CalibrationConfig) -> Result<Self, CalibrationError> {
-        let normalized = NormalizedPoses::<MAX_POSES>::prepare(poses, config.init, config.gravity, &config.outliers)?;
+        let mut out = Self::EMPTY;
+        out.refill(poses, config)?;
+        Ok(out)
+    }
+
+    /// A placeholder to [`Prepared::refill`].
+    const EMPTY: Self =
+        Self { normalized: NormalizedPoses::EMPTY, held: [false; PARAM_COUNT], start: [0.0; PARAM_COUNT] };
+
+    /// [`Prepared::new`] into `self`, where it stays: the pose buffer is never copied on the stack.
+    fn refill(&mut self, poses: &[Pose], config: &CalibrationConfig) -> Result<(), CalibrationError> {
+        let normalized = &mut self.normalized;
+        normalized.refill(poses, config.init, config.gravity, &config.outliers)?;
         let set = normalized.pose_set(poses);
         let held = parameters_to_hold(&normalized.start(), normalized.frame(), &set, normalized.initial().held);
         // One pose per parameter fitted (six faces fit the biases and scale factors).
@@ -355,7 +371,8 @@ impl<const MAX_POSES: usize> Prepared<MAX_POSES> {
                 start[i] = 0.0;
             }
         }
-        Ok(Self { normalized, held, start })
+        (self.held, self.start) = (held, start);
+        Ok(())
     }
 
     /// The normalised poses used.
@@ -418,7 +435,8 @@ pub fn calibrate<R: Rng, const POP: usize, const MAX_POSES: usize>(
     config: &CalibrationConfig,
     rng: R,
 ) -> Result<Calibration, CalibrationError> {
-    let prepared = Prepared::<MAX_POSES>::new(poses, config)?;
+    let mut prepared = Prepared::<MAX_POSES>::EMPTY;
+    prepared.refill(poses, config)?;
     let start = Optimised::at(prepared.start);
     let run = match config.method {
         Method::Newton | Method::Lm => prepared.polish(start, config)?,

@@ -31,7 +31,7 @@
 //! assert!((fit.params.nonorth[1] + 0.02).abs() < 1e-3);
 //! ```
 
-use crate::linalg::{DETERMINED_PIVOT, Matrix, solve_spd_holding, weak_pivots};
+use crate::linalg::{DETERMINED_PIVOT, Matrix, solve_spd_holding_in_place, weak_pivots};
 use crate::model::{PARAM_COUNT, Params};
 
 /// Quadric coefficients `[xx, yy, zz, xy, xz, yz, x, y, z]`.
@@ -145,6 +145,9 @@ pub struct PoseList {
 }
 
 impl PoseList {
+    /// No index.
+    pub const EMPTY: Self = Self { len: 0, index: [0; MAX_EXCLUDED] };
+
     /// The indices.
     pub fn as_slice(&self) -> &[u16] {
         &self.index[..usize::from(self.len).min(MAX_EXCLUDED)]
@@ -395,8 +398,9 @@ fn fit_once(means: &[[f32; 3]], keep: &[bool], gravity: f32) -> Result<(Params, 
     if held[..3].iter().chain(&held[6..]).any(|&h| h) {
         return Err(degenerate());
     }
-    let theta = solve_spd_holding(&ata, &atb, &held).map_err(|_| degenerate())?;
-    let params = factor(&theta, m0, s, gravity).ok_or_else(degenerate)?;
+    // `atb` becomes the quadric coefficients.
+    solve_spd_holding_in_place(&mut ata, &mut atb, &held).map_err(|_| degenerate())?;
+    let params = factor(&atb, m0, s, gravity).ok_or_else(degenerate)?;
     // Quadric cross terms xy, xz, yz map to Mxx, Myy, Mzz.
     Ok((params, [held[3], held[4], held[5]]))
 }

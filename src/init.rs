@@ -102,34 +102,57 @@ impl<const MAX_POSES: usize> NormalizedPoses<MAX_POSES> {
         Self::prepare(poses, Init::SixPosition, gravity, &OutlierRule::KEEP_ALL)
     }
 
-    /// The initial estimate chosen by `init`, and the poses it keeps normalised in its frame. Out of
-    /// line: its temporaries (the means, the ellipsoid's matrices) need not share a frame with the GA.
-    #[inline(never)]
+    /// The initial estimate chosen by `init`, and the poses it keeps normalised in its frame.
     pub fn prepare(poses: &[Pose], init: Init, gravity: f32, rule: &OutlierRule) -> Result<Self, InitError> {
+        let mut out = Self::EMPTY;
+        out.refill(poses, init, gravity, rule)?;
+        Ok(out)
+    }
+
+    /// A placeholder to [`NormalizedPoses::refill`]: no poses, the identity frame.
+    pub(crate) const EMPTY: Self = Self {
+        frame: Frame { offset: [0.0; 3], gain: [1.0; 3], gravity: 1.0 },
+        initial: Initial {
+            kind: Init::Auto,
+            params: Params::IDENTITY,
+            excluded: PoseList::EMPTY,
+            held: [false; PARAM_COUNT],
+        },
+        start: [0.0; PARAM_COUNT],
+        poses: heapless::Vec::new(),
+        source: heapless::Vec::new(),
+    };
+
+    /// [`NormalizedPoses::prepare`] into `self`, so that the pose buffer is written where it stays
+    /// (no copy of it on the stack). On an error `self` is unusable.
+    pub(crate) fn refill(
+        &mut self,
+        poses: &[Pose],
+        init: Init,
+        gravity: f32,
+        rule: &OutlierRule,
+    ) -> Result<(), InitError> {
         if poses.len() > MAX_POSES {
             return Err(InitError::TooManyPoses { got: poses.len(), capacity: MAX_POSES });
         }
-        let mut means: heapless::Vec<[f32; 3], MAX_POSES> = heapless::Vec::new();
-        let mut keep: heapless::Vec<bool, MAX_POSES> = heapless::Vec::new();
-        for p in poses {
-            // Capacity checked above (a `collect` would carry a panicking branch).
-            let _ = means.push(p.mean);
-            let _ = keep.push(true);
-        }
-        let (initial, frame) = initial_estimate(&means, &mut keep, init, gravity, rule)?;
-        let mut start = frame.to_deviation(&initial.params);
+        let mut keep = [true; MAX_POSES];
+        let keep = &mut keep[..poses.len()];
+        let (initial, frame) = estimate_of_poses::<MAX_POSES>(poses, keep, init, gravity, rule)?;
+        self.start = frame.to_deviation(&initial.params);
         for i in 0..PARAM_COUNT {
             if initial.held[i] {
-                start[i] = 0.0;
+                self.start[i] = 0.0;
             }
         }
-        let mut out = Self { frame, initial, start, poses: heapless::Vec::new(), source: heapless::Vec::new() };
-        for (i, (m, _)) in means.iter_mut().zip(&keep).enumerate().filter(|(_, (_, k))| **k) {
+        (self.frame, self.initial) = (frame, initial);
+        self.poses.clear();
+        self.source.clear();
+        for (i, (p, _)) in poses.iter().zip(keep.iter()).enumerate().filter(|(_, (_, k))| **k) {
             // Capacity checked above.
-            let _ = out.poses.push(frame.normalize(*m));
-            let _ = out.source.push(i as u16);
+            let _ = self.poses.push(frame.normalize(p.mean));
+            let _ = self.source.push(i as u16);
         }
-        Ok(out)
+        Ok(())
     }
 
     /// The frame the deviation vectors live in.
@@ -161,6 +184,23 @@ impl<const MAX_POSES: usize> NormalizedPoses<MAX_POSES> {
     pub fn pose_set<'a>(&'a self, poses: &'a [Pose]) -> PoseSet<'a> {
         PoseSet { poses, norm: &self.poses, source: &self.source }
     }
+}
+
+/// [`initial_estimate`] of the poses' means. Out of line: the means and the ellipsoid's matrices need
+/// not share a stack frame with the normalised poses (nor, in the calibration, with the GA).
+#[inline(never)]
+fn estimate_of_poses<const MAX_POSES: usize>(
+    poses: &[Pose],
+    keep: &mut [bool],
+    init: Init,
+    gravity: f32,
+    rule: &OutlierRule,
+) -> Result<(Initial, Frame), InitError> {
+    let mut means = [[0.0f32; 3]; MAX_POSES];
+    for (m, p) in means.iter_mut().zip(poses) {
+        *m = p.mean;
+    }
+    initial_estimate(&means[..poses.len().min(MAX_POSES)], keep, init, gravity, rule)
 }
 
 /// The estimate `init` asks for (see [`Init`]) and its frame; `keep` marks the poses it uses.

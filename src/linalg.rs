@@ -44,8 +44,13 @@ pub fn solve_lu<const N: usize>(mut a: Matrix<N>, mut b: [f32; N]) -> Result<[f3
         if !(a[pivot][col].abs() > tiny) {
             return Err(LinalgError::Singular);
         }
-        a.swap(col, pivot);
-        b.swap(col, pivot);
+        if pivot != col {
+            // Element by element: a row swap of the array links the library's large `memmove`.
+            for k in 0..N {
+                (a[col][k], a[pivot][k]) = (a[pivot][k], a[col][k]);
+            }
+            b.swap(col, pivot);
+        }
         for row in col + 1..N {
             let factor = a[row][col] / a[col][col];
             for k in col..N {
@@ -85,24 +90,34 @@ pub fn sqrt_f32(x: f32) -> f32 {
 
 /// Cholesky factor `L` (lower) of a symmetric positive definite matrix, with `a = L L^T`.
 pub fn cholesky<const N: usize>(a: &Matrix<N>) -> Result<Matrix<N>, LinalgError> {
-    let mut l = [[0.0; N]; N];
+    let mut l = *a;
+    cholesky_in_place(&mut l)?;
+    for (i, row) in l.iter_mut().enumerate() {
+        row[i + 1..].iter_mut().for_each(|v| *v = 0.0);
+    }
+    Ok(l)
+}
+
+/// [`cholesky`] without a copy: the lower triangle of `a` (the only part read) is overwritten by `L`;
+/// the upper triangle is left as it was. On an error `a` is partly overwritten.
+pub fn cholesky_in_place<const N: usize>(a: &mut Matrix<N>) -> Result<(), LinalgError> {
     for i in 0..N {
         for j in 0..i + 1 {
             let mut s = a[i][j];
             for k in 0..j {
-                s -= l[i][k] * l[j][k];
+                s -= a[i][k] * a[j][k];
             }
             if i == j {
                 if !(s > 0.0 && s.is_finite()) {
                     return Err(LinalgError::Singular);
                 }
-                l[i][i] = sqrt_f32(s);
+                a[i][i] = sqrt_f32(s);
             } else {
-                l[i][j] = s / l[j][j];
+                a[i][j] = s / a[j][j];
             }
         }
     }
-    Ok(l)
+    Ok(())
 }
 
 /// Solves `a x = b` for a symmetric positive definite `a` given by its lower triangle, in place: `a`'s
@@ -163,6 +178,14 @@ pub fn cholesky_solve<const N: usize>(l: &Matrix<N>, b: [f32; N]) -> [f32; N] {
 
 /// Inverse of a symmetric positive definite matrix, with Jacobi (diagonal) scaling for conditioning.
 pub fn spd_inverse<const N: usize>(a: &Matrix<N>) -> Result<Matrix<N>, LinalgError> {
+    let mut inv = *a;
+    spd_inverse_in_place(&mut inv)?;
+    Ok(inv)
+}
+
+/// [`spd_inverse`] in place: `a` is replaced by its inverse (left unchanged on an error). One matrix of
+/// scratch (the factor) besides `a`.
+pub fn spd_inverse_in_place<const N: usize>(a: &mut Matrix<N>) -> Result<(), LinalgError> {
     let mut d = [0.0; N];
     for i in 0..N {
         if !(a[i][i] > 0.0 && a[i][i].is_finite()) {
@@ -170,23 +193,17 @@ pub fn spd_inverse<const N: usize>(a: &Matrix<N>) -> Result<Matrix<N>, LinalgErr
         }
         d[i] = 1.0 / sqrt_f32(a[i][i]);
     }
-    let mut scaled = [[0.0; N]; N];
-    for i in 0..N {
-        for j in 0..N {
-            scaled[i][j] = a[i][j] * d[i] * d[j];
-        }
-    }
-    let l = cholesky(&scaled)?;
-    let mut inv = [[0.0; N]; N];
+    let mut l: Matrix<N> = core::array::from_fn(|i| core::array::from_fn(|j| a[i][j] * d[i] * d[j]));
+    cholesky_in_place(&mut l)?;
     for j in 0..N {
         let mut e = [0.0; N];
         e[j] = 1.0;
         let col = cholesky_solve(&l, e);
         for i in 0..N {
-            inv[i][j] = col[i] * d[i] * d[j];
+            a[i][j] = col[i] * d[i] * d[j];
         }
     }
-    Ok(inv)
+    Ok(())
 }
 
 /// Smallest share of a column's information not explained by the columns before it (the pivot of
@@ -248,35 +265,47 @@ pub fn solve_spd_holding<const N: usize>(
     b: &[f32; N],
     held: &[bool; N],
 ) -> Result<[f32; N], LinalgError> {
-    let mut m = [[0.0f32; N]; N];
-    let mut rhs = [0.0f32; N];
+    let (mut m, mut x) = (*a, *b);
+    solve_spd_holding_in_place(&mut m, &mut x, held)?;
+    Ok(x)
+}
+
+/// [`solve_spd_holding`] without copies: `a`'s lower triangle is overwritten by the scaled factor and
+/// `b` by the solution `x`.
+pub fn solve_spd_holding_in_place<const N: usize>(
+    a: &mut Matrix<N>,
+    b: &mut [f32; N],
+    held: &[bool; N],
+) -> Result<(), LinalgError> {
     for i in 0..N {
         for j in 0..=i {
-            let v = if held[i] || held[j] { if i == j { 1.0 } else { 0.0 } } else { a[i][j] };
-            m[i][j] = v;
-            m[j][i] = v;
+            if held[i] || held[j] {
+                a[i][j] = if i == j { 1.0 } else { 0.0 };
+            }
         }
-        rhs[i] = if held[i] { 0.0 } else { b[i] };
+        if held[i] {
+            b[i] = 0.0;
+        }
     }
     let mut d = [0.0f32; N];
     for i in 0..N {
-        if !(m[i][i] > 0.0 && m[i][i].is_finite()) {
+        if !(a[i][i] > 0.0 && a[i][i].is_finite()) {
             return Err(LinalgError::Singular);
         }
-        d[i] = 1.0 / sqrt_f32(m[i][i]);
+        d[i] = 1.0 / sqrt_f32(a[i][i]);
     }
     for i in 0..N {
-        for j in 0..N {
-            m[i][j] *= d[i] * d[j];
+        for j in 0..=i {
+            a[i][j] *= d[i] * d[j];
         }
-        rhs[i] *= d[i];
+        b[i] *= d[i];
     }
-    let y = cholesky_solve(&cholesky(&m)?, rhs);
-    let mut x = [0.0f32; N];
+    cholesky_in_place(a)?;
+    *b = cholesky_solve(a, *b);
     for i in 0..N {
-        x[i] = y[i] * d[i];
+        b[i] *= d[i];
     }
-    if x.iter().all(|v| v.is_finite()) { Ok(x) } else { Err(LinalgError::Singular) }
+    if b.iter().all(|v| v.is_finite()) { Ok(()) } else { Err(LinalgError::Singular) }
 }
 
 #[cfg(test)]
@@ -310,6 +339,49 @@ mod tests {
                 assert!((v - if i == j { 1.0 } else { 0.0 }).abs() < 1e-5);
             }
         }
+    }
+
+    /// A symmetric positive definite 4x4 with spread-out entries (Gram matrix plus a ridge).
+    fn spd4() -> Matrix<4> {
+        let g = [[1.0, 0.3, -0.2, 0.7], [0.1, 2.0, 0.5, -0.4], [-0.6, 0.2, 1.5, 0.3], [0.4, -0.9, 0.1, 0.8]];
+        core::array::from_fn(|i| {
+            core::array::from_fn(|j| (0..4).map(|k| g[i][k] * g[j][k]).sum::<f32>() + if i == j { 0.1 } else { 0.0 })
+        })
+    }
+
+    #[test]
+    fn in_place_forms_equal_the_copying_ones_bit_for_bit() {
+        let a = spd4();
+        let mut l = a;
+        cholesky_in_place(&mut l).unwrap();
+        let copied = cholesky(&a).unwrap();
+        for i in 0..4 {
+            assert_eq!(l[i][..=i], copied[i][..=i], "row {i}");
+            assert!(copied[i][i + 1..].iter().all(|&v| v == 0.0));
+        }
+        let (b, held) = ([1.0, -2.0, 0.5, 3.0], [false, true, false, false]);
+        let (mut m, mut x) = (a, b);
+        solve_spd_holding_in_place(&mut m, &mut x, &held).unwrap();
+        assert_eq!(x, solve_spd_holding(&a, &b, &held).unwrap());
+        assert_eq!(x[1], 0.0);
+        for i in [0, 2, 3] {
+            let r: f32 = [0, 2, 3].iter().map(|&k| a[i.max(k)][i.min(k)] * x[k]).sum();
+            assert!((r - b[i]).abs() < 1e-4, "{i}: {r}");
+        }
+    }
+
+    #[test]
+    fn in_place_inverse_leaves_a_singular_matrix_unchanged() {
+        let mut a = spd4();
+        a[3] = [0.0; 4];
+        let before = a;
+        assert_eq!(spd_inverse_in_place(&mut a), Err(LinalgError::Singular));
+        assert_eq!(a, before);
+        // Positive diagonal, indefinite: the factorisation (not the diagonal check) fails.
+        let mut a = [[1.0, 2.0, 0.0, 0.0], [2.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
+        let before = a;
+        assert_eq!(spd_inverse_in_place(&mut a), Err(LinalgError::Singular));
+        assert_eq!(a, before);
     }
 
     #[test]

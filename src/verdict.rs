@@ -10,7 +10,7 @@
 use crate::accumulator::Pose;
 use crate::ellipsoid::PoseList;
 use crate::frame::{Deviation, Frame, NormPose, modulus_error_gradient};
-use crate::linalg::{Matrix, spd_inverse};
+use crate::linalg::{Matrix, spd_inverse_in_place};
 use crate::model::{PARAM_COUNT, Params};
 
 /// The poses of a calibration: the captured poses, the normalised poses the optimisers use, and for
@@ -229,11 +229,18 @@ pub fn deviation_covariance(
     set: &PoseSet<'_>,
     held: &[bool; PARAM_COUNT],
 ) -> Option<Matrix<PARAM_COUNT>> {
-    covariance_holding(information_matrix(x, frame, set, held, false)?, held)
+    let mut info = information_matrix(x, frame, set, held, false)?;
+    covariance_holding_in_place(&mut info, held).then_some(info)
 }
 
 /// Inverse of `info` with the `held` rows and columns replaced by the identity, then zeroed.
 pub fn covariance_holding(mut info: Matrix<PARAM_COUNT>, held: &[bool; PARAM_COUNT]) -> Option<Matrix<PARAM_COUNT>> {
+    covariance_holding_in_place(&mut info, held).then_some(info)
+}
+
+/// [`covariance_holding`] in place: `info` becomes the covariance; `false` (and `info` unusable)
+/// when it cannot be inverted.
+pub fn covariance_holding_in_place(info: &mut Matrix<PARAM_COUNT>, held: &[bool; PARAM_COUNT]) -> bool {
     for i in 0..PARAM_COUNT {
         for j in 0..PARAM_COUNT {
             if held[i] || held[j] {
@@ -241,15 +248,17 @@ pub fn covariance_holding(mut info: Matrix<PARAM_COUNT>, held: &[bool; PARAM_COU
             }
         }
     }
-    let mut cov = spd_inverse(&info).ok()?;
+    if spd_inverse_in_place(info).is_err() {
+        return false;
+    }
     for i in 0..PARAM_COUNT {
         for j in 0..PARAM_COUNT {
             if held[i] || held[j] {
-                cov[i][j] = 0.0;
+                info[i][j] = 0.0;
             }
         }
     }
-    Some(cov)
+    true
 }
 
 /// The largest standard deviation each parameter may have under `bounds` (paper convention,
@@ -282,7 +291,11 @@ pub fn parameters_to_hold(
     let structural = undetermined_parameters(x, set.norm);
     let mut held: [bool; PARAM_COUNT] = core::array::from_fn(|i| held[i] || structural[i]);
     let Some(info) = information_matrix(x, frame, set, &held, false) else { return held };
-    while let Some(cov) = covariance_holding(info, &held) {
+    loop {
+        let mut cov = info;
+        if !covariance_holding_in_place(&mut cov, &held) {
+            break;
+        }
         let worst = (0..PARAM_COUNT)
             .filter(|&i| !held[i])
             .map(|i| (i, crate::linalg::sqrt_f32(cov[i][i].max(0.0)) / HOLD_STD[i]))

@@ -46,6 +46,8 @@ fn main() -> Result<(), String> {
     };
     let offset = if args.held_out { HELD_OUT_SEED } else { 0 };
     let mut outcomes: Vec<Outcome> = Vec::new();
+    // A progress bar on a terminal (indicatif draws nothing when stderr is not one).
+    let bar = indicatif::ProgressBar::new(families.len() as u64 * args.per_family);
     for family in families {
         let k = Family::ALL.iter().position(|f| *f == family).unwrap_or(0) as u64;
         for i in 0..args.per_family {
@@ -69,8 +71,10 @@ fn main() -> Result<(), String> {
                 );
             }
             outcomes.push(o);
+            bar.inc(1);
         }
     }
+    bar.finish_and_clear();
     print!("{}", blind_eval::table(&blind_eval::summarize(&outcomes)));
     print!("\n{}", blind_eval::overall(&outcomes).to_text());
     let slowest = outcomes.iter().map(|o| (o.seconds, o.samples)).fold((0.0, 0), |a, b| if b.0 > a.0 { b } else { a });

@@ -13,4 +13,5 @@ pub mod labelled;
 pub mod paper;
 pub mod plots;
 pub mod report;
+pub mod report_html;
 pub mod sim;

@@ -13,6 +13,7 @@ use accelcal_host::csvstream;
 use accelcal_host::diagnose;
 use accelcal_host::paper::{self, PaperOptions, format_sig};
 use accelcal_host::plots::{Series, line_chart};
+use accelcal_host::report_html;
 use accelcal_host::sim::{self, OutputUnits, Plan, SimConfig};
 use clap::{Parser, Subcommand};
 use serde_json::json;
@@ -81,6 +82,9 @@ enum Command {
         /// Also time N runs of the whole pipeline (read, poses, calibration, leave-one-out).
         #[arg(long, value_name = "N")]
         bench: Option<usize>,
+        /// Write a self-contained HTML report (DIR/index.html: inline SVG, no network).
+        #[arg(long, value_name = "DIR")]
+        report: Option<PathBuf>,
     },
     /// Explain a calibration's residual gap: where it lies and which unmodelled effect causes it.
     Diagnose {
@@ -92,6 +96,9 @@ enum Command {
         /// Directory for the SVG plots.
         #[arg(long)]
         plots: Option<PathBuf>,
+        /// Write a self-contained HTML report (DIR/index.html: inline SVG, no network).
+        #[arg(long, value_name = "DIR")]
+        report: Option<PathBuf>,
         /// Seed of the GA and of the simulations.
         #[arg(long, default_value_t = 1)]
         seed: u64,
@@ -206,8 +213,12 @@ fn main() -> ExitCode {
         Command::Simulate { plan, seed, noise_mg, rate, seconds, units, random_truth, output, json } => {
             simulate(plan, seed, noise_mg, rate, seconds, units, random_truth, &output, json)
         }
-        Command::Calibrate { input, method, json, seed, bench } => calibrate_file(&input, &method, seed, json, bench),
-        Command::Diagnose { input, json, plots, seed } => diagnose_file(&input, json, plots.as_deref(), seed),
+        Command::Calibrate { input, method, json, seed, bench, report } => {
+            calibrate_file(&input, &method, seed, CalibrateOutput { json, bench, report })
+        }
+        Command::Diagnose { input, json, plots, report, seed } => {
+            diagnose_file(&input, json, plots.as_deref(), report.as_deref(), seed)
+        }
         Command::Report { json, check } => match accelcal_host::report::run(json, check) {
             Ok(true) => Ok(()),
             Ok(false) => Err(Failure::Verdict),
@@ -362,6 +373,8 @@ struct Loaded {
     poses: Vec<accelcal::accumulator::Pose>,
     spans: Option<Vec<csvio::PoseSpan>>,
     host: calib::HostCalibration,
+    /// The configuration calibrated with.
+    config: CalibrationConfig,
     /// Rows the pose detection skipped as stale repeats.
     stale_repeats: usize,
     /// Data rows read (a large file's `table` holds only its first rows).
@@ -427,7 +440,7 @@ fn load_and_calibrate(input: &InputArgs, method: Method, seed: u64, warn: bool) 
     };
     let config = CalibrationConfig { gravity, method, before, init: input.init.into(), ..CalibrationConfig::DEFAULT };
     let host = calib::run_with_loo(&poses, &config, seed).map_err(|e| format!("{file}: {e}"))?;
-    Ok(Loaded { table, poses, spans, host, stale_repeats, rows })
+    Ok(Loaded { table, poses, spans, host, config, stale_repeats, rows })
 }
 
 /// Refuses more poses than one calibration takes ([`calib::MAX_POSES`], the library's buffer),
@@ -473,56 +486,84 @@ fn bench(input: &InputArgs, method: Method, seed: u64, runs: usize) -> Result<(f
     Ok((ms[0], ms[ms.len() / 2], ms[ms.len() - 1]))
 }
 
-fn calibrate_file(
+/// What `calibrate` writes besides its exit code.
+struct CalibrateOutput {
+    /// JSON on stdout instead of text.
+    json: bool,
+    /// Also time N runs.
+    bench: Option<usize>,
+    /// Directory for the HTML report.
+    report: Option<PathBuf>,
+}
+
+/// The `calibrate --json` document (also embedded in the HTML report).
+fn calibrate_json(
     input: &InputArgs,
-    method: &str,
-    seed: u64,
-    as_json: bool,
-    bench_runs: Option<usize>,
-) -> Result<(), Failure> {
+    loaded: &Loaded,
+    timing: Option<(f64, f64, f64)>,
+    runs: Option<usize>,
+) -> serde_json::Value {
+    let Loaded { table, poses, spans, host, config, stale_repeats, .. } = loaded;
+    let cal = host.calibration;
+    let v = &cal.verdict;
+    let residuals = report_html::pose_residuals_mg(poses, config, &cal.params);
+    let temps = report_html::pose_temperatures_c(table, spans.as_deref(), poses.len());
+    let pose_json: Vec<serde_json::Value> = poses
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let span = spans.as_ref().and_then(|s| s.get(i));
+            json!({
+                "t_start": span.and_then(|s| s.start_s),
+                "t_end": span.and_then(|s| s.end_s),
+                "n": p.n,
+                "mean": p.mean,
+                "std": p.variance.map(f32::sqrt),
+                "temp_c": temps.get(i).copied().flatten(),
+                "direction": report_html::calibrated_direction(&cal.params, p.mean),
+                "residual_before_mg": residuals.get(i).map(|r| num(r.before_mg)),
+                "residual_after_mg": residuals.get(i).map(|r| num(r.after_mg)),
+            })
+        })
+        .collect();
+    json!({
+        "file": input.file.display().to_string(),
+        "method": config.method.name(),
+        "gravity": config.gravity,
+        "units": table.units.to_string(),
+        "rows_dropped": calib::rows_dropped_json(&table.dropped, *stale_repeats),
+        "units_header": table.units_header.as_ref().map(|h| json!({"column": h.column, "unit": h.label, "factor": h.factor})),
+        "poses": pose_json,
+        "params": params_json(&cal.params),
+        "objective": cal.objective,
+        "rmse_mg": {"before": num(v.rmse_before_mg), "after": num(v.rmse_after_mg), "loo": host.rmse_loo_mg},
+        "noise_floor_mg": v.noise_floor_mg,
+        "param_std": v.param_std.map(num),
+        "generations": cal.generations,
+        "iterations": cal.iterations,
+        "verdict": verdict_json(v),
+        "bench_ms": timing.map(|(min, median, max)| json!({"runs": runs, "min": min, "median": median, "max": max})),
+    })
+}
+
+fn calibrate_file(input: &InputArgs, method: &str, seed: u64, output: CalibrateOutput) -> Result<(), Failure> {
     let method = calib::parse_method(method)?;
-    let Loaded { table, poses, spans, host, stale_repeats, rows } = load_and_calibrate(input, method, seed, true)?;
+    let loaded = load_and_calibrate(input, method, seed, true)?;
+    let bench_runs = output.bench;
     let timing = match bench_runs {
         Some(runs) => Some(bench(input, method, seed, runs)?),
         None => None,
     };
+    let document = (output.json || output.report.is_some()).then(|| calibrate_json(input, &loaded, timing, bench_runs));
+    if let (Some(dir), Some(document)) = (&output.report, &document) {
+        let page = report_html::write_calibrate_report(dir, document)?;
+        eprintln!("accelcal: report written to {}", page.display());
+    }
+    let Loaded { table, poses, host, stale_repeats, rows, .. } = loaded;
     let file = input.file.display();
-    let gravity = input.gravity as f32;
     let cal = host.calibration;
     let v = &cal.verdict;
-    if as_json {
-        let pose_json: Vec<serde_json::Value> = poses
-            .iter()
-            .enumerate()
-            .map(|(i, p)| {
-                let span = spans.as_ref().and_then(|s| s.get(i));
-                json!({
-                    "t_start": span.and_then(|s| s.start_s),
-                    "t_end": span.and_then(|s| s.end_s),
-                    "n": p.n,
-                    "mean": p.mean,
-                    "std": p.variance.map(f32::sqrt),
-                })
-            })
-            .collect();
-        let out = json!({
-            "file": file.to_string(),
-            "method": method.name(),
-            "gravity": gravity,
-            "units": table.units.to_string(),
-            "rows_dropped": calib::rows_dropped_json(&table.dropped, stale_repeats),
-            "units_header": table.units_header.as_ref().map(|h| json!({"column": h.column, "unit": h.label, "factor": h.factor})),
-            "poses": pose_json,
-            "params": params_json(&cal.params),
-            "objective": cal.objective,
-            "rmse_mg": {"before": num(v.rmse_before_mg), "after": num(v.rmse_after_mg), "loo": host.rmse_loo_mg},
-            "noise_floor_mg": v.noise_floor_mg,
-            "param_std": v.param_std.map(num),
-            "generations": cal.generations,
-            "iterations": cal.iterations,
-            "verdict": verdict_json(v),
-            "bench_ms": timing.map(|(min, median, max)| json!({"runs": bench_runs, "min": min, "median": median, "max": max})),
-        });
+    if let (true, Some(out)) = (output.json, document) {
         println!("{out}");
     } else {
         if let (Some((min, median, max)), Some(runs)) = (timing, bench_runs) {
@@ -560,7 +601,13 @@ fn calibrate_file(
     if v.pass() { Ok(()) } else { Err(Failure::Verdict) }
 }
 
-fn diagnose_file(input: &InputArgs, as_json: bool, plots: Option<&std::path::Path>, seed: u64) -> Result<(), Failure> {
+fn diagnose_file(
+    input: &InputArgs,
+    as_json: bool,
+    plots: Option<&std::path::Path>,
+    report_dir: Option<&std::path::Path>,
+    seed: u64,
+) -> Result<(), Failure> {
     if input.means {
         let msg = "diagnose needs raw samples (within-pose noise, time, settling), not per-pose means";
         return Err(msg.to_string().into());
@@ -579,11 +626,15 @@ fn diagnose_file(input: &InputArgs, as_json: bool, plots: Option<&std::path::Pat
     if let Some(dir) = plots {
         report.write_plots(dir)?;
     }
+    let mut json = report.to_json();
+    if let Some(object) = json.as_object_mut() {
+        object.insert("rows_dropped".into(), calib::rows_dropped_json(&table.dropped, stale_repeats));
+    }
+    if let Some(dir) = report_dir {
+        let page = report_html::write_diagnose_report(dir, &json)?;
+        eprintln!("accelcal: report written to {}", page.display());
+    }
     if as_json {
-        let mut json = report.to_json();
-        if let Some(object) = json.as_object_mut() {
-            object.insert("rows_dropped".into(), calib::rows_dropped_json(&table.dropped, stale_repeats));
-        }
         println!("{json}");
     } else {
         print!("{}", report.to_text());

@@ -88,8 +88,8 @@ pub const BUDGETS: [Budget; 6] = [
         what: "RAM: static + peak stack of the solve",
         limit: 4 * 1024,
         unit: "bytes",
-        enforced: false,
-        ceiling: 6_450,
+        enforced: true,
+        ceiling: 3_940,
     },
 ];
 
