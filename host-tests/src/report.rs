@@ -81,7 +81,7 @@ pub const BUDGETS: [Budget; 6] = [
         limit: 16 * 1024,
         unit: "bytes",
         enforced: false,
-        ceiling: 35_600,
+        ceiling: 33_200,
     },
     Budget {
         key: "solve_ram_bytes",
