@@ -10,6 +10,7 @@ pub mod diagnose;
 pub mod effects;
 pub mod i2c_sim;
 pub mod labelled;
+pub mod output;
 pub mod paper;
 pub mod plots;
 pub mod report;

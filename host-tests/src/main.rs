@@ -5,6 +5,27 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+/// `println!` to stdout that ends the program quietly when stdout is closed (output piped into
+/// `head`) instead of panicking; any other write error is reported and exits with 2.
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        if let Err(e) = writeln!(std::io::stdout(), $($arg)*) {
+            accelcal_host::output::stdout_failed(e)
+        }
+    }};
+}
+
+/// `print!` likewise (see [`outln`]).
+macro_rules! out {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        if let Err(e) = write!(std::io::stdout(), $($arg)*) {
+            accelcal_host::output::stdout_failed(e)
+        }
+    }};
+}
+
 use accelcal::calibrate::{CalibrationConfig, Method};
 use accelcal::model::{PARAM_COUNT, PARAM_NAMES, Params};
 use accelcal_host::calib::{self, num, params_json, verdict_json};
@@ -283,38 +304,38 @@ fn demo(seed: u64, as_json: bool) -> Result<(), Failure> {
             "truth": params_json(&truth),
             "results": results,
         });
-        println!("{out}");
+        outln!("{out}");
     } else {
-        println!(
+        outln!(
             "accelcal demo: the paper's 24-position experiment simulated (seed {seed}, {} mg noise, 200 Hz, 5 s per pose)",
             cfg.noise_mg
         );
-        println!("{} samples -> {} static poses found by the accumulator", table.samples.len(), acc.poses.len());
-        print!("{:<10}", "");
+        outln!("{} samples -> {} static poses found by the accumulator", table.samples.len(), acc.poses.len());
+        out!("{:<10}", "");
         for n in PARAM_NAMES {
-            print!("{n:>13}");
+            out!("{n:>13}");
         }
-        println!();
-        print!("{:<10}", "truth");
+        outln!();
+        out!("{:<10}", "truth");
         for v in truth.to_array() {
-            print!("{v:>13.8}");
+            out!("{v:>13.8}");
         }
-        println!();
+        outln!();
         for (method, cal, rel) in &lines {
-            print!("{:<10}", method.name());
+            out!("{:<10}", method.name());
             for v in cal.params.to_array() {
-                print!("{v:>13.8}");
+                out!("{v:>13.8}");
             }
-            println!();
-            print!("{:<10}", "  err %");
+            outln!();
+            out!("{:<10}", "  err %");
             for v in rel {
-                print!("{:>13}", format_sig(*v));
+                out!("{:>13}", format_sig(*v));
             }
-            println!();
+            outln!();
         }
         for (method, cal, _) in &lines {
             let v = &cal.verdict;
-            println!(
+            outln!(
                 "{:<8} modulus RMSE {} -> {} mg (noise floor {} mg); {} generations, {} iterations; verdict {}",
                 method.name(),
                 format_sig(f64::from(v.rmse_before_mg)),
@@ -350,14 +371,14 @@ fn simulate(
     let mut w = std::io::BufWriter::new(file);
     sim::write_csv(&recording, &mut w).map_err(|e| format!("{}: {e}", output.display()))?;
     if as_json {
-        println!(
+        outln!(
             "{}",
             json!({"file": output.display().to_string(), "plan": plan.to_string(), "seed": seed,
                    "samples": recording.samples.len(), "poses": recording.poses.len(),
                    "units": units.to_string(), "truth": params_json(&truth)})
         );
     } else {
-        println!(
+        outln!(
             "wrote {} ({} samples, {} poses, plan {plan}, seed {seed}, units {units})",
             output.display(),
             recording.samples.len(),
@@ -564,38 +585,38 @@ fn calibrate_file(input: &InputArgs, method: &str, seed: u64, output: CalibrateO
     let cal = host.calibration;
     let v = &cal.verdict;
     if let (true, Some(out)) = (output.json, document) {
-        println!("{out}");
+        outln!("{out}");
     } else {
         if let (Some((min, median, max)), Some(runs)) = (timing, bench_runs) {
-            println!(
+            outln!(
                 "bench: read + find poses + calibrate + leave-one-out, {runs} runs: min {min:.1} ms, median {median:.1} ms, max {max:.1} ms"
             );
         }
-        println!("{file}: {} rows in {}, {} poses, method {}", rows, table.units_summary(), poses.len(), method.name());
-        println!("{:<6}{:>16}{:>16}{:>16}", "", "x", "y", "z");
-        println!("{:<6}{:>16.8}{:>16.8}{:>16.8}", "B", cal.params.bias[0], cal.params.bias[1], cal.params.bias[2]);
-        println!(
+        outln!("{file}: {} rows in {}, {} poses, method {}", rows, table.units_summary(), poses.len(), method.name());
+        outln!("{:<6}{:>16}{:>16}{:>16}", "", "x", "y", "z");
+        outln!("{:<6}{:>16.8}{:>16.8}{:>16.8}", "B", cal.params.bias[0], cal.params.bias[1], cal.params.bias[2]);
+        outln!("{:<6}{:>16.8e}{:>16.8e}{:>16.8e}", "S", cal.params.scale[0], cal.params.scale[1], cal.params.scale[2]);
+        outln!(
             "{:<6}{:>16.8e}{:>16.8e}{:>16.8e}",
-            "S", cal.params.scale[0], cal.params.scale[1], cal.params.scale[2]
+            "M",
+            cal.params.nonorth[0],
+            cal.params.nonorth[1],
+            cal.params.nonorth[2]
         );
-        println!(
-            "{:<6}{:>16.8e}{:>16.8e}{:>16.8e}",
-            "M", cal.params.nonorth[0], cal.params.nonorth[1], cal.params.nonorth[2]
-        );
-        println!(
+        outln!(
             "modulus RMSE before {} mg, after {} mg, leave-one-pose-out {} mg, noise floor {} mg",
             format_sig(f64::from(v.rmse_before_mg)),
             format_sig(f64::from(v.rmse_after_mg)),
             host.rmse_loo_mg.map_or("?".into(), |x| format_sig(f64::from(x))),
             v.noise_floor_mg.map_or("?".into(), |x| format_sig(f64::from(x)))
         );
-        println!("verdict: {}", if v.pass() { "PASS".to_string() } else { format!("FAIL {}", verdict_json(v)) });
+        outln!("verdict: {}", if v.pass() { "PASS".to_string() } else { format!("FAIL {}", verdict_json(v)) });
         let warnings = calib::warnings_line(v);
         if !warnings.is_empty() {
-            println!("warning: {warnings}");
+            outln!("warning: {warnings}");
         }
         if let Some(line) = calib::rows_dropped_line(&table.dropped, stale_repeats) {
-            println!("{line}");
+            outln!("{line}");
         }
     }
     if v.pass() { Ok(()) } else { Err(Failure::Verdict) }
@@ -635,11 +656,11 @@ fn diagnose_file(
         eprintln!("accelcal: report written to {}", page.display());
     }
     if as_json {
-        println!("{json}");
+        outln!("{json}");
     } else {
-        print!("{}", report.to_text());
+        out!("{}", report.to_text());
         if let Some(line) = calib::rows_dropped_line(&table.dropped, stale_repeats) {
-            println!("{line}");
+            outln!("{line}");
         }
     }
     Ok(())
@@ -661,13 +682,13 @@ fn paper_cmd(options: PaperOptions, out: Option<PathBuf>, as_json: bool) -> Resu
     if let Some(dir) = out {
         write_figures(&report, &dir)?;
         if !as_json {
-            println!("figures written to {}", dir.display());
+            outln!("figures written to {}", dir.display());
         }
     }
     if as_json {
-        println!("{}", paper::to_json(&report));
+        outln!("{}", paper::to_json(&report));
     } else {
-        print!("{}", paper::to_text(&report));
+        out!("{}", paper::to_text(&report));
     }
     Ok(())
 }

@@ -101,9 +101,12 @@ pub const TOP_FUNCTIONS: usize = 10;
 pub fn run(json: bool, check: bool) -> Result<bool, String> {
     let report = measure()?;
     if json {
-        println!("{}", serde_json::to_string_pretty(&report.json).map_err(|e| e.to_string())?);
+        crate::output::write_stdout(&format!(
+            "{}\n",
+            serde_json::to_string_pretty(&report.json).map_err(|e| e.to_string())?
+        ));
     } else {
-        print!("{}", report.markdown);
+        crate::output::write_stdout(&report.markdown);
     }
     let failed = exceeded(&BUDGETS, &report.within, &report.measured);
     if check && !failed.is_empty() {

@@ -186,3 +186,31 @@ fn a_free_hand_log_needs_no_face_unless_the_six_position_start_is_asked_for() {
     assert_eq!(out.status.code(), Some(0), "{stdout}{}", String::from_utf8_lossy(&out.stderr));
     assert!(stdout.contains("verdict: PASS"), "{stdout}");
 }
+
+/// Output piped into a reader that goes away (`accelcal ... | head`): a quiet exit 0, not a panic.
+#[test]
+fn a_closed_stdout_ends_quietly() {
+    let g = 9.80665;
+    let mut csv = String::from("t,ax,ay,az\n");
+    let faces = [[0.0, 0.0, g], [0.0, 0.0, -g], [g, 0.0, 0.0], [-g, 0.0, 0.0], [0.0, g, 0.0], [0.0, -g, 0.0]];
+    let mut t = 0.0;
+    for (k, f) in faces.iter().enumerate() {
+        for i in 0..400 {
+            let n = (((i * 7919 + k * 104_729) % 1000) as f64 / 1000.0 - 0.5) * 0.01;
+            csv.push_str(&format!("{t:.3},{},{},{}\n", f[0] + n, f[1] - n, f[2] + 0.5 * n));
+            t += 0.005;
+        }
+    }
+    let path = write("closed_stdout.csv", csv.as_bytes());
+    let mut child = Command::new(env!("CARGO_BIN_EXE_accelcal"))
+        .args(["calibrate", path.to_str().unwrap(), "--json"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(out.status.code().is_some_and(|c| c <= 1), "{:?}: {stderr}", out.status);
+}
