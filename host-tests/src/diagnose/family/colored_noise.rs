@@ -6,35 +6,44 @@ use super::{Candidate, Context, Evaluation, Family, Variant};
 use crate::csvio::Table;
 use crate::diagnose::gap::PoseData;
 use crate::diagnose::gap::{Noise, expected_cv_ms, residual_noise_draws, row_time, simulate_gap};
+use crate::diagnose::math::cv_residuals;
 use crate::diagnose::math::{V3, lstsq, mean, predict};
 use crate::diagnose::{CV_NOISE_DRAWS, PARAMETER_PENALTY, WALK_EXCESS};
 
 pub(crate) struct ColoredNoise;
 
-/// Share of the nominal model's squared held-out residual above which one pose is said to hold
-/// the gap (see [`one_pose_dominates`]).
-const ONE_POSE_SHARE: f64 = 0.5;
-
-/// One pose holds most of the squared held-out residual: a noise process spreads its scatter over
-/// every pose (with 8 or more poses, Gaussian scatter puts half of it in one pose by chance only
-/// rarely), so the gap is one bad pose, not noise.
-fn one_pose_dominates(ctx: &Context<'_>) -> bool {
-    let squares: Vec<f64> = ctx.nominal_cv.iter().flatten().map(|r| r * r).collect();
+/// Share of the squared held-out residual in the largest pose (0 without residuals).
+fn largest_share(cv: &[Option<f64>]) -> f64 {
+    let squares: Vec<f64> = cv.iter().flatten().map(|r| r * r).collect();
     let total: f64 = squares.iter().sum();
-    let largest = squares.iter().copied().fold(0.0, f64::max);
-    squares.len() >= 8 && total > 0.0 && largest > ONE_POSE_SHARE * total
+    if total > 0.0 { squares.iter().copied().fold(0.0, f64::max) / total } else { 0.0 }
 }
 
+/// Fewest noise draws out of [`CV_NOISE_DRAWS`] that must put as large a share of the scatter in one
+/// pose as the data do, for the noise model to stay credible.
+const MIN_DRAWS_AS_CONCENTRATED: usize = 1;
+
 impl ColoredNoise {
-    /// Penalised held-out ratio of the pose means under white noise plus this walk and floor.
-    fn heldout_ratio(&self, ctx: &Context<'_>, walk: V3, floor: V3) -> f64 {
+    /// Penalised held-out ratio of the pose means under white noise plus this walk and floor; `None`
+    /// when the data put far more of their scatter in one pose than the model ever does (one bad
+    /// pose, not noise: no draw of the model concentrates it so).
+    fn heldout_ratio(&self, ctx: &Context<'_>, walk: V3, floor: V3) -> Option<f64> {
         let m = ctx.m;
         let noise = Noise { white: m.white, walk, floor: std::array::from_fn(|a| floor[a] + m.quantisation[a]) };
         let draws = residual_noise_draws(&m.model, &m.directions, &m.poses, &noise, CV_NOISE_DRAWS, ctx.opts.seed);
+        let observed = largest_share(&ctx.nominal_cv);
+        let as_concentrated = draws
+            .iter()
+            .filter_map(|d| cv_residuals(&ctx.base_rows, d, &ctx.fold, ctx.folds, &ctx.none_dropped))
+            .filter(|cv| largest_share(cv) >= observed)
+            .count();
+        if as_concentrated < MIN_DRAWS_AS_CONCENTRATED {
+            return None;
+        }
         let e_col = expected_cv_ms(&ctx.base_rows, &draws, &ctx.fold, ctx.folds, &ctx.none_dropped);
         let ms =
             (crate::diagnose::math::sum_sq(&ctx.nominal_cv).0 + PARAMETER_PENALTY * ctx.e_white) / m.poses.len() as f64;
-        (ms / e_col).sqrt()
+        Some((ms / e_col).sqrt())
     }
 }
 
@@ -61,10 +70,10 @@ impl Family for ColoredNoise {
         let zero = [0.0; 3];
         let mut best: Option<(f64, V3, V3)> = None;
         for (w, f) in [(walk, floor), (walk, zero), (zero, floor)] {
-            if !(ctx.pose_level && !one_pose_dominates(ctx) && w.iter().chain(&f).any(|v| *v > 0.0)) {
+            if !(ctx.pose_level && w.iter().chain(&f).any(|v| *v > 0.0)) {
                 continue;
             }
-            let ratio = self.heldout_ratio(ctx, w, f);
+            let Some(ratio) = self.heldout_ratio(ctx, w, f) else { continue };
             if best.is_none_or(|(b, _, _)| ctx.gain(ratio) > ctx.gain(b)) {
                 best = Some((ratio, w, f));
             }
