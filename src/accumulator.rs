@@ -245,6 +245,7 @@ fn max_f32(a: f32, b: f32) -> f32 {
 
 /// One static position: the average of its samples.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Pose {
     /// Per-axis mean, input unit.

@@ -144,6 +144,14 @@ pub struct PoseList {
     index: [u16; MAX_EXCLUDED],
 }
 
+/// A list of indices is serialised as the sequence of its indices.
+#[cfg(feature = "serde")]
+impl serde::Serialize for PoseList {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.collect_seq(self.as_slice())
+    }
+}
+
 impl PoseList {
     /// No index.
     pub const EMPTY: Self = Self { len: 0, index: [0; MAX_EXCLUDED] };

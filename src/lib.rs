@@ -44,7 +44,8 @@
 //! Features: `mpu6050` (driver), `micromath` (vector types), `default-rng` (`DefaultRng`,
 //! `seeded_rng`) are on by default; `storage` (two-slot power-loss-safe flash storage of the blob on
 //! an `embedded-storage` NorFlash), `accelerometer` (any `accelerometer` crate driver as the sensor),
-//! `async` (the session in an async task: `session_async`) and `defmt` are opt-in.
+//! `async` (the session in an async task: `session_async`), `serde` (`Serialize` on the parameters,
+//! poses and verdict) and `defmt` are opt-in.
 //!
 //! ```
 //! use accelcal::accumulator::{Accumulator, AccumulatorConfig};

@@ -23,6 +23,7 @@ pub const PARAM_NAMES: [&str; PARAM_COUNT] = ["Bx", "By", "Bz", "Sxx", "Syy", "S
 ///
 /// `bias` is in the output unit (that of gravity), `scale` and `nonorth` in output unit per input unit.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Params {
     /// `B = [Bx, By, Bz]`, subtracted after `Ka`.

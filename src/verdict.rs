@@ -79,6 +79,7 @@ impl Default for VerdictBounds {
 
 /// Which bound failed (all `false` on a pass).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Failures {
     /// RMSE after calibration above `max_rmse_mg`.
@@ -97,6 +98,7 @@ pub struct Failures {
 
 /// What the calibration could not do but reports instead of failing.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Warnings {
     /// Per parameter: the poses do not determine it (their directions leave it free, or its standard
@@ -116,6 +118,7 @@ impl Warnings {
 
 /// The verdict on a calibration.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Verdict {
     /// Modulus RMSE of the poses with the "before" model, mg.
