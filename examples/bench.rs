@@ -20,7 +20,9 @@
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
 #[cfg(not(target_os = "none"))]
-fn main() {}
+fn main() {
+    // On the host the firmware example is an empty stub, so that `cargo test` can build it.
+}
 
 #[cfg(target_os = "none")]
 #[path = "common/sim_sensor.rs"]
@@ -123,6 +125,28 @@ mod firmware {
 
     #[cortex_m_rt::entry]
     fn main() -> ! {
+        let acc = accumulate_stream();
+        let poses = acc.poses();
+        bench_apply(poses);
+        bench_ga_and_lm(poses);
+        if !initial_estimate(poses) {
+            fail("initial estimate");
+        }
+        bench_full_calibration(poses);
+        hprintln!(
+            "bench: sizes accumulator {} ga {} normalized_poses {} population {}",
+            core::mem::size_of::<Acc>(),
+            core::mem::size_of::<Taga>(),
+            core::mem::size_of::<NormalizedPoses<POSES>>(),
+            POP
+        );
+        debug::exit(debug::EXIT_SUCCESS);
+        #[allow(clippy::empty_loop)]
+        loop {}
+    }
+
+    /// The simulated sensor's whole stream through `accumulate_sample`.
+    fn accumulate_stream() -> Acc {
         let mut sensor = SimSensor::new(SIM_SEED);
         let mut acc = match Acc::new(AccumulatorConfig::DEFAULT) {
             Ok(acc) => acc,
@@ -138,9 +162,13 @@ mod firmware {
         if acc.finish().is_err() {
             fail("finish");
         }
-        let poses = acc.poses();
-        hprintln!("bench: samples {} at {} Hz, poses {}", samples, sim_sensor::SAMPLE_RATE_HZ as u32, poses.len());
+        let rate_hz = sim_sensor::SAMPLE_RATE_HZ as u32;
+        hprintln!("bench: samples {} at {} Hz, poses {}", samples, rate_hz, acc.poses().len());
+        acc
+    }
 
+    /// One `apply_sample` call on a batch of the pose means.
+    fn bench_apply(poses: &[Pose]) {
         let gain = sim_sensor::LSB_PER_G / accelcal::model::STANDARD_GRAVITY_MPS2;
         let params = Params { scale: [1.0 / gain; 3], ..Params::IDENTITY };
         let mut batch = [[0.0f32; 3]; APPLY_BATCH];
@@ -150,14 +178,16 @@ mod firmware {
         apply_sample(black_box(&params), black_box(&mut batch));
         black_box(&batch);
         hprintln!("bench: apply samples_per_call {}", APPLY_BATCH);
+    }
 
-        let gravity = CalibrationConfig::DEFAULT.gravity;
-        let normalized = match NormalizedPoses::<POSES>::new(poses, gravity) {
+    /// `GENERATIONS` TAGA generations, then LM alone, on the six-position normalised problem.
+    fn bench_ga_and_lm(poses: &[Pose]) {
+        let config = CalibrationConfig::DEFAULT;
+        let normalized = match NormalizedPoses::<POSES>::new(poses, config.gravity) {
             Ok(n) => n,
             Err(_) => fail("normalise"),
         };
         let norm = normalized.poses();
-        let config = CalibrationConfig::DEFAULT;
         let rng = Xoshiro128PlusPlus::seed_from_u64(GA_SEED);
         let start = normalized.start();
         let mut ga: Taga = match ga_solver(norm, &start, &accelcal::coarse::SearchWidths::DEFAULT, config.ga, rng) {
@@ -168,15 +198,14 @@ mod firmware {
             taga_generation(&mut ga, norm);
         }
         hprintln!("bench: taga_generation {} evaluations {}", ga.generation(), ga.evaluations());
-
         match lm(norm) {
             Ok(r) => hprintln!("bench: lm iterations {}", r.iterations),
             Err(_) => fail("lm"),
         }
-        if !initial_estimate(poses) {
-            fail("initial estimate");
-        }
+    }
 
+    /// The whole calibration from the same seed.
+    fn bench_full_calibration(poses: &[Pose]) {
         let rng = Xoshiro128PlusPlus::seed_from_u64(GA_SEED);
         match full_calibration(poses, rng) {
             Ok(cal) => hprintln!(
@@ -189,15 +218,5 @@ mod firmware {
             ),
             Err(_) => fail("calibrate"),
         }
-        hprintln!(
-            "bench: sizes accumulator {} ga {} normalized_poses {} population {}",
-            core::mem::size_of::<Acc>(),
-            core::mem::size_of::<Taga>(),
-            core::mem::size_of::<NormalizedPoses<POSES>>(),
-            POP
-        );
-        debug::exit(debug::EXIT_SUCCESS);
-        #[allow(clippy::empty_loop)]
-        loop {}
     }
 }

@@ -18,7 +18,9 @@
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
 #[cfg(not(target_os = "none"))]
-fn main() {}
+fn main() {
+    // On the host the firmware example is an empty stub, so that `cargo test` can build it.
+}
 
 /// Poses to collect before calibrating.
 #[cfg(target_os = "none")]
@@ -58,6 +60,13 @@ mod firmware {
         }
     }
 
+    /// The accumulator: up to 32 poses, blocks of 32 samples.
+    type Poses = Accumulator<i16, 32, 32>;
+    /// The MPU-6050 on I2C1.
+    type Imu = Mpu6050<I2c<pac::I2C1>>;
+    /// The sample-rate tick.
+    type Ticker = stm32f4xx_hal::timer::SysCounterHz;
+
     fn run() -> Result<(), &'static str> {
         let dp = pac::Peripherals::take().ok_or("device peripherals already taken")?;
         let cp = cortex_m::Peripherals::take().ok_or("core peripherals already taken")?;
@@ -78,7 +87,16 @@ mod firmware {
         }
         rprintln!("MPU-6050 ready, +-2 g, {} LSB/g; hold still in {} orientations", imu.lsb_per_g(), POSES_WANTED);
 
-        let mut acc: Accumulator<i16, 32, 32> =
+        let acc = collect_poses(&mut imu, &mut ticker)?;
+        report_calibration(&acc)?;
+        // The bus is free again for the application.
+        let _i2c = imu.release();
+        Ok(())
+    }
+
+    /// Samples at the tick into the accumulator until enough poses (or the time limit).
+    fn collect_poses(imu: &mut Imu, ticker: &mut Ticker) -> Result<Poses, &'static str> {
+        let mut acc: Poses =
             Accumulator::new(AccumulatorConfig::DEFAULT).map_err(|_| "bad accumulator configuration")?;
         let mut read_errors = 0u32;
         let limit = MAX_SECONDS * RATE_HZ;
@@ -125,7 +143,11 @@ mod firmware {
             r.moving,
             read_errors
         );
+        Ok(acc)
+    }
 
+    /// Calibrates the poses and prints the parameters, the verdict and the blob.
+    fn report_calibration(acc: &Poses) -> Result<(), &'static str> {
         let rng = Xoshiro128PlusPlus::seed_from_u64(GA_SEED);
         let cal = match calibrate::<_, 40, 32>(acc.poses(), &CalibrationConfig::DEFAULT, rng) {
             Ok(cal) => cal,
@@ -146,8 +168,6 @@ mod firmware {
         }
         let bytes = blob::encode(&cal.params, STANDARD_GRAVITY_MPS2);
         rprintln!("blob ({} bytes, store in flash): {:02x?}", bytes.len(), bytes);
-        // The bus is free again for the application.
-        let _i2c = imu.release();
         Ok(())
     }
 
