@@ -11,6 +11,7 @@ use std::time::Instant;
 
 use crate::blindgen::{self, Family, LogSpec};
 use crate::csvio::{ReadOptions, read_csv_str};
+use crate::diagnose::math::median;
 use crate::diagnose::{DiagnoseOptions, diagnose};
 
 /// Gap ratio from which an effect counts as clearly visible.
@@ -173,8 +174,7 @@ pub fn summarize(outcomes: &[Outcome]) -> Vec<FamilySummary> {
 fn summarize_family(family: Family, outcomes: &[Outcome]) -> FamilySummary {
     let mine: Vec<&Outcome> = outcomes.iter().filter(|o| o.family == family).collect();
     let visible: Vec<&&Outcome> = mine.iter().filter(|o| o.visible()).collect();
-    let mut shrinks: Vec<f64> =
-        visible.iter().filter(|o| o.right).map(|o| o.shrink).filter(|s| s.is_finite()).collect();
+    let shrinks: Vec<f64> = visible.iter().filter(|o| o.right).map(|o| o.shrink).collect();
     let mut answers: Vec<(String, usize)> = Vec::new();
     for o in &mine {
         let key = if o.verdict.starts_with("refused") { "refused".to_string() } else { o.verdict.clone() };
@@ -194,7 +194,7 @@ fn summarize_family(family: Family, outcomes: &[Outcome]) -> FamilySummary {
             mine.iter().filter(|o| o.calibrate_accepts).count(),
         ),
         visibility_80: visibility_80(&mine),
-        median_shrink: median(&mut shrinks),
+        median_shrink: median(&shrinks),
         answers,
     }
 }
@@ -205,14 +205,6 @@ fn visibility_80(outcomes: &[&Outcome]) -> Option<f64> {
         let above: Vec<&&Outcome> = outcomes.iter().filter(|o| o.visibility >= v).collect();
         above.len() >= 3 && above.iter().filter(|o| o.right).count() * 5 >= above.len() * 4
     })
-}
-
-fn median(values: &mut [f64]) -> f64 {
-    if values.is_empty() {
-        return f64::NAN;
-    }
-    values.sort_by(f64::total_cmp);
-    values[values.len() / 2]
 }
 
 /// The markdown table of the summaries.
@@ -262,14 +254,13 @@ pub fn overall(outcomes: &[Outcome]) -> Overall {
     let visible: Vec<&&Outcome> = named.iter().filter(|o| o.visible()).collect();
     let count = |e: Expected| outcomes.iter().filter(|o| expected_verdict(o.family) == e).count();
     let right = |e: Expected| outcomes.iter().filter(|o| expected_verdict(o.family) == e && o.right).count();
-    let mut shrinks: Vec<f64> =
-        visible.iter().filter(|o| o.right).map(|o| o.shrink).filter(|s| s.is_finite()).collect();
+    let shrinks: Vec<f64> = visible.iter().filter(|o| o.right).map(|o| o.shrink).collect();
     Overall {
         visible: (visible.len(), visible.iter().filter(|o| o.right).count()),
         clean: (count(Expected::Nothing), count(Expected::Nothing) - right(Expected::Nothing)),
         outside: (count(Expected::Honest), right(Expected::Honest)),
         wrongly_refused: outcomes.iter().filter(|o| o.calibrate_accepts).count(),
-        median_shrink: median(&mut shrinks),
+        median_shrink: median(&shrinks),
     }
 }
 

@@ -53,7 +53,7 @@
 mod family;
 mod gap;
 mod locate;
-mod math;
+pub(crate) mod math;
 mod probe;
 mod report;
 mod verdict;

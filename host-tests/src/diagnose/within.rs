@@ -52,8 +52,8 @@ pub(crate) struct WithinFit {
 pub(crate) struct Within {
     /// Whitened deviation per row (one row per pose and segment).
     pub(crate) d: Vec<f64>,
-    /// Pose and segment of each row.
-    pub(crate) index: Vec<(usize, usize)>,
+    /// Pose of each row.
+    pub(crate) pose: Vec<usize>,
     /// Table rows of each row's segment.
     pub(crate) rows: Vec<Range<usize>>,
     /// Segment mid time of each row, s.
@@ -93,7 +93,7 @@ impl Within {
         let white = white_from_differences(table, &m.poses);
         let mut w = Within {
             d: Vec::new(),
-            index: Vec::new(),
+            pose: Vec::new(),
             rows: Vec::new(),
             t: Vec::new(),
             weight: Vec::new(),
@@ -136,7 +136,7 @@ impl Within {
             let rows = start..start + pose.seg_n;
             let t = 0.5 * (row_time(table, rows.start, m.rate) + row_time(table, rows.end - 1, m.rate));
             self.d.push(dot(kt, dev) * weight);
-            self.index.push((p, k));
+            self.pose.push(p);
             self.rows.push(rows);
             self.t.push(t);
             self.weight.push(weight);
@@ -151,16 +151,15 @@ impl Within {
         let n = m.poses.len();
         let mut pose_extra = vec![vec![0.0; params]; n];
         let mut by_pose: Vec<Vec<(usize, Vec<f64>)>> = vec![Vec::new(); n];
-        for (i, &(p, k)) in self.index.iter().enumerate() {
+        for (i, &p) in self.pose.iter().enumerate() {
             let u = m.directions[p];
-            let _ = k;
             let col: Vec<f64> = effect(p, self.t[i], self.rows[i].clone()).iter().map(|e| dot(u, *e)).collect();
             by_pose[p].push((i, col));
         }
         let mut rows = vec![vec![0.0; params]; self.d.len()];
         for (p, segs) in by_pose.iter().enumerate() {
             if segs.is_empty() {
-                pose_extra[p] = effect_pose_mean(m, table_rate(m), p, params, effect);
+                pose_extra[p] = effect_pose_mean(m, p, params, effect);
                 continue;
             }
             let mean: Vec<f64> =
@@ -202,13 +201,9 @@ impl Within {
 /// some table rows.
 pub(crate) type Effect<'a> = dyn Fn(usize, f64, Range<usize>) -> Vec<V3> + 'a;
 
-fn table_rate(m: &Measured) -> f64 {
-    m.rate
-}
-
 /// A pose's mean contribution of every parameter, for a pose outside the channel (its segments
 /// evenly over its rows).
-fn effect_pose_mean(m: &Measured, rate: f64, p: usize, params: usize, effect: &Effect<'_>) -> Vec<f64> {
+fn effect_pose_mean(m: &Measured, p: usize, params: usize, effect: &Effect<'_>) -> Vec<f64> {
     let (u, pose) = (m.directions[p], &m.poses[p]);
     let mut mean = vec![0.0; params];
     let seg = (pose.n / SEGMENTS).max(1);
@@ -216,7 +211,7 @@ fn effect_pose_mean(m: &Measured, rate: f64, p: usize, params: usize, effect: &E
     for k in 0..SEGMENTS {
         let rows =
             (pose.rows.start + k * seg).min(pose.rows.end - 1)..(pose.rows.start + (k + 1) * seg).min(pose.rows.end);
-        let t = pose.t_start + (k as f64 + 0.5) * seg as f64 / rate;
+        let t = pose.t_start + (k as f64 + 0.5) * seg as f64 / m.rate;
         if rows.is_empty() {
             continue;
         }
