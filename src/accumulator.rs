@@ -98,8 +98,8 @@ fn ratio_to_f32(total: i64, n: u32) -> f32 {
 }
 
 /// Raw sums `(sum x, sum x^2)` of one axis of a block of `i16` samples (at most `2^16`: the `i32` sum
-/// is exact, `2^16 * 2^15 = 2^31`), two samples per step: the pair of squares is one dual
-/// multiply-accumulate into the `i64` on a Cortex-M4 (each square is at most `2^30`).
+/// is exact, `2^16 * 2^15 = 2^31`), two samples per step; each square (at most `2^30`) is one
+/// multiply-accumulate into the `i64` (`smlal` on a Cortex-M4).
 #[inline(always)]
 fn raw_i16_axis_sums(values: &[i16]) -> (i64, i64) {
     let (mut sum, mut sum_sq) = (0i32, 0i64);
