@@ -2,8 +2,13 @@
 //! and a JSON-ready summary. Every number comes from `accelcal`; nothing is re-implemented here.
 
 use accelcal::accumulator::Pose;
-use accelcal::calibrate::{Calibration, CalibrationConfig, CalibrationError, Method, NormalizedPoses, calibrate};
-use accelcal::frame::{Deviation, modulus_error};
+use std::ops::ControlFlow;
+
+use accelcal::calibrate::{
+    Calibration, CalibrationConfig, CalibrationError, Calibrator, Method, NormalizedPoses, Step,
+};
+use accelcal::frame::{Deviation, Frame, modulus_error};
+use accelcal::ga::Ga;
 use accelcal::model::{Params, STANDARD_GRAVITY_MPS2};
 
 use crate::csvio::{DroppedRows, Units};
@@ -70,9 +75,39 @@ pub struct HostCalibration {
     pub rmse_loo_mg: Option<f32>,
 }
 
-/// Runs the library's calibration with a GA seeded by `seed`.
+/// The GA of a calibration as [`run_observed`] shows it.
+pub type HostGa = Ga<Xoshiro128PlusPlus, POPULATION, { accelcal::model::PARAM_COUNT }>;
+
+/// Runs the library's calibration with a GA seeded by `seed`: `accelcal calibrate`'s pipeline, and
+/// the paper reproduction's (with the paper's initialisation, intervals and operators in `config`).
 pub fn run(poses: &[Pose], config: &CalibrationConfig, seed: u64) -> Result<Calibration, CalibrationError> {
-    calibrate::<_, POPULATION, MAX_POSES>(poses, config, Xoshiro128PlusPlus::seed_from_u64(seed))
+    match run_observed(poses, config, seed, |_, _| ControlFlow::Continue(()))? {
+        Some(calibration) => Ok(calibration),
+        None => unreachable!("an observer that never breaks runs to the end"),
+    }
+}
+
+/// [`run`] stepped (the library's [`Calibrator`], same result for the same seed), with `observe`
+/// shown the GA and the frame of its individuals after the first population and after each
+/// generation (never for Newton or LM alone). `observe` breaking stops the run: `Ok(None)`.
+pub fn run_observed(
+    poses: &[Pose],
+    config: &CalibrationConfig,
+    seed: u64,
+    mut observe: impl FnMut(&HostGa, &Frame) -> ControlFlow<()>,
+) -> Result<Option<Calibration>, CalibrationError> {
+    let rng = Xoshiro128PlusPlus::seed_from_u64(seed);
+    let mut calibrator = Calibrator::<_, POPULATION, MAX_POSES>::new(poses, config, rng)?;
+    loop {
+        if let Some(ga) = calibrator.ga()
+            && observe(ga, calibrator.frame()).is_break()
+        {
+            return Ok(None);
+        }
+        if let Step::Finished(calibration) = calibrator.step(poses)? {
+            return Ok(Some(calibration));
+        }
+    }
 }
 
 /// [`run`] plus the leave-one-pose-out RMSE: each pose is predicted by an LM fit of the others

@@ -2,18 +2,20 @@
 //! Table 2 as a Monte Carlo against the Cramer-Rao bound, Fig. 3 (operators on Rastrigin), Fig. 6/7
 //! (one TAGA run), and the bound of the paper's 24 positions against a 26-direction cube.
 
+use std::ops::ControlFlow;
+
 use accelcal::accumulator::Pose;
-use accelcal::calibrate::{CalibrationConfig, NormalizedPoses, ga_solver};
+use accelcal::calibrate::{Calibration, CalibrationConfig, Init, Intervals, Method, NormalizedPoses};
 use accelcal::coarse::SearchWidths;
-use accelcal::frame::{Deviation, objective};
+use accelcal::ellipsoid::OutlierRule;
 use accelcal::ga::{Ga, GaConfig, Operators, SearchBox, rastrigin};
 use accelcal::model::{PARAM_COUNT, PARAM_NAMES, Params};
-use accelcal::solve::{levenberg_marquardt, newton};
+use accelcal::solve::levenberg_marquardt;
 use accelcal::verdict::{deviation_covariance, param_std};
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro128PlusPlus;
 
-use crate::calib::{MAX_POSES, POPULATION};
+use crate::calib::{self, MAX_POSES, POPULATION};
 use crate::sim::{Plan, SimConfig, simulate_pose_means};
 
 /// The paper's Table 2: relative errors (%) of classical Newton and of the paper's method.
@@ -138,6 +140,21 @@ pub fn crlb_rel_pct(plan: Plan, seed: u64, runs: usize, noise_mg: f64) -> [f64; 
     sum.map(|s| (s / n.max(1) as f64).sqrt())
 }
 
+/// The paper's set-up of the calibration pipeline ([`calib::run`], as `accelcal calibrate` runs
+/// it): the six-position start, the fixed search widths, every pose kept, TAGA with the paper's
+/// operators run to convergence (200 generations at most), `method` after it.
+pub fn paper_config(method: Method, gravity: f32) -> CalibrationConfig {
+    CalibrationConfig {
+        gravity,
+        method,
+        init: Init::SixPosition,
+        intervals: Intervals::Fixed(SearchWidths::DEFAULT),
+        outliers: OutlierRule::KEEP_ALL,
+        ga: CalibrationConfig::TAGA_ALONE.ga,
+        ..CalibrationConfig::DEFAULT
+    }
+}
+
 /// What one Monte Carlo experiment gave.
 struct RunOutcome {
     /// Relative errors (%) per method of [`METHODS`]; `None` where the solve failed.
@@ -149,99 +166,95 @@ struct RunOutcome {
     iterations: [u32; 5],
 }
 
-/// One Monte Carlo experiment.
-fn one_run(cfg: &SimConfig, ga_seed: u64) -> Option<RunOutcome> {
+/// LM from the neutral model (`Params::IDENTITY`) instead of an initial estimate: not a pipeline
+/// `calibrate` offers, the experiment that shows LM needs no initial estimate on this problem.
+/// The parameters and the LM iterations.
+fn lm_from_neutral(poses: &[Pose], gravity: f32) -> Option<(Params, u32)> {
+    let norm = NormalizedPoses::<MAX_POSES>::new(poses, gravity).ok()?;
+    let frame = norm.frame();
+    let start = frame.to_deviation(&Params::IDENTITY);
+    let report = levenberg_marquardt(start, norm.poses(), &CalibrationConfig::DEFAULT.lm).ok()?;
+    Some((frame.to_params(&report.x), report.iterations))
+}
+
+/// One Monte Carlo experiment: every method of [`METHODS`] through the calibration pipeline (the
+/// paper's set-up), TAGA and TAGA+LM from the same GA seed (the same GA run).
+fn one_run(cfg: &SimConfig, ga_seed: u64) -> RunOutcome {
     let poses = simulate_pose_means(cfg);
-    let config = CalibrationConfig::DEFAULT;
-    let norm = NormalizedPoses::<MAX_POSES>::new(&poses, cfg.gravity as f32).ok()?;
-    let frame = *norm.frame();
-    let p = norm.poses();
-    let truth = cfg.truth;
-    let err = |x: &Deviation| Some(rel_err_pct(&frame.to_params(x), &truth));
-    let zero = [0.0; PARAM_COUNT];
-    let nt = newton(zero, p, &config.newton).ok();
-    let lm = levenberg_marquardt(zero, p, &config.lm).ok();
-    let neutral = levenberg_marquardt(frame.to_deviation(&Params::IDENTITY), p, &config.lm).ok();
-    // TAGA as the paper runs it (alone, to convergence); TAGA+LM polishes the same run.
-    let ga_config = CalibrationConfig::TAGA_ALONE.ga;
-    let mut ga = ga_solver::<_, POPULATION>(
-        p,
-        &[0.0; PARAM_COUNT],
-        &SearchWidths::DEFAULT,
-        ga_config,
-        Xoshiro128PlusPlus::seed_from_u64(ga_seed),
-    )
-    .ok()?;
-    let ga_report = ga.run(&|x: &Deviation| objective(x, p));
-    let polished = levenberg_marquardt(ga_report.best, p, &config.lm).ok();
-    let errors = [
-        nt.as_ref().and_then(|r| err(&r.x)),
-        err(&ga_report.best),
-        lm.as_ref().and_then(|r| err(&r.x)),
-        polished.as_ref().and_then(|r| err(&r.x)),
-        neutral.as_ref().and_then(|r| err(&r.x)),
-    ];
-    let it = |r: &Option<accelcal::solve::SolveReport>| r.as_ref().map_or(0, |r| r.iterations);
-    Some(RunOutcome {
-        errors,
-        generations: ga_report.generations,
-        evaluations: ga_report.evaluations,
-        iterations: [it(&nt), 0, it(&lm), it(&polished), it(&neutral)],
-    })
+    let gravity = cfg.gravity as f32;
+    let run = |method| calib::run(&poses, &paper_config(method, gravity), ga_seed).ok();
+    let [newton, taga, lm, taga_lm] = [Method::Newton, Method::Taga, Method::Lm, Method::TagaLm].map(run);
+    let neutral = lm_from_neutral(&poses, gravity);
+    let err = |p: &Params| rel_err_pct(p, &cfg.truth);
+    let pipeline = |c: &Option<Calibration>| c.as_ref().map(|c| (err(&c.params), c.iterations));
+    let outcomes =
+        [pipeline(&newton), pipeline(&taga), pipeline(&lm), pipeline(&taga_lm), neutral.map(|(p, i)| (err(&p), i))];
+    RunOutcome {
+        errors: outcomes.map(|o| o.map(|(e, _)| e)),
+        generations: taga.as_ref().map_or(0, |c| c.generations),
+        evaluations: taga.as_ref().map_or(0, |c| c.evaluations),
+        iterations: outcomes.map(|o| o.map_or(0, |(_, i)| i)),
+    }
+}
+
+/// The Monte Carlo's sums over the runs, per method of [`METHODS`].
+#[derive(Default)]
+struct Tally {
+    runs: usize,
+    /// Sums of squared relative errors.
+    squares: [[f64; PARAM_COUNT]; 5],
+    /// Runs whose solve succeeded.
+    counts: [usize; 5],
+    iterations: [u64; 5],
+    /// GA generations and cost evaluations of the TAGA runs that succeeded.
+    generations: u64,
+    evaluations: u64,
+}
+
+impl Tally {
+    fn add(&mut self, outcome: &RunOutcome) {
+        self.runs += 1;
+        for (m, errors) in outcome.errors.iter().enumerate() {
+            let Some(errors) = errors else { continue };
+            for i in 0..PARAM_COUNT {
+                self.squares[m][i] += errors[i] * errors[i];
+            }
+            self.counts[m] += 1;
+            self.iterations[m] += u64::from(outcome.iterations[m]);
+        }
+        self.generations += u64::from(outcome.generations);
+        self.evaluations += u64::from(outcome.evaluations);
+    }
+
+    /// RMS errors and mean effort per method (the GA's effort for TAGA and TAGA+LM).
+    fn methods(&self) -> Vec<(&'static str, MethodResult)> {
+        let taga_runs = self.counts[1].max(1) as f64;
+        let per_taga_run = |v: u64| v as f64 / taga_runs;
+        let results = METHODS.iter().enumerate().map(|(m, name)| {
+            let n = self.counts[m].max(1) as f64;
+            let is_ga = *name == "taga" || *name == "taga+lm";
+            let result = MethodResult {
+                rel_err_pct: self.squares[m].map(|s| (s / n).sqrt()),
+                mean_generations: if is_ga { per_taga_run(self.generations) } else { 0.0 },
+                mean_evaluations: if is_ga { per_taga_run(self.evaluations) } else { 0.0 },
+                mean_iterations: self.iterations[m] as f64 / n,
+                failures: self.runs - self.counts[m],
+            };
+            (*name, result)
+        });
+        results.collect()
+    }
 }
 
 /// Runs the whole reproduction. `progress` is called once per finished Monte Carlo run.
 pub fn run(options: &PaperOptions, mut progress: impl FnMut()) -> PaperReport {
-    let mut sq = [[0.0f64; PARAM_COUNT]; 5];
-    let mut counts = [0usize; 5];
-    let mut failures = [0usize; 5];
-    let (mut generations, mut evaluations) = (0u64, 0u64);
-    let mut iterations = [0u64; 5];
-    let mut ga_runs = 0u64;
+    let mut tally = Tally::default();
     for run in 0..options.runs {
         let seed = options.seed + run as u64;
-        let cfg = sim_config(options.plan, seed, options.noise_mg);
-        match one_run(&cfg, seed) {
-            Some(outcome) => {
-                for (m, r) in outcome.errors.iter().enumerate() {
-                    match r {
-                        Some(errs) => {
-                            for i in 0..PARAM_COUNT {
-                                sq[m][i] += errs[i] * errs[i];
-                            }
-                            counts[m] += 1;
-                        }
-                        None => failures[m] += 1,
-                    }
-                }
-                generations += u64::from(outcome.generations);
-                evaluations += u64::from(outcome.evaluations);
-                for (total, it) in iterations.iter_mut().zip(outcome.iterations) {
-                    *total += u64::from(it);
-                }
-                ga_runs += 1;
-            }
-            None => failures.iter_mut().for_each(|f| *f += 1),
-        }
+        tally.add(&one_run(&sim_config(options.plan, seed, options.noise_mg), seed));
         progress();
     }
-    let per_run = |v: u64| v as f64 / ga_runs.max(1) as f64;
-    let methods = METHODS
-        .iter()
-        .enumerate()
-        .map(|(m, name)| {
-            let rel_err_pct = sq[m].map(|s| (s / counts[m].max(1) as f64).sqrt());
-            let is_ga = *name == "taga" || *name == "taga+lm";
-            let result = MethodResult {
-                rel_err_pct,
-                mean_generations: if is_ga { per_run(generations) } else { 0.0 },
-                mean_evaluations: if is_ga { per_run(evaluations) } else { 0.0 },
-                mean_iterations: per_run(iterations[m]),
-                failures: failures[m],
-            };
-            (*name, result)
-        })
-        .collect::<Vec<_>>();
+    let methods = tally.methods();
     let crlb_runs = options.runs.clamp(1, 200);
     let crlb = crlb_rel_pct(options.plan, options.seed, crlb_runs, options.noise_mg);
     let crlb_paper24 = crlb_rel_pct(Plan::Paper24, options.seed, crlb_runs, options.noise_mg);
@@ -293,29 +306,21 @@ pub fn operator_comparison(seeds: u64) -> Vec<OperatorResult> {
 }
 
 /// Fig. 6/7: best and mean cost (`fE`, (m/s^2)^4) and the best parameters per generation of one TAGA
-/// run on one simulated experiment.
+/// run (the calibration pipeline, the paper's set-up, all 200 generations) on one simulated experiment.
 pub fn taga_trace(plan: Plan, seed: u64, noise_mg: f64) -> Vec<(f64, f64, Params)> {
     let cfg = sim_config(plan, seed, noise_mg);
     let poses = simulate_pose_means(&cfg);
-    let Ok(norm) = NormalizedPoses::<MAX_POSES>::new(&poses, cfg.gravity as f32) else { return Vec::new() };
-    let frame = *norm.frame();
-    let p = norm.poses();
-    let ga_config = GaConfig { stall_generations: 0, ..CalibrationConfig::TAGA_ALONE.ga };
-    let Ok(mut ga) = ga_solver::<_, POPULATION>(
-        p,
-        &[0.0; PARAM_COUNT],
-        &SearchWidths::DEFAULT,
-        ga_config,
-        Xoshiro128PlusPlus::seed_from_u64(seed),
-    ) else {
-        return Vec::new();
-    };
+    let gravity = cfg.gravity as f32;
+    let base = paper_config(Method::Taga, gravity);
+    let config = CalibrationConfig { ga: GaConfig { stall_generations: 0, ..base.ga }, ..base };
     let g4 = cfg.gravity.powi(4);
-    let cost = |x: &Deviation| objective(x, p);
-    let mut out = vec![(f64::from(ga.best_cost()) * g4, f64::from(ga.mean_cost()) * g4, frame.to_params(ga.best()))];
-    while ga.generation() < ga_config.max_generations {
-        ga.step(&cost);
+    let mut out = Vec::new();
+    let traced = calib::run_observed(&poses, &config, seed, |ga, frame| {
         out.push((f64::from(ga.best_cost()) * g4, f64::from(ga.mean_cost()) * g4, frame.to_params(ga.best())));
+        ControlFlow::Continue(())
+    });
+    if traced.is_err() {
+        out.clear();
     }
     out
 }
