@@ -4,9 +4,7 @@
 use accelcal::accumulator::Pose;
 use std::ops::ControlFlow;
 
-use accelcal::calibrate::{
-    Calibration, CalibrationConfig, CalibrationError, Calibrator, Method, NormalizedPoses, Step,
-};
+use accelcal::calibrate::{Calibration, CalibrationConfig, CalibrationError, Calibrator, NormalizedPoses, Step};
 use accelcal::frame::{Deviation, Frame, modulus_error};
 use accelcal::ga::Ga;
 use accelcal::model::{Params, STANDARD_GRAVITY_MPS2};
@@ -141,41 +139,52 @@ fn loo_rmse_mg(poses: &[Pose], config: &CalibrationConfig, params: &Params) -> O
     Some(((sum / all.len() as f64).sqrt() * 1000.0) as f32)
 }
 
-/// Parses a method name (`newton`, `lm`, `taga`, `taga+lm`).
-pub fn parse_method(s: &str) -> Result<Method, String> {
-    [Method::Newton, Method::Lm, Method::Taga, Method::TagaLm]
-        .into_iter()
-        .find(|m| m.name() == s)
-        .ok_or_else(|| format!("unknown method '{s}' (expected newton, lm, taga or taga+lm)"))
-}
-
-/// JSON of the parameters: `{"bias": [..], "scale": [..], "nonorth": [..]}`.
+/// JSON of the parameters: `{"bias": [..], "scale": [..], "nonorth": [..]}` (the library's
+/// `Serialize`).
 pub fn params_json(p: &Params) -> serde_json::Value {
-    serde_json::json!({ "bias": p.bias, "scale": p.scale, "nonorth": p.nonorth })
+    serde_json::to_value(p).unwrap_or_default()
 }
 
-/// A non-finite float as JSON `null`.
-pub fn num(v: f32) -> serde_json::Value {
-    if v.is_finite() { serde_json::json!(v) } else { serde_json::Value::Null }
+/// A verdict as the host reports it: what failed, by name, and what was held or left out.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct VerdictSummary {
+    /// No bound failed.
+    pub pass: bool,
+    /// RMSE after calibration above its bound.
+    pub rmse_over_limit: bool,
+    /// RMSE far above the noise floor.
+    pub model_misfit: bool,
+    /// Parameters outside the plausible range.
+    pub implausible: bool,
+    /// Names of the parameters the poses do not determine well enough.
+    pub undetermined: Vec<&'static str>,
+    /// Names of the parameters held at nominal.
+    pub held_at_nominal: Vec<&'static str>,
+    /// Poses left out (indices from 0).
+    pub poses_left_out: Vec<u16>,
 }
 
-/// JSON of a verdict.
+impl From<&accelcal::verdict::Verdict> for VerdictSummary {
+    fn from(v: &accelcal::verdict::Verdict) -> Self {
+        let f = &v.failures;
+        Self {
+            pass: v.pass(),
+            rmse_over_limit: f.rmse,
+            model_misfit: f.model_misfit,
+            implausible: f.implausible,
+            undetermined: held_names(&f.undetermined),
+            held_at_nominal: held_names(&v.warnings.held),
+            poses_left_out: v.warnings.excluded.as_slice().to_vec(),
+        }
+    }
+}
+
+/// JSON of a verdict ([`VerdictSummary`], keys sorted).
 pub fn verdict_json(v: &accelcal::verdict::Verdict) -> serde_json::Value {
-    let f = &v.failures;
-    let undetermined: Vec<&str> =
-        accelcal::model::PARAM_NAMES.iter().zip(f.undetermined).filter(|(_, u)| *u).map(|(n, _)| *n).collect();
-    serde_json::json!({
-        "pass": v.pass(),
-        "rmse_over_limit": f.rmse,
-        "model_misfit": f.model_misfit,
-        "implausible": f.implausible,
-        "undetermined": undetermined,
-        "held_at_nominal": held_names(&v.warnings.held),
-        "poses_left_out": v.warnings.excluded.as_slice(),
-    })
+    serde_json::to_value(VerdictSummary::from(v)).unwrap_or_default()
 }
 
-/// Names of the parameters flagged in `held`.
+/// Names of the parameters flagged (held, or undetermined).
 pub fn held_names(held: &[bool; accelcal::model::PARAM_COUNT]) -> Vec<&'static str> {
     accelcal::model::PARAM_NAMES.iter().zip(held).filter(|(_, h)| **h).map(|(n, _)| *n).collect()
 }
@@ -200,33 +209,55 @@ pub fn warnings_line(v: &accelcal::verdict::Verdict) -> String {
     parts.join("; ")
 }
 
-/// The rows dropped while reading (by reason) and while finding poses (stale repeats), with their
-/// names as in [`rows_dropped_json`].
-fn rows_dropped(dropped: &DroppedRows, stale_repeats: usize) -> [(&'static str, usize); 4] {
-    [
-        ("non_finite", dropped.non_finite),
-        ("stale_flag", dropped.stale_flag),
-        ("stale_repeat", stale_repeats),
-        ("truncated_last_line", dropped.truncated),
-    ]
+/// The rows dropped while reading (by reason), while finding poses (stale repeats), and their total.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct RowsDropped {
+    /// A needed cell empty, NaN or infinite.
+    pub non_finite: usize,
+    /// Marked stale by a stale-flag column.
+    pub stale_flag: usize,
+    /// Repeats of the previous reading skipped by the pose detection.
+    pub stale_repeat: usize,
+    /// A truncated last line.
+    pub truncated_last_line: usize,
+    /// All of them.
+    pub total: usize,
+}
+
+impl RowsDropped {
+    /// The counts of `dropped` and the stale repeats.
+    pub fn new(dropped: &DroppedRows, stale_repeats: usize) -> Self {
+        let total = dropped.non_finite + dropped.stale_flag + stale_repeats + dropped.truncated;
+        Self {
+            non_finite: dropped.non_finite,
+            stale_flag: dropped.stale_flag,
+            stale_repeat: stale_repeats,
+            truncated_last_line: dropped.truncated,
+            total,
+        }
+    }
+
+    /// The reasons by name, as in the JSON.
+    fn reasons(&self) -> [(&'static str, usize); 4] {
+        [
+            ("non_finite", self.non_finite),
+            ("stale_flag", self.stale_flag),
+            ("stale_repeat", self.stale_repeat),
+            ("truncated_last_line", self.truncated_last_line),
+        ]
+    }
 }
 
 /// JSON of the rows dropped, by reason, and their total: every reason, zeros included.
 pub fn rows_dropped_json(dropped: &DroppedRows, stale_repeats: usize) -> serde_json::Value {
-    let reasons = rows_dropped(dropped, stale_repeats);
-    let mut object = serde_json::Map::new();
-    for (name, count) in reasons {
-        object.insert(name.into(), count.into());
-    }
-    object.insert("total".into(), reasons.iter().map(|r| r.1).sum::<usize>().into());
-    serde_json::Value::Object(object)
+    serde_json::to_value(RowsDropped::new(dropped, stale_repeats)).unwrap_or_default()
 }
 
 /// One text line of the rows dropped (`rows dropped: 12 (non_finite 2, stale_flag 10)`), `None`
 /// when none were.
 pub fn rows_dropped_line(dropped: &DroppedRows, stale_repeats: usize) -> Option<String> {
-    let reasons = rows_dropped(dropped, stale_repeats);
-    let total: usize = reasons.iter().map(|r| r.1).sum();
-    let parts: Vec<String> = reasons.iter().filter(|r| r.1 > 0).map(|(name, n)| format!("{name} {n}")).collect();
+    let rows = RowsDropped::new(dropped, stale_repeats);
+    let total = rows.total;
+    let parts: Vec<String> = rows.reasons().iter().filter(|r| r.1 > 0).map(|(name, n)| format!("{name} {n}")).collect();
     (total > 0).then(|| format!("rows dropped: {total} ({})", parts.join(", ")))
 }

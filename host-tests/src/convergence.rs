@@ -77,8 +77,9 @@ const SETUPS: [(&str, Init, bool); 3] = [
     ("ellipsoid, uncertainty box", Init::Ellipsoid, false),
 ];
 
-/// Generations-to-1 % for each set-up over `runs` experiments of `plan` (seeds `seed..`).
-pub fn compare(plan: Plan, seed: u64, runs: usize, noise_mg: f64) -> Vec<Convergence> {
+/// Generations-to-1 % for each set-up over `runs` experiments of `plan` (seeds `seed..`);
+/// `progress` is called after each experiment of each set-up (`3 runs` times).
+pub fn compare(plan: Plan, seed: u64, runs: usize, noise_mg: f64, mut progress: impl FnMut()) -> Vec<Convergence> {
     SETUPS
         .iter()
         .map(|&(name, init, fixed)| {
@@ -87,7 +88,9 @@ pub fn compare(plan: Plan, seed: u64, runs: usize, noise_mg: f64) -> Vec<Converg
                     let s = seed + run as u64;
                     let cfg = SimConfig { noise_mg, ..SimConfig::for_plan(plan, s) };
                     let poses: Vec<Pose> = simulate_pose_means(&cfg);
-                    one(&poses, init, fixed, s, cfg.gravity as f32).map(|r| r.unwrap_or(MAX_GENERATIONS + 1))
+                    let reached = one(&poses, init, fixed, s, cfg.gravity as f32);
+                    progress();
+                    reached.map(|r| r.unwrap_or(MAX_GENERATIONS + 1))
                 })
                 .collect();
             summary(name, generations)

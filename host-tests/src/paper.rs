@@ -2,6 +2,8 @@
 //! Table 2 as a Monte Carlo against the Cramer-Rao bound, Fig. 3 (operators on Rastrigin), Fig. 6/7
 //! (one TAGA run), and the bound of the paper's 24 positions against a 26-direction cube.
 
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
 use std::ops::ControlFlow;
 
 use accelcal::accumulator::Pose;
@@ -246,7 +248,13 @@ impl Tally {
     }
 }
 
-/// Runs the whole reproduction. `progress` is called once per finished Monte Carlo run.
+/// Steps of [`run`] reported to its `progress`: each Monte Carlo run, and each run of each of the
+/// three convergence set-ups.
+pub fn progress_steps(options: &PaperOptions) -> u64 {
+    4 * options.runs as u64
+}
+
+/// Runs the whole reproduction. `progress` is called after each of its [`progress_steps`].
 pub fn run(options: &PaperOptions, mut progress: impl FnMut()) -> PaperReport {
     let mut tally = Tally::default();
     for run in 0..options.runs {
@@ -271,7 +279,7 @@ pub fn run(options: &PaperOptions, mut progress: impl FnMut()) -> PaperReport {
         noise_to_match_paper_mg,
         operators: operator_comparison(options.operator_seeds),
         trace: taga_trace(options.plan, options.seed, options.noise_mg),
-        convergence: crate::convergence::compare(options.plan, options.seed, options.runs, options.noise_mg),
+        convergence: crate::convergence::compare(options.plan, options.seed, options.runs, options.noise_mg, progress),
     }
 }
 
@@ -325,52 +333,166 @@ pub fn taga_trace(plan: Plan, seed: u64, noise_mg: f64) -> Vec<(f64, f64, Params
     out
 }
 
-/// The report as JSON (keys as documented in the README).
-pub fn to_json(r: &PaperReport) -> serde_json::Value {
-    use serde_json::json;
-    let mut rel = serde_json::Map::new();
-    let mut ratio = serde_json::Map::new();
-    let mut effort = serde_json::Map::new();
-    for (name, m) in &r.methods {
-        rel.insert((*name).into(), json!(m.rel_err_pct));
-        let rt: Vec<f64> = (0..PARAM_COUNT).map(|i| m.rel_err_pct[i] / r.crlb_rel_pct[i]).collect();
-        ratio.insert((*name).into(), json!(rt));
-        effort.insert(
-            (*name).into(),
-            json!({"generations": m.mean_generations, "evaluations": m.mean_evaluations,
-                   "iterations": m.mean_iterations, "failures": m.failures}),
-        );
+/// The `paper --json` document (keys as documented in the README).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct PaperDocument {
+    /// Monte Carlo runs.
+    pub runs: usize,
+    /// White noise per sample and axis, mg.
+    pub noise_mg: f64,
+    /// Pose plan.
+    pub plan: String,
+    /// First seed.
+    pub seed: u64,
+    /// Parameter names, in the order of every array.
+    pub params: [&'static str; PARAM_COUNT],
+    /// Per method: RMS relative error (%) per parameter.
+    pub rel_err_pct: BTreeMap<&'static str, [f64; PARAM_COUNT]>,
+    /// The Cramer-Rao bound (%) per parameter.
+    pub crlb_rel_pct: [f64; PARAM_COUNT],
+    /// Per method: the RMS error over the bound.
+    pub ratio_to_crlb: BTreeMap<&'static str, [f64; PARAM_COUNT]>,
+    /// Per method: its mean effort.
+    pub effort: BTreeMap<&'static str, Effort>,
+    /// The paper's Table 2 (%): `newton` and `taga`.
+    pub paper_table2_pct: BTreeMap<&'static str, [f64; PARAM_COUNT]>,
+    /// See [`PaperReport::noise_to_match_paper_mg`].
+    pub noise_to_match_paper_mg: [f64; PARAM_COUNT],
+    /// The bound (%) of `paper24`, `cube26` and their `ratio`.
+    pub crlb_plans_pct: BTreeMap<&'static str, [f64; PARAM_COUNT]>,
+    /// Fig. 3, per operator.
+    pub operators: BTreeMap<&'static str, OperatorCurve>,
+    /// Generations to within 1 % of the LM optimum, per set-up.
+    pub generations_to_1pct: Vec<GenerationsTo1Pct>,
+    /// Fig. 6/7, per generation.
+    pub trace: Vec<TracePoint>,
+}
+
+/// Mean effort of one method over the runs.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Effort {
+    /// GA generations.
+    pub generations: f64,
+    /// Cost evaluations by the GA.
+    pub evaluations: f64,
+    /// Newton/LM iterations.
+    pub iterations: f64,
+    /// Runs whose solve failed.
+    pub failures: usize,
+}
+
+/// One operator of Fig. 3.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct OperatorCurve {
+    /// Seeds whose best cost went below 1e-3.
+    pub successes: u64,
+    /// Seeds run.
+    pub seeds: u64,
+    /// Mean best cost per generation.
+    pub mean_best: Vec<f64>,
+}
+
+/// Generations to within 1 % of the LM optimum from one set-up.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct GenerationsTo1Pct {
+    /// The set-up.
+    pub init: &'static str,
+    /// Median generations.
+    pub median: u32,
+    /// 95th percentile.
+    pub p95: u32,
+    /// Share of runs within 1 % by generation 40.
+    pub share_by_40: f64,
+    /// Runs.
+    pub runs: usize,
+}
+
+/// One generation of Fig. 6/7: best and mean `fE` ((m/s^2)^4), the best parameters.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct TracePoint {
+    /// Best cost.
+    pub best: f64,
+    /// Mean cost.
+    pub mean: f64,
+    /// Best parameters ([`PARAM_NAMES`] order).
+    pub params: [f32; PARAM_COUNT],
+}
+
+/// Element-wise `a / b`.
+fn ratio(a: &[f64; PARAM_COUNT], b: &[f64; PARAM_COUNT]) -> [f64; PARAM_COUNT] {
+    std::array::from_fn(|i| a[i] / b[i])
+}
+
+/// The report as the `paper --json` document.
+pub fn to_document(r: &PaperReport) -> PaperDocument {
+    let per_method =
+        |f: &dyn Fn(&MethodResult) -> [f64; PARAM_COUNT]| r.methods.iter().map(|(n, m)| (*n, f(m))).collect();
+    let effort = |m: &MethodResult| Effort {
+        generations: m.mean_generations,
+        evaluations: m.mean_evaluations,
+        iterations: m.mean_iterations,
+        failures: m.failures,
+    };
+    let operator = |o: &OperatorResult| {
+        (o.name, OperatorCurve { successes: o.successes, seeds: o.seeds, mean_best: o.mean_best.clone() })
+    };
+    let convergence = |c: &crate::convergence::Convergence| GenerationsTo1Pct {
+        init: c.init,
+        median: c.median,
+        p95: c.p95,
+        share_by_40: c.by_40,
+        runs: c.runs,
+    };
+    let (p24, c26) = (r.crlb_paper24, r.crlb_cube26);
+    PaperDocument {
+        runs: r.options.runs,
+        noise_mg: r.options.noise_mg,
+        plan: r.options.plan.to_string(),
+        seed: r.options.seed,
+        params: PARAM_NAMES,
+        rel_err_pct: per_method(&|m| m.rel_err_pct),
+        crlb_rel_pct: r.crlb_rel_pct,
+        ratio_to_crlb: per_method(&|m| ratio(&m.rel_err_pct, &r.crlb_rel_pct)),
+        effort: r.methods.iter().map(|(n, m)| (*n, effort(m))).collect(),
+        paper_table2_pct: [("newton", PAPER_TABLE2.map(|p| p.0)), ("taga", PAPER_TABLE2.map(|p| p.1))].into(),
+        noise_to_match_paper_mg: r.noise_to_match_paper_mg,
+        crlb_plans_pct: [("paper24", p24), ("cube26", c26), ("ratio", ratio(&p24, &c26))].into(),
+        operators: r.operators.iter().map(operator).collect(),
+        generations_to_1pct: r.convergence.iter().map(convergence).collect(),
+        trace: r
+            .trace
+            .iter()
+            .map(|(best, mean, p)| TracePoint { best: *best, mean: *mean, params: p.to_array() })
+            .collect(),
     }
-    let operators: serde_json::Map<String, serde_json::Value> = r
-        .operators
-        .iter()
-        .map(|o| (o.name.to_string(), json!({"successes": o.successes, "seeds": o.seeds, "mean_best": o.mean_best})))
-        .collect();
-    json!({
-        "runs": r.options.runs,
-        "noise_mg": r.options.noise_mg,
-        "plan": r.options.plan.to_string(),
-        "seed": r.options.seed,
-        "params": PARAM_NAMES,
-        "rel_err_pct": rel,
-        "crlb_rel_pct": r.crlb_rel_pct,
-        "ratio_to_crlb": ratio,
-        "effort": effort,
-        "paper_table2_pct": {"newton": PAPER_TABLE2.map(|p| p.0), "taga": PAPER_TABLE2.map(|p| p.1)},
-        "noise_to_match_paper_mg": r.noise_to_match_paper_mg,
-        "crlb_plans_pct": {"paper24": r.crlb_paper24, "cube26": r.crlb_cube26,
-            "ratio": (0..PARAM_COUNT).map(|i| r.crlb_paper24[i] / r.crlb_cube26[i]).collect::<Vec<_>>()},
-        "operators": operators,
-        "generations_to_1pct": r.convergence.iter().map(|c| json!({"init": c.init, "median": c.median,
-            "p95": c.p95, "share_by_40": c.by_40, "runs": c.runs})).collect::<Vec<_>>(),
-        "trace": r.trace.iter().map(|(b, m, p)| json!({"best": b, "mean": m, "params": p.to_array()})).collect::<Vec<_>>(),
-    })
+}
+
+/// The report as JSON ([`PaperDocument`], keys sorted).
+pub fn to_json(r: &PaperReport) -> serde_json::Value {
+    serde_json::to_value(to_document(r)).unwrap_or_default()
 }
 
 /// The report as text tables.
 pub fn to_text(r: &PaperReport) -> String {
-    use std::fmt::Write;
     let mut s = String::new();
+    table2_text(&mut s, r);
+    effort_text(&mut s, r);
+    crlb_plans_text(&mut s, r);
+    figures_text(&mut s, r);
+    s
+}
+
+/// One row of a text table: a label and nine numbers.
+fn text_row(s: &mut String, label: &str, v: &[f64]) {
+    let _ = write!(s, "{label:<12}");
+    for x in v {
+        let _ = write!(s, "{:>10}", format_sig(*x));
+    }
+    let _ = writeln!(s);
+}
+
+/// Table 2: our RMS errors and their ratio to the bound, the paper's values, the noise to match them.
+fn table2_text(s: &mut String, r: &PaperReport) {
     let o = &r.options;
     let _ = writeln!(
         s,
@@ -387,28 +509,24 @@ pub fn to_text(r: &PaperReport) -> String {
         let _ = write!(s, "{n:>10}");
     }
     let _ = writeln!(s);
-    let row = |s: &mut String, label: &str, v: &[f64]| {
-        let _ = write!(s, "{label:<12}");
-        for x in v {
-            let _ = write!(s, "{:>10}", format_sig(*x));
-        }
-        let _ = writeln!(s);
-    };
-    row(&mut s, "CRLB", &r.crlb_rel_pct);
+    text_row(s, "CRLB", &r.crlb_rel_pct);
     for (name, m) in &r.methods {
-        row(&mut s, name, &m.rel_err_pct);
-        let ratio: Vec<f64> = (0..PARAM_COUNT).map(|i| m.rel_err_pct[i] / r.crlb_rel_pct[i]).collect();
-        row(&mut s, "  /CRLB", &ratio);
+        text_row(s, name, &m.rel_err_pct);
+        text_row(s, "  /CRLB", &ratio(&m.rel_err_pct, &r.crlb_rel_pct));
     }
-    row(&mut s, "paper newton", &PAPER_TABLE2.map(|p| p.0));
-    row(&mut s, "paper TAGA", &PAPER_TABLE2.map(|p| p.1));
-    row(&mut s, "noise->paper", &r.noise_to_match_paper_mg);
+    text_row(s, "paper newton", &PAPER_TABLE2.map(|p| p.0));
+    text_row(s, "paper TAGA", &PAPER_TABLE2.map(|p| p.1));
+    text_row(s, "noise->paper", &r.noise_to_match_paper_mg);
     let _ = writeln!(
         s,
         "(noise->paper: the per-sample noise in mg at which our Newton RMS error equals the paper's Table 2"
     );
     let _ =
         writeln!(s, " magnitude; the paper's single run is one draw, so only the order of magnitude means anything)");
+}
+
+/// The mean effort of each method.
+fn effort_text(s: &mut String, r: &PaperReport) {
     for (name, m) in &r.methods {
         if m.mean_generations > 0.0 {
             let _ = writeln!(
@@ -420,24 +538,31 @@ pub fn to_text(r: &PaperReport) -> String {
             let _ = writeln!(s, "{name}: {:.1} iterations on average; {} failed runs", m.mean_iterations, m.failures);
         }
     }
+}
+
+/// The bound of the paper's plan against a 26-direction cube.
+fn crlb_plans_text(s: &mut String, r: &PaperReport) {
     let _ = writeln!(s, "\nCramer-Rao bound (%) of the paper's 24 positions vs a 26-direction cube, same noise:");
-    row(&mut s, "paper24", &r.crlb_paper24);
-    row(&mut s, "cube26", &r.crlb_cube26);
-    let ratio: Vec<f64> = (0..PARAM_COUNT).map(|i| r.crlb_paper24[i] / r.crlb_cube26[i]).collect();
-    row(&mut s, "ratio", &ratio);
+    text_row(s, "paper24", &r.crlb_paper24);
+    text_row(s, "cube26", &r.crlb_cube26);
+    text_row(s, "ratio", &ratio(&r.crlb_paper24, &r.crlb_cube26));
+}
+
+/// Fig. 3, Fig. 6 and the generations to within 1 % of the optimum.
+fn figures_text(s: &mut String, r: &PaperReport) {
     let _ = writeln!(s, "\nFig. 3: operators on 2-D Rastrigin (population 40, 100 generations, same seeds):");
     for op in &r.operators {
-        let at = |g: usize| op.mean_best.get(g).copied().unwrap_or(f64::NAN);
+        let at = |g: usize| format_sig(op.mean_best.get(g).copied().unwrap_or(f64::NAN));
         let _ = writeln!(
             s,
             "{:<5} success (best < 1e-3) {:>3}/{}; mean best cost at generation 10: {}, 25: {}, 50: {}, 100: {}",
             op.name,
             op.successes,
             op.seeds,
-            format_sig(at(10)),
-            format_sig(at(25)),
-            format_sig(at(50)),
-            format_sig(at(100))
+            at(10),
+            at(25),
+            at(50),
+            at(100)
         );
     }
     if let (Some(first), Some(last)) = (r.trace.first(), r.trace.last()) {
@@ -449,8 +574,8 @@ pub fn to_text(r: &PaperReport) -> String {
             format_sig(last.0)
         );
     }
-    let _ =
-        writeln!(s, "\nTAGA (population {POPULATION}) generations to within 1 % of the LM optimum, {} runs:", o.runs);
+    let runs = r.options.runs;
+    let _ = writeln!(s, "\nTAGA (population {POPULATION}) generations to within 1 % of the LM optimum, {runs} runs:");
     for c in &r.convergence {
         let _ = writeln!(
             s,
@@ -461,7 +586,6 @@ pub fn to_text(r: &PaperReport) -> String {
             100.0 * c.by_40
         );
     }
-    s
 }
 
 /// Four significant digits, scientific when small or large.
