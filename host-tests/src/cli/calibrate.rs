@@ -10,7 +10,7 @@ use accelcal_host::report_html;
 use serde::Serialize;
 
 use super::input::{InputArgs, Loaded, MethodArg, load_and_calibrate};
-use super::{Failure, print_json};
+use super::{Failure, print_json, progress_bar};
 
 #[derive(clap::Args)]
 pub(super) struct CalibrateArgs {
@@ -121,12 +121,15 @@ pub(super) fn run(args: &CalibrateArgs) -> Result<(), Failure> {
 /// Wall time of `runs` repetitions of the whole pipeline (min, median, max).
 fn bench(input: &InputArgs, method: Method, seed: u64, runs: usize) -> Result<Bench, Failure> {
     let mut ms = Vec::with_capacity(runs);
+    let bar = progress_bar(runs.max(1) as u64, "bench");
     for _ in 0..runs.max(1) {
         let start = std::time::Instant::now();
         let loaded = load_and_calibrate(input, method, seed, false)?;
         ms.push(start.elapsed().as_secs_f64() * 1e3);
         std::hint::black_box(loaded.host.calibration.params);
+        bar.inc(1);
     }
+    bar.finish_and_clear();
     ms.sort_by(f64::total_cmp);
     Ok(Bench { runs, min: ms[0], median: ms[ms.len() / 2], max: ms[ms.len() - 1] })
 }

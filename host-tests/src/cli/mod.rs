@@ -117,11 +117,25 @@ fn print_json(value: &impl serde::Serialize) -> Result<(), Failure> {
     Ok(())
 }
 
-/// A progress bar on stderr for `len` steps, drawn only when stderr is a terminal (and not in CI).
-fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
+/// Progress is drawn only when stderr is a terminal (and not in CI).
+fn progress_drawn() -> bool {
     use std::io::IsTerminal as _;
-    let drawn = std::io::stderr().is_terminal() && std::env::var_os("CI").is_none();
-    if !drawn {
+    std::io::stderr().is_terminal() && std::env::var_os("CI").is_none()
+}
+
+/// A spinner on stderr for work without countable steps (see [`progress_drawn`]).
+fn spinner(what: &str) -> indicatif::ProgressBar {
+    if !progress_drawn() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let spinner = indicatif::ProgressBar::new_spinner().with_message(what.to_string());
+    spinner.enable_steady_tick(std::time::Duration::from_millis(120));
+    spinner
+}
+
+/// A progress bar on stderr for `len` steps (see [`progress_drawn`]).
+fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
+    if !progress_drawn() {
         return indicatif::ProgressBar::hidden();
     }
     let bar = indicatif::ProgressBar::new(len);

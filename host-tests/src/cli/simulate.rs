@@ -6,7 +6,7 @@ use accelcal::model::Params;
 use accelcal_host::sim::{self, OutputUnits, Plan, SimConfig};
 use serde::Serialize;
 
-use super::{Failure, print_json};
+use super::{Failure, print_json, spinner};
 
 #[derive(clap::Args)]
 pub(super) struct SimulateArgs {
@@ -64,11 +64,13 @@ pub(super) fn run(args: &SimulateArgs) -> Result<(), Failure> {
         ..SimConfig::for_plan(plan, seed)
     };
     cfg.validate().map_err(|e| format!("simulate: {e}"))?;
+    let spinner = spinner("simulating and writing the recording");
     let recording = sim::simulate(&cfg);
     let output = &args.output;
     let file = std::fs::File::create(output).map_err(|e| format!("{}: {e}", output.display()))?;
     let mut w = std::io::BufWriter::new(file);
     sim::write_csv(&recording, &mut w).map_err(|e| format!("{}: {e}", output.display()))?;
+    spinner.finish_and_clear();
     let (samples, poses) = (recording.samples.len(), recording.poses.len());
     if args.json {
         let file = output.display().to_string();
