@@ -261,3 +261,55 @@ pub fn rows_dropped_line(dropped: &DroppedRows, stale_repeats: usize) -> Option<
     let parts: Vec<String> = rows.reasons().iter().filter(|r| r.1 > 0).map(|(name, n)| format!("{name} {n}")).collect();
     (total > 0).then(|| format!("rows dropped: {total} ({})", parts.join(", ")))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::{SimConfig, simulate_pose_means};
+    use accelcal::calibrate::{Method, calibrate};
+
+    fn paper_poses() -> (Vec<Pose>, f32) {
+        let cfg = SimConfig::paper(3);
+        (simulate_pose_means(&cfg), cfg.gravity as f32)
+    }
+
+    #[test]
+    fn the_stepped_pipeline_equals_the_librarys_calibrate_and_shows_every_generation() {
+        let (poses, gravity) = paper_poses();
+        let config = CalibrationConfig { gravity, ..CalibrationConfig::DEFAULT };
+        let rng = Xoshiro128PlusPlus::seed_from_u64(7);
+        let at_once = calibrate::<_, POPULATION, MAX_POSES>(&poses, &config, rng).unwrap();
+        let mut seen = Vec::new();
+        let stepped = run_observed(&poses, &config, 7, |ga, _| {
+            seen.push((ga.generation(), ga.best_cost()));
+            ControlFlow::Continue(())
+        });
+        let stepped = stepped.unwrap().expect("runs to the end");
+        assert_eq!(stepped, at_once);
+        assert!(stepped.generations > 0);
+        assert_eq!(seen.len(), stepped.generations as usize + 1, "the first population and each generation");
+        assert!(seen.iter().enumerate().all(|(i, (g, _))| *g == i as u32), "{seen:?}");
+        assert!(seen.windows(2).all(|w| w[1].1 <= w[0].1), "elitism: the best never worsens: {seen:?}");
+    }
+
+    #[test]
+    fn breaking_stops_the_run_and_gradient_methods_show_no_ga() {
+        let (poses, gravity) = paper_poses();
+        let config = CalibrationConfig { gravity, ..CalibrationConfig::TAGA_ALONE };
+        let mut calls = 0;
+        let stopped = run_observed(&poses, &config, 1, |ga, _| {
+            calls += 1;
+            if ga.generation() == 3 { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+        });
+        assert_eq!(stopped, Ok(None));
+        assert_eq!(calls, 4);
+        let newton = CalibrationConfig { method: Method::Newton, ..config };
+        let mut ga_seen = false;
+        let cal = run_observed(&poses, &newton, 1, |_, _| {
+            ga_seen = true;
+            ControlFlow::Continue(())
+        });
+        assert_eq!(cal.unwrap().map(|c| c.generations), Some(0));
+        assert!(!ga_seen);
+    }
+}

@@ -599,3 +599,49 @@ pub fn format_sig(v: f64) -> String {
         format!("{v:.3e}")
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn trace_runs_every_generation_of_the_paper_setup_and_never_worsens() {
+        let trace = taga_trace(Plan::Paper24, 2, 1.0);
+        let generations = paper_config(Method::Taga, 9.8).ga.max_generations as usize;
+        assert_eq!(trace.len(), generations + 1, "the first population and each generation");
+        assert!(trace.windows(2).all(|w| w[1].0 <= w[0].0), "the best objective never rises");
+        assert!(trace.iter().all(|t| t.1 >= t.0), "the mean is never below the best");
+    }
+
+    #[test]
+    fn document_keeps_the_documented_keys_and_the_papers_table() {
+        let options = PaperOptions { runs: 2, noise_mg: 1.0, plan: Plan::Paper24, seed: 1, operator_seeds: 2 };
+        let mut steps = 0;
+        let report = run(&options, || steps += 1);
+        assert_eq!(steps, progress_steps(&options));
+        let json = to_json(&report);
+        let keys: Vec<&str> = json.as_object().unwrap().keys().map(String::as_str).collect();
+        let documented = [
+            "crlb_plans_pct",
+            "crlb_rel_pct",
+            "effort",
+            "generations_to_1pct",
+            "noise_mg",
+            "noise_to_match_paper_mg",
+            "operators",
+            "paper_table2_pct",
+            "params",
+            "plan",
+            "ratio_to_crlb",
+            "rel_err_pct",
+            "runs",
+            "seed",
+            "trace",
+        ];
+        assert_eq!(keys, documented);
+        assert_eq!(json["paper_table2_pct"]["newton"][6], -61.43882);
+        assert_eq!(json["rel_err_pct"].as_object().unwrap().len(), METHODS.len());
+        assert_eq!(json["effort"]["taga"]["failures"], 0);
+        assert_eq!(json["operators"]["taga"]["mean_best"].as_array().unwrap().len(), 101);
+    }
+}
