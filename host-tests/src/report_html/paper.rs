@@ -80,11 +80,8 @@ fn table2_figure(out: &mut String, doc: &Value) {
         series.push((label, colour, values(&doc["paper_table2_pct"][key]).iter().map(|v| v.abs()).collect()));
     }
     let xs: Vec<f64> = (0..=names.len() + 1).map(|i| i as f64).collect();
-    let mut ys: Vec<f64> = series.iter().flat_map(|s| s.2.iter().copied()).collect();
-    // Two decades of headroom above the data for the legend.
-    let highest = ys.iter().copied().filter(|y| y.is_finite()).fold(f64::MIN_POSITIVE, f64::max);
-    ys.push(highest * 100.0);
-    let axes = Axes::fit_log_y(&xs, &ys).categorical_x();
+    let ys: Vec<f64> = series.iter().flat_map(|s| s.2.iter().copied()).collect();
+    let axes = Axes::fit_log_y(&xs, &with_headroom(ys, 100.0)).categorical_x();
     axes.open(out, "Table 2: |relative error| per parameter (log scale)", "parameter", "relative error (%)");
     for (i, name) in names.iter().enumerate() {
         axes.x_label(out, i as f64 + 1.0, name);
@@ -101,6 +98,13 @@ fn table2_figure(out: &mut String, doc: &Value) {
         legend(out, k, colour, label);
     }
     out.push_str("</svg>\n");
+}
+
+/// `ys` and a value `factor` times their largest: headroom above the data for the legend.
+fn with_headroom(mut ys: Vec<f64>, factor: f64) -> Vec<f64> {
+    let highest = ys.iter().copied().filter(|y| y.is_finite()).fold(f64::MIN_POSITIVE, f64::max);
+    ys.push(highest * factor);
+    ys
 }
 
 /// The numbers of a JSON array (NaN for a non-number).
@@ -140,7 +144,7 @@ fn fig3(out: &mut String, doc: &Value) {
         .collect();
     let xs: Vec<f64> = curves.iter().flat_map(|c| c.2.iter().map(|p| p.0)).collect();
     let ys: Vec<f64> = curves.iter().flat_map(|c| c.2.iter().map(|p| p.1)).collect();
-    let axes = Axes::fit_log_y(&xs, &ys);
+    let axes = Axes::fit_log_y(&xs, &with_headroom(ys, 10.0));
     axes.open(out, "Fig. 3: mean best Rastrigin cost per generation", "generation", "cost");
     for (k, (name, colour, points)) in curves.iter().enumerate() {
         axes.polyline(out, points, colour, false);
