@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use accelcal::model::{PARAM_NAMES, Params};
 use accelcal_host::paper::{self, PaperOptions};
-use accelcal_host::plots::{Series, line_chart};
+use accelcal_host::plots::{Scale, Series, line_chart};
 use accelcal_host::report_html;
 use accelcal_host::sim::Plan;
 
@@ -83,7 +83,14 @@ fn write_figures(r: &paper::PaperReport, dir: &Path) -> Result<(), String> {
         .iter()
         .map(|o| Series { name: o.name, points: o.mean_best.iter().enumerate().map(|(g, v)| (g as f64, *v)).collect() })
         .collect();
-    line_chart(&dir.join("fig3_operators.svg"), "Fig. 3: mean best Rastrigin cost", "generation", "cost", &ops, true)?;
+    line_chart(
+        &dir.join("fig3_operators.svg"),
+        "Fig. 3: mean best Rastrigin cost",
+        "generation",
+        "cost",
+        &ops,
+        Scale::LogY,
+    )?;
     let gens = |f: &dyn Fn(&(f64, f64, Params)) -> f64| -> Vec<(f64, f64)> {
         r.trace.iter().enumerate().map(|(g, t)| (g as f64, f(t))).collect()
     };
@@ -95,14 +102,21 @@ fn write_figures(r: &paper::PaperReport, dir: &Path) -> Result<(), String> {
         "generation",
         "fE (m/s^2)^4",
         &fitness,
-        true,
+        Scale::LogY,
     )?;
     for (group, range, file) in
         [("bias", 0..3, "fig7_bias.svg"), ("scale", 3..6, "fig7_scale.svg"), ("nonorth", 6..9, "fig7_nonorth.svg")]
     {
         let series: Vec<Series> =
             range.map(|i| Series { name: PARAM_NAMES[i], points: gens(&|t| f64::from(t.2.to_array()[i])) }).collect();
-        line_chart(&dir.join(file), &format!("Fig. 7: {group} per generation"), "generation", group, &series, false)?;
+        line_chart(
+            &dir.join(file),
+            &format!("Fig. 7: {group} per generation"),
+            "generation",
+            group,
+            &series,
+            Scale::Linear,
+        )?;
     }
     Ok(())
 }
