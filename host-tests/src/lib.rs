@@ -7,8 +7,6 @@ pub mod convergence;
 pub mod csvio;
 pub mod csvstream;
 pub mod diagnose;
-pub mod effects;
-pub mod i2c_sim;
 pub mod labelled;
 pub mod output;
 pub mod paper;

@@ -11,7 +11,7 @@
 //! class. Run with `--nocapture` to see the table.
 
 use accelcal_host::diagnose::{DiagnoseOptions, diagnose};
-use accelcal_host::effects::{EffectClass, generate, random_scenario, to_table};
+use accelcal_host::sim::scenario::{EffectClass, generate, random_scenario, to_table};
 
 /// Base seed of the logs (override with `ACCELCAL_BLIND_SEED`).
 const BASE_SEED: u64 = 20_261_121;

@@ -1,5 +1,5 @@
 //! The firmware path on the host, exactly as a board runs it: a simulated MPU-6050 on the I2C bus
-//! ([`accelcal_host::i2c_sim`]) -> the [`accelcal::mpu6050`] driver -> a [`Session`] (accumulator,
+//! ([`accelcal_host::sim::i2c`]) -> the [`accelcal::mpu6050`] driver -> a [`Session`] (accumulator,
 //! guidance, coarse, TAGA, LM, verdict, blob).
 //!
 //! The truth in the session's units (counts in, m/s^2 out against 9.80665) is
@@ -16,7 +16,7 @@ use accelcal::sensor::AccelSensor;
 use accelcal::session::{
     DirectionKind, GuidanceBasis, Progress, RunLimits, Session, SessionConfig, SessionResult, State,
 };
-use accelcal_host::i2c_sim::SimMpu6050;
+use accelcal_host::sim::i2c::SimMpu6050;
 use accelcal_host::sim::{self, OutputUnits, PAPER_TRUTH, Recording, SimConfig, simulate};
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro128PlusPlus;
