@@ -14,3 +14,4 @@ pub mod plots;
 pub mod report;
 pub mod report_html;
 pub mod sim;
+pub mod stats;

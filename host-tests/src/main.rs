@@ -36,6 +36,7 @@ use accelcal_host::paper::{self, PaperOptions, format_sig};
 use accelcal_host::plots::{Series, line_chart};
 use accelcal_host::report_html;
 use accelcal_host::sim::{self, OutputUnits, Plan, SimConfig};
+use accelcal_host::stats::median;
 use clap::{Parser, Subcommand};
 use serde_json::json;
 
@@ -504,7 +505,7 @@ fn bench(input: &InputArgs, method: Method, seed: u64, runs: usize) -> Result<(f
         std::hint::black_box(loaded.host.calibration.params);
     }
     ms.sort_by(f64::total_cmp);
-    Ok((ms[0], ms[ms.len() / 2], ms[ms.len() - 1]))
+    Ok((ms[0], median(&ms), ms[ms.len() - 1]))
 }
 
 /// What `calibrate` writes besides its exit code.
