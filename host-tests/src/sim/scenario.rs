@@ -280,7 +280,12 @@ pub fn generate(scenario: &Scenario) -> SimLog {
             sim::simulate_with(cfg, &mut [&mut ColoredBias::new(*walk, *instability, *correlation_s, cfg.seed)])
         }
     };
-    let temps_c = recording.times_s.iter().map(|&t| (scenario.temperature.at(t) * 100.0).round() / 100.0).collect();
+    with_thermometer(recording, &scenario.temperature)
+}
+
+/// The recording with the thermometer's column: `profile` at every sample time, to 0.01 deg C.
+fn with_thermometer(recording: Recording, profile: &TemperatureProfile) -> SimLog {
+    let temps_c = recording.times_s.iter().map(|&t| (profile.at(t) * 100.0).round() / 100.0).collect();
     SimLog { recording, temps_c }
 }
 
@@ -320,10 +325,7 @@ pub fn generate_outside(kind: Outside, seed: u64) -> SimLog {
     let cfg = &scenario.sim;
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x0075_1DE0);
     let mg = sim::STANDARD_GRAVITY_MPS2 * 1e-3;
-    let poses = match cfg.plan {
-        Plan::Random(n) => n,
-        _ => 24,
-    };
+    let poses = cfg.plan.pose_count();
     let recording = match kind {
         Outside::OneBadPose => {
             let bad = 1 + (rng.next_u64() % (poses as u64 - 1)) as usize;
@@ -380,8 +382,7 @@ pub fn generate_outside(kind: Outside, seed: u64) -> SimLog {
             )
         }
     };
-    let temps_c = recording.times_s.iter().map(|&t| (scenario.temperature.at(t) * 100.0).round() / 100.0).collect();
-    SimLog { recording, temps_c }
+    with_thermometer(recording, &scenario.temperature)
 }
 
 /// Other shapes of the catalogue's effects than [`random_scenario`] injects (the diagnosis should
@@ -432,10 +433,7 @@ pub fn generate_shape(shape: Shape, seed: u64) -> SimLog {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x05A4_E000);
     let g = sim::STANDARD_GRAVITY_MPS2;
     let mg = g * 1e-3;
-    let poses = match cfg.plan {
-        Plan::Random(n) => n,
-        _ => 24,
-    };
+    let poses = cfg.plan.pose_count();
     let duration = cfg.initial_rest_s + poses as f64 * (cfg.seconds_per_pose + cfg.move_seconds);
     let amp = |rng: &mut Xoshiro256PlusPlus, lo: f64, hi: f64| -> [f64; 3] {
         std::array::from_fn(|_| random_sign(rng) * uniform_in(rng, lo, hi) * mg)
@@ -488,8 +486,7 @@ pub fn generate_shape(shape: Shape, seed: u64) -> SimLog {
             )
         }
     };
-    let temps_c = recording.times_s.iter().map(|&t| (scenario.temperature.at(t) * 100.0).round() / 100.0).collect();
-    SimLog { recording, temps_c }
+    with_thermometer(recording, &scenario.temperature)
 }
 
 /// The log as `t,ax,ay,az,temp` CSV text (counts as integers, other units with 10 significant
