@@ -30,7 +30,7 @@ pub const LANDING_JOLT_MPS2: f64 = 1.0;
 /// Time over which the hand's shake ramps up after lift-off, s.
 pub const SHAKE_ONSET_S: f64 = 0.1;
 
-/// Largest recording [`simulate`] accepts, samples (a guard against typos like `rate_hz = 1e9`).
+/// Largest recording [`simulate`](super::simulate) accepts, samples (a guard against typos like `rate_hz = 1e9`).
 pub const MAX_SAMPLES: usize = 100_000_000;
 
 /// The paper's Table 1 truth: `B = 0.124886392` m/s^2 on every axis,

@@ -22,8 +22,8 @@ pub enum Plan {
     /// `N >= 1` hand-placed orientations drawn uniformly on SO(3).
     Random(usize),
     /// A free-hand session: `N >= 1` orientations drawn uniformly on SO(3), held by hand for a few
-    /// seconds each ([`SimConfig::for_plan`]: 4 s holds, 1.5 s rotations with the hand's shake, no long
-    /// initial rest). No face is ever aligned.
+    /// seconds each ([`SimConfig::for_plan`](super::SimConfig::for_plan): 4 s holds, 1.5 s rotations
+    /// with the hand's shake, no long initial rest). No face is ever aligned.
     FreeHand(usize),
 }
 
@@ -37,7 +37,8 @@ impl Plan {
         }
     }
 
-    /// Default [`SimConfig::initial_rest_s`]: 0 s on a platform, 10 s for hand-placed poses.
+    /// Default [`SimConfig::initial_rest_s`](super::SimConfig::initial_rest_s): 0 s on a platform,
+    /// 10 s for hand-placed poses.
     pub fn default_initial_rest_s(&self) -> f64 {
         match self {
             Self::Paper24 | Self::Cube26 => 0.0,
