@@ -8,7 +8,7 @@ use std::time::Instant;
 
 use accelcal_host::csvio::{ReadOptions, read_csv_str};
 use accelcal_host::diagnose::{DiagnoseOptions, diagnose};
-use accelcal_host::effects::{EffectClass, Scenario, generate, random_scenario, to_csv_string};
+use accelcal_host::sim::scenario::{EffectClass, Scenario, generate, random_scenario, to_csv_string};
 use accelcal_host::sim::{Plan, SimConfig};
 
 /// Runs timed.

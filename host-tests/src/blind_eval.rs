@@ -11,8 +11,8 @@ use std::time::Instant;
 
 use crate::blindgen::{self, Family, LogSpec};
 use crate::csvio::{ReadOptions, read_csv_str};
-use crate::diagnose::math::median;
 use crate::diagnose::{DiagnoseOptions, diagnose};
+use crate::stats::median;
 
 /// Gap ratio from which an effect counts as clearly visible.
 pub const CLEARLY_VISIBLE: f64 = 2.0;

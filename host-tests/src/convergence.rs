@@ -18,6 +18,7 @@ use accelcal::ga::GaConfig;
 
 use crate::calib;
 use crate::sim::{Plan, SimConfig, simulate_pose_means};
+use crate::stats::median;
 
 /// Generations run at most.
 pub const MAX_GENERATIONS: u32 = 200;
@@ -30,7 +31,7 @@ pub const WITHIN: f32 = 1.01;
 pub struct Convergence {
     /// The set-up.
     pub init: &'static str,
-    /// Median generations (runs that never got there count as `MAX_GENERATIONS + 1`).
+    /// Median generations, rounded (runs that never got there count as `MAX_GENERATIONS + 1`).
     pub median: u32,
     /// 95th percentile, likewise.
     pub p95: u32,
@@ -67,7 +68,8 @@ fn summary(init: &'static str, mut generations: Vec<u32>) -> Convergence {
     generations.sort_unstable();
     let at = |q: f64| generations.get(((generations.len() as f64 - 1.0) * q).round() as usize).copied().unwrap_or(0);
     let by_40 = generations.iter().filter(|&&g| g <= 40).count() as f64 / generations.len().max(1) as f64;
-    Convergence { init, median: at(0.5), p95: at(0.95), by_40, runs: generations.len() }
+    let middle = median(&generations.iter().map(|&g| f64::from(g)).collect::<Vec<_>>()).round() as u32;
+    Convergence { init, median: middle, p95: at(0.95), by_40, runs: generations.len() }
 }
 
 /// The set-ups compared: name, initialisation, fixed (paper) box.

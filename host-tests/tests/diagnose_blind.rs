@@ -11,7 +11,8 @@
 //! class. Run with `--nocapture` to see the table.
 
 use accelcal_host::diagnose::{DiagnoseOptions, diagnose};
-use accelcal_host::effects::{EffectClass, generate, random_scenario, to_table};
+use accelcal_host::sim::scenario::{EffectClass, generate, random_scenario, to_table};
+use accelcal_host::stats::median;
 
 /// Base seed of the logs (override with `ACCELCAL_BLIND_SEED`).
 const BASE_SEED: u64 = 20_261_121;
@@ -27,15 +28,6 @@ const MIN_MEDIAN_SHRINK: f64 = 0.7;
 
 fn env_or<T: std::str::FromStr>(name: &str, default: T) -> T {
     std::env::var(name).ok().and_then(|v| v.parse().ok()).unwrap_or(default)
-}
-
-fn median(v: &mut [f64]) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
 }
 
 #[test]
@@ -94,7 +86,7 @@ fn diagnose_names_the_withheld_effect() {
         println!(
             "{:<19} right {class_right}/{logs}  median shrink {}  smallest winning gain {}",
             class.name(),
-            fmt(median(&mut shrinks)),
+            fmt(median(&shrinks)),
             fmt(min_gain)
         );
         for w in wrong {
@@ -102,7 +94,7 @@ fn diagnose_names_the_withheld_effect() {
         }
     }
     let accuracy = right as f64 / total as f64;
-    let shrink = median(&mut all_shrinks);
+    let shrink = median(&all_shrinks);
     println!("overall: {right}/{total} right ({:.1} %), median shrink {shrink:.2}", 100.0 * accuracy);
     assert!(accuracy >= MIN_ACCURACY, "accuracy {accuracy}");
     assert!(shrink >= MIN_MEDIAN_SHRINK, "median shrink {shrink}");

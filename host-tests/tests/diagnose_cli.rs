@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 use std::process::Command;
 
-use accelcal_host::effects::{EffectClass, generate, random_scenario, to_csv_string};
+use accelcal_host::sim::scenario::{EffectClass, generate, random_scenario, to_csv_string};
 
 fn scratch(name: &str) -> PathBuf {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("diagnose_cli");

@@ -5,7 +5,7 @@
 //! per kind; run with `--nocapture` for the table.
 
 use accelcal_host::diagnose::{DiagnoseOptions, diagnose};
-use accelcal_host::effects::{Outside, generate_outside, to_table};
+use accelcal_host::sim::scenario::{Outside, generate_outside, to_table};
 
 /// Base seed of the logs.
 const BASE_SEED: u64 = 40_261_123;

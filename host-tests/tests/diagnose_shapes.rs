@@ -4,7 +4,7 @@
 //! run with `--nocapture` for the table.
 
 use accelcal_host::diagnose::{DiagnoseOptions, diagnose};
-use accelcal_host::effects::{Shape, generate_shape, to_table};
+use accelcal_host::sim::scenario::{Shape, generate_shape, to_table};
 
 /// Base seed of the logs.
 const BASE_SEED: u64 = 50_261_123;

@@ -1,5 +1,5 @@
 //! The firmware path on the host, exactly as a board runs it: a simulated MPU-6050 on the I2C bus
-//! ([`accelcal_host::i2c_sim`]) -> the [`accelcal::mpu6050`] driver -> a [`Session`] (accumulator,
+//! ([`accelcal_host::sim::i2c`]) -> the [`accelcal::mpu6050`] driver -> a [`Session`] (accumulator,
 //! guidance, coarse, TAGA, LM, verdict, blob).
 //!
 //! The truth in the session's units (counts in, m/s^2 out against 9.80665) is
@@ -16,10 +16,11 @@ use accelcal::sensor::AccelSensor;
 use accelcal::session::{
     DirectionKind, GuidanceBasis, Progress, RunLimits, Session, SessionConfig, SessionResult, State,
 };
-use accelcal_host::i2c_sim::SimMpu6050;
+use accelcal_host::sim::i2c::SimMpu6050;
+use accelcal_host::sim::random::standard_normal;
 use accelcal_host::sim::{self, OutputUnits, PAPER_TRUTH, Recording, SimConfig, simulate};
 use rand_core::SeedableRng;
-use rand_xoshiro::Xoshiro128PlusPlus;
+use rand_xoshiro::{Xoshiro128PlusPlus, Xoshiro256PlusPlus};
 
 /// What firmware would instantiate: `i16` counts, 32 poses, blocks of 32 samples, GA population 40.
 type FirmwareSession = Session<i16, 32, 32, 40>;
@@ -159,32 +160,14 @@ fn an_i2c_error_in_the_middle_of_pose_10_is_a_skipped_sample() {
 // Guidance: the person follows the suggestions
 // ---------------------------------------------------------------------------------------------
 
-/// Deterministic noise for hand-made streams (SplitMix64 and Box-Muller).
-struct Noise(u64);
-
-impl Noise {
-    fn uniform(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    fn gaussian(&mut self) -> f64 {
-        let r = (-2.0 * (1.0 - self.uniform()).ln()).sqrt();
-        r * (std::f64::consts::TAU * self.uniform()).cos()
-    }
-}
-
 /// One placement in counts: `direction` (unit, sensor axes) up for 5 s at 200 Hz with 1 mg (16 LSB)
 /// noise, then a 1 s move (a swinging reading the static detector must not average).
-fn placement(truth_counts: &Params, direction: [f32; 3], noise: &mut Noise) -> Vec<[i16; 3]> {
+fn placement(truth_counts: &Params, direction: [f32; 3], noise: &mut Xoshiro256PlusPlus) -> Vec<[i16; 3]> {
     let g = STANDARD_GRAVITY_MPS2;
     let reading = truth_counts.invert(direction.map(|d| d * g)).unwrap();
     let mut out = Vec::new();
     for _ in 0..1000 {
-        out.push(std::array::from_fn(|a| (f64::from(reading[a]) + 16.0 * noise.gaussian()).round() as i16));
+        out.push(std::array::from_fn(|a| (f64::from(reading[a]) + 16.0 * standard_normal(noise)).round() as i16));
     }
     for i in 0..200 {
         let swing = 3000.0 * (i as f64 * 0.2).sin();
@@ -234,7 +217,7 @@ fn mean(d: &[Duration]) -> Duration {
 fn guidance_asks_for_the_faces_then_off_axis_orientations_and_following_it_calibrates() {
     let truth = sim::random_truth(5);
     let truth_counts = truth_in_counts(&truth);
-    let mut noise = Noise(17);
+    let mut noise = Xoshiro256PlusPlus::seed_from_u64(17);
     let mut times = PushTimes::default();
     let mut session = FirmwareSession::new(SessionConfig::DEFAULT).unwrap();
 

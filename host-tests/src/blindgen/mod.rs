@@ -6,6 +6,13 @@
 //! output unit, and at most one effect from a [`Family`]. Every log has a *twin*: the same spec and
 //! the same noise with the effect switched off ([`LogSpec::twin`]).
 //!
+//! Why a second generator beside [`crate::sim`] (the host's simulator): this one is the blind test's
+//! data source, written from the physics by someone who never saw the diagnosis's detectors, with its
+//! own rotations, noise and effect models. Sharing code with `sim` (whose scenarios the detectors were
+//! developed on) would let one modelling choice, or one bug, shape both the test data and what the
+//! detectors expect, and the blind score would no longer measure anything. Keep it separate and do not
+//! tune it to the detectors.
+//!
 //! ```
 //! use accelcal_host::blindgen::{Family, generate, random_small_spec};
 //! let spec = random_small_spec(Family::Drift, 7);

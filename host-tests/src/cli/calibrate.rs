@@ -131,7 +131,7 @@ fn bench(input: &InputArgs, method: Method, seed: u64, runs: usize) -> Result<Be
     }
     bar.finish_and_clear();
     ms.sort_by(f64::total_cmp);
-    Ok(Bench { runs, min: ms[0], median: ms[ms.len() / 2], max: ms[ms.len() - 1] })
+    Ok(Bench { runs, min: ms[0], median: accelcal_host::stats::median(&ms), max: ms[ms.len() - 1] })
 }
 
 fn document<'a>(input: &InputArgs, loaded: &'a Loaded, bench: Option<Bench>) -> CalibrateDocument<'a> {

@@ -12,7 +12,7 @@ use super::report::Gap;
 use super::{DiagnoseError, DiagnoseOptions, SEGMENTS, SIGNIFICANT_RATIO, SIGNIFICANT_Z, err};
 use crate::calib;
 use crate::csvio::{self, AccumulateOptions, Table};
-use crate::effects::gaussian;
+use crate::sim::random::standard_normal;
 
 /// One pose's statistics from its own samples (input unit).
 #[derive(Debug, Clone)]
@@ -102,9 +102,9 @@ pub(crate) fn draw_noise(poses: &[PoseData], noise: &Noise, rng: &mut Xoshiro256
             let dt = (t - last_t).max(0.0);
             last_t = t;
             std::array::from_fn(|a| {
-                walk[a] += (noise.walk[a] * dt).sqrt() * gaussian(rng);
+                walk[a] += (noise.walk[a] * dt).sqrt() * standard_normal(rng);
                 let within = noise.walk[a] * p.duration() / 12.0;
-                walk[a] + (noise.white[a] / p.n as f64 + within + noise.floor[a]).sqrt() * gaussian(rng)
+                walk[a] + (noise.white[a] / p.n as f64 + within + noise.floor[a]).sqrt() * standard_normal(rng)
             })
         })
         .collect()

@@ -43,7 +43,7 @@
 //!
 //! ```
 //! use accelcal_host::diagnose::{diagnose, DiagnoseOptions};
-//! use accelcal_host::effects::{generate, random_scenario, to_table, EffectClass};
+//! use accelcal_host::sim::scenario::{generate, random_scenario, to_table, EffectClass};
 //! let log = generate(&random_scenario(EffectClass::ScaleNonlinearity, 4));
 //! let table = to_table(&log, "sim").unwrap();
 //! let report = diagnose(&table, &DiagnoseOptions::DEFAULT).unwrap();
@@ -206,8 +206,10 @@ mod tests {
 
     #[test]
     fn a_clean_log_has_no_gap_and_the_report_has_the_documented_fields() {
-        use crate::effects::{EffectClass, generate, random_scenario, to_table};
-        let log = generate(&random_scenario(EffectClass::None, 5));
+        use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
+        // A clean log's gap is significant about once in 40 seeds (1/40 on seeds 0..39 with the
+        // simulator's rand_distr noise, ratio median 1.03): seed 5 is that one, seed 0 is not.
+        let log = generate(&random_scenario(EffectClass::None, 0));
         let table = to_table(&log, "clean").unwrap();
         let report = diagnose(&table, &DiagnoseOptions::DEFAULT).unwrap();
         assert!(!report.gap.significant, "{}", report.to_text());

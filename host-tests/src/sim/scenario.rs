@@ -1,13 +1,13 @@
-//! Unmodelled physical effects for the simulator ([`sim::Effect`] implementations) and random
-//! scenarios that inject one of them into a log with a temperature column, for `accelcal diagnose`
-//! and its blind test.
+//! Random scenarios for `accelcal diagnose` and its tests: a hand-placed session with a
+//! temperature column and one effect of the catalogue ([`super::effects`]) injected as physics, or an
+//! effect outside the catalogue ([`Outside`]), or another shape of a catalogue effect ([`Shape`]).
 //!
 //! Every scenario has a temperature profile that is *not* monotonic in time (two slow sinusoids),
 //! written to the `temp` column whether or not the temperature acts on the sensor. Magnitudes are
 //! realistic: each effect moves the pose means by one to a few mg.
 //!
 //! ```
-//! use accelcal_host::effects::{EffectClass, random_scenario, generate};
+//! use accelcal_host::sim::scenario::{EffectClass, random_scenario, generate};
 //! let scenario = random_scenario(EffectClass::Drift, 3);
 //! let log = generate(&scenario);
 //! assert_eq!(log.temps_c.len(), log.recording.samples.len());
@@ -20,7 +20,11 @@ use rand_core::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 
 use crate::csvio::{self, CsvError, ReadOptions, Table, Units};
-use crate::sim::{self, Effect, OutputUnits, Plan, Recording, SimConfig};
+use crate::sim::effects::{
+    ColoredBias, ScaleNonlinearity, Settling, SlowMotion, TemperatureEffect, TemperatureProfile, WarmUpDrift,
+};
+use crate::sim::random::{random_sign, uniform_in, unit_vector};
+use crate::sim::{self, OutputUnits, Plan, Recording, SimConfig};
 
 /// The effect a scenario injects (the diagnosis classes).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -65,22 +69,6 @@ impl EffectClass {
             Self::Motion => "motion",
             Self::ColoredNoise => "colored-noise",
         }
-    }
-}
-
-/// Temperature in deg C: `base + sum of amplitude * sin(2 pi t / period + phase)`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TemperatureProfile {
-    /// Mean temperature, deg C.
-    pub base_c: f64,
-    /// `(amplitude deg C, period s, phase rad)` of the two components.
-    pub waves: [(f64, f64, f64); 2],
-}
-
-impl TemperatureProfile {
-    /// Temperature at `t_s`.
-    pub fn at(&self, t_s: f64) -> f64 {
-        self.base_c + self.waves.iter().map(|&(a, p, ph)| a * (std::f64::consts::TAU * t_s / p + ph).sin()).sum::<f64>()
     }
 }
 
@@ -158,30 +146,6 @@ pub struct SimLog {
     pub temps_c: Vec<f64>,
 }
 
-pub(crate) fn uniform(rng: &mut impl Rng, low: f64, high: f64) -> f64 {
-    low + (high - low) * ((rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64)
-}
-
-fn sign(rng: &mut impl Rng) -> f64 {
-    if rng.next_u64() & 1 == 0 { 1.0 } else { -1.0 }
-}
-
-pub(crate) fn gaussian(rng: &mut impl Rng) -> f64 {
-    let u1 = 1.0 - uniform(rng, 0.0, 1.0);
-    let u2 = uniform(rng, 0.0, 1.0);
-    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-}
-
-fn unit_vector(rng: &mut impl Rng) -> [f64; 3] {
-    loop {
-        let v = [gaussian(rng), gaussian(rng), gaussian(rng)];
-        let norm = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-        if norm > 1e-6 {
-            return v.map(|c| c / norm);
-        }
-    }
-}
-
 /// `true` when every axis points within 20 deg of up and of down in some direction.
 fn covers_every_axis(directions: &[[f64; 3]]) -> bool {
     (0..3).all(|a| [1.0, -1.0].iter().all(|s| directions.iter().any(|d| s * d[a] > 0.94)))
@@ -209,10 +173,10 @@ pub fn random_scenario(class: EffectClass, seed: u64) -> Scenario {
         plan: Plan::Random(poses),
         seed: sim_seed,
         rate_hz: if rng.next_u64() & 1 == 0 { 100.0 } else { 200.0 },
-        seconds_per_pose: uniform(&mut rng, 4.0, 8.0),
-        move_seconds: uniform(&mut rng, 1.5, 3.0),
-        initial_rest_s: uniform(&mut rng, 40.0, 90.0),
-        noise_mg: uniform(&mut rng, 0.5, 2.0),
+        seconds_per_pose: uniform_in(&mut rng, 4.0, 8.0),
+        move_seconds: uniform_in(&mut rng, 1.5, 3.0),
+        initial_rest_s: uniform_in(&mut rng, 40.0, 90.0),
+        noise_mg: uniform_in(&mut rng, 0.5, 2.0),
         truth: sim::random_truth(seed),
         units,
         ..SimConfig::paper(sim_seed)
@@ -220,10 +184,14 @@ pub fn random_scenario(class: EffectClass, seed: u64) -> Scenario {
     let duration = cfg.initial_rest_s + poses as f64 * (cfg.seconds_per_pose + cfg.move_seconds) - cfg.move_seconds;
     // Two slow waves: at least one full period of the faster one fits in the log (not monotonic).
     let temperature = TemperatureProfile {
-        base_c: uniform(&mut rng, 20.0, 35.0),
+        base_c: uniform_in(&mut rng, 20.0, 35.0),
         waves: [
-            (uniform(&mut rng, 1.5, 4.0), duration * uniform(&mut rng, 0.3, 0.7), uniform(&mut rng, 0.0, 6.3)),
-            (uniform(&mut rng, 0.5, 1.5), duration * uniform(&mut rng, 0.1, 0.25), uniform(&mut rng, 0.0, 6.3)),
+            (uniform_in(&mut rng, 1.5, 4.0), duration * uniform_in(&mut rng, 0.3, 0.7), uniform_in(&mut rng, 0.0, 6.3)),
+            (
+                uniform_in(&mut rng, 0.5, 1.5),
+                duration * uniform_in(&mut rng, 0.1, 0.25),
+                uniform_in(&mut rng, 0.0, 6.3),
+            ),
         ],
     };
     let injected = random_injected(class, &mut rng, poses, duration);
@@ -237,32 +205,32 @@ fn random_injected(class: EffectClass, rng: &mut Xoshiro256PlusPlus, poses: usiz
     match class {
         EffectClass::None => Injected::None,
         EffectClass::Drift => Injected::Drift {
-            amplitude: std::array::from_fn(|_| sign(rng) * uniform(rng, 1.5, 5.0) * mg),
-            tau_s: duration * uniform(rng, 0.15, 0.6),
+            amplitude: std::array::from_fn(|_| random_sign(rng) * uniform_in(rng, 1.5, 5.0) * mg),
+            tau_s: duration * uniform_in(rng, 0.15, 0.6),
         },
         EffectClass::Temperature => {
             let which = rng.next_u64() % 3; // bias, scale or both
             let bias = which != 1;
             let scale = which != 0;
             Injected::Temperature {
-                bias_per_c: std::array::from_fn(|_| if bias { sign(rng) * uniform(rng, 0.4, 1.2) * mg } else { 0.0 }),
-                scale_per_c: std::array::from_fn(
-                    |_| {
-                        if scale { sign(rng) * uniform(rng, 300e-6, 1000e-6) } else { 0.0 }
-                    },
-                ),
+                bias_per_c: std::array::from_fn(|_| {
+                    if bias { random_sign(rng) * uniform_in(rng, 0.4, 1.2) * mg } else { 0.0 }
+                }),
+                scale_per_c: std::array::from_fn(|_| {
+                    if scale { random_sign(rng) * uniform_in(rng, 300e-6, 1000e-6) } else { 0.0 }
+                }),
                 reference_c: 25.0,
             }
         }
-        EffectClass::ScaleNonlinearity => {
-            Injected::ScaleNonlinearity { k2: std::array::from_fn(|_| sign(rng) * uniform(rng, 1.5, 5.0) * 1e-3 / g) }
-        }
+        EffectClass::ScaleNonlinearity => Injected::ScaleNonlinearity {
+            k2: std::array::from_fn(|_| random_sign(rng) * uniform_in(rng, 1.5, 5.0) * 1e-3 / g),
+        },
         EffectClass::Settling => Injected::Settling {
-            lag: std::array::from_fn(|_| uniform(rng, 0.002, 0.006)),
-            tau_s: uniform(rng, 0.5, 2.0),
+            lag: std::array::from_fn(|_| uniform_in(rng, 0.002, 0.006)),
+            tau_s: uniform_in(rng, 0.5, 2.0),
         },
         EffectClass::Motion => {
-            let count = ((poses as f64 * uniform(rng, 0.12, 0.3)).round() as usize).max(2);
+            let count = ((poses as f64 * uniform_in(rng, 0.12, 0.3)).round() as usize).max(2);
             let mut chosen: Vec<usize> = Vec::new();
             while chosen.len() < count {
                 let i = 1 + (rng.next_u64() % (poses as u64 - 1)) as usize;
@@ -272,193 +240,16 @@ fn random_injected(class: EffectClass, rng: &mut Xoshiro256PlusPlus, poses: usiz
             }
             chosen.sort_unstable();
             Injected::Motion {
-                poses: chosen.into_iter().map(|i| (i, unit_vector(rng), uniform(rng, 3.0, 10.0) * mg)).collect(),
+                poses: chosen.into_iter().map(|i| (i, unit_vector(rng), uniform_in(rng, 3.0, 10.0) * mg)).collect(),
             }
         }
         EffectClass::ColoredNoise => {
             let kind = rng.next_u64() % 3; // random walk, bias instability or both
             Injected::ColoredNoise {
-                walk: std::array::from_fn(|_| if kind != 1 { uniform(rng, 0.05, 0.2) * mg } else { 0.0 }),
-                instability: std::array::from_fn(|_| if kind != 0 { uniform(rng, 0.5, 2.0) * mg } else { 0.0 }),
-                correlation_s: uniform(rng, 20.0, 200.0),
+                walk: std::array::from_fn(|_| if kind != 1 { uniform_in(rng, 0.05, 0.2) * mg } else { 0.0 }),
+                instability: std::array::from_fn(|_| if kind != 0 { uniform_in(rng, 0.5, 2.0) * mg } else { 0.0 }),
+                correlation_s: uniform_in(rng, 20.0, 200.0),
             }
-        }
-    }
-}
-
-/// Warm-up drift (see [`Injected::Drift`]).
-pub struct WarmUpDrift {
-    /// Final bias change per axis, m/s^2.
-    pub amplitude: [f64; 3],
-    /// Time constant, s.
-    pub tau_s: f64,
-}
-
-impl Effect for WarmUpDrift {
-    fn apply(&mut self, t_s: f64, _pose: Option<usize>, reading: &mut [f64; 3]) {
-        let k = 1.0 - (-t_s / self.tau_s).exp();
-        for a in 0..3 {
-            reading[a] += self.amplitude[a] * k;
-        }
-    }
-}
-
-/// Temperature sensitivity (see [`Injected::Temperature`]).
-pub struct TemperatureEffect {
-    /// The temperature over time.
-    pub profile: TemperatureProfile,
-    /// Bias coefficient per axis, m/s^2 / deg C.
-    pub bias_per_c: [f64; 3],
-    /// Relative scale coefficient per axis, 1 / deg C.
-    pub scale_per_c: [f64; 3],
-    /// Reference temperature, deg C.
-    pub reference_c: f64,
-}
-
-impl Effect for TemperatureEffect {
-    fn apply(&mut self, t_s: f64, _pose: Option<usize>, reading: &mut [f64; 3]) {
-        let dt = self.profile.at(t_s) - self.reference_c;
-        for a in 0..3 {
-            reading[a] += self.bias_per_c[a] * dt + self.scale_per_c[a] * dt * reading[a];
-        }
-    }
-}
-
-/// Second-order scale term (see [`Injected::ScaleNonlinearity`]).
-pub struct ScaleNonlinearity {
-    /// `k2` per axis, 1 / (m/s^2).
-    pub k2: [f64; 3],
-}
-
-impl Effect for ScaleNonlinearity {
-    fn apply(&mut self, _t_s: f64, _pose: Option<usize>, reading: &mut [f64; 3]) {
-        for a in 0..3 {
-            reading[a] += self.k2[a] * reading[a] * reading[a];
-        }
-    }
-}
-
-/// Settling: the output lags the orientation change and relaxes over `tau_s` (see
-/// [`Injected::Settling`]).
-pub struct Settling {
-    /// Lag fraction per axis.
-    pub lag: [f64; 3],
-    /// Decay time, s.
-    pub tau_s: f64,
-    current: Option<(usize, f64, [f64; 3])>,
-    previous_reading: Option<[f64; 3]>,
-}
-
-impl Settling {
-    /// A settling effect.
-    pub fn new(lag: [f64; 3], tau_s: f64) -> Self {
-        Self { lag, tau_s, current: None, previous_reading: None }
-    }
-}
-
-impl Effect for Settling {
-    fn apply(&mut self, t_s: f64, pose: Option<usize>, reading: &mut [f64; 3]) {
-        let Some(index) = pose else {
-            return;
-        };
-        if self.current.is_none_or(|(i, _, _)| i != index) {
-            if let Some((_, _, last)) = self.current {
-                self.previous_reading = Some(last);
-            }
-            self.current = Some((index, t_s, *reading));
-        }
-        let Some((_, start, clean)) = self.current else {
-            return;
-        };
-        if let Some(previous) = self.previous_reading {
-            let k = (-(t_s - start) / self.tau_s).exp();
-            for a in 0..3 {
-                reading[a] += self.lag[a] * (previous[a] - clean[a]) * k;
-            }
-        }
-    }
-}
-
-/// Slow motion on some poses: a half-sine hump of linear acceleration over the pose.
-pub struct SlowMotion {
-    /// `(pose index, unit direction, peak m/s^2)`.
-    pub poses: Vec<(usize, [f64; 3], f64)>,
-    /// Static time per pose, s.
-    pub pose_seconds: f64,
-    start: Option<(usize, f64)>,
-}
-
-impl SlowMotion {
-    /// A slow-motion effect.
-    pub fn new(poses: Vec<(usize, [f64; 3], f64)>, pose_seconds: f64) -> Self {
-        Self { poses, pose_seconds, start: None }
-    }
-}
-
-impl Effect for SlowMotion {
-    fn apply(&mut self, t_s: f64, pose: Option<usize>, reading: &mut [f64; 3]) {
-        let Some(index) = pose else {
-            return;
-        };
-        if self.start.is_none_or(|(i, _)| i != index) {
-            self.start = Some((index, t_s));
-        }
-        let Some((_, start)) = self.start else {
-            return;
-        };
-        if let Some(&(_, dir, peak)) = self.poses.iter().find(|(i, _, _)| *i == index) {
-            let phase = ((t_s - start) / self.pose_seconds).clamp(0.0, 1.0);
-            let k = peak * (std::f64::consts::PI * phase).sin();
-            for a in 0..3 {
-                reading[a] += dir[a] * k;
-            }
-        }
-    }
-}
-
-/// Colored bias noise per axis: a random walk plus a first-order Gauss-Markov bias instability
-/// (see [`Injected::ColoredNoise`]).
-pub struct ColoredBias {
-    /// Random-walk coefficient per axis, m/s^2 per sqrt(s).
-    pub walk: [f64; 3],
-    /// Bias-instability standard deviation per axis, m/s^2.
-    pub instability: [f64; 3],
-    /// Bias-instability correlation time, s.
-    pub correlation_s: f64,
-    walk_bias: [f64; 3],
-    markov_bias: Option<[f64; 3]>,
-    last_t: Option<f64>,
-    rng: Xoshiro256PlusPlus,
-}
-
-impl ColoredBias {
-    /// Colored bias noise seeded by `seed`.
-    pub fn new(walk: [f64; 3], instability: [f64; 3], correlation_s: f64, seed: u64) -> Self {
-        Self {
-            walk,
-            instability,
-            correlation_s,
-            walk_bias: [0.0; 3],
-            markov_bias: None,
-            last_t: None,
-            rng: Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x0C01_07ED),
-        }
-    }
-}
-
-impl Effect for ColoredBias {
-    fn apply(&mut self, t_s: f64, _pose: Option<usize>, reading: &mut [f64; 3]) {
-        let dt = self.last_t.map_or(0.0, |last| (t_s - last).max(0.0));
-        self.last_t = Some(t_s);
-        let rng = &mut self.rng;
-        let instability = self.instability;
-        // Stationary from the start.
-        let markov = self.markov_bias.get_or_insert_with(|| std::array::from_fn(|a| instability[a] * gaussian(rng)));
-        let keep = (-dt / self.correlation_s).exp();
-        for a in 0..3 {
-            self.walk_bias[a] += self.walk[a] * dt.sqrt() * gaussian(rng);
-            markov[a] = keep * markov[a] + instability[a] * (1.0 - keep * keep).sqrt() * gaussian(rng);
-            reading[a] += self.walk_bias[a] + markov[a];
         }
     }
 }
@@ -489,7 +280,12 @@ pub fn generate(scenario: &Scenario) -> SimLog {
             sim::simulate_with(cfg, &mut [&mut ColoredBias::new(*walk, *instability, *correlation_s, cfg.seed)])
         }
     };
-    let temps_c = recording.times_s.iter().map(|&t| (scenario.temperature.at(t) * 100.0).round() / 100.0).collect();
+    with_thermometer(recording, &scenario.temperature)
+}
+
+/// The recording with the thermometer's column: `profile` at every sample time, to 0.01 deg C.
+fn with_thermometer(recording: Recording, profile: &TemperatureProfile) -> SimLog {
+    let temps_c = recording.times_s.iter().map(|&t| (profile.at(t) * 100.0).round() / 100.0).collect();
     SimLog { recording, temps_c }
 }
 
@@ -529,14 +325,11 @@ pub fn generate_outside(kind: Outside, seed: u64) -> SimLog {
     let cfg = &scenario.sim;
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x0075_1DE0);
     let mg = sim::STANDARD_GRAVITY_MPS2 * 1e-3;
-    let poses = match cfg.plan {
-        Plan::Random(n) => n,
-        _ => 24,
-    };
+    let poses = cfg.plan.pose_count();
     let recording = match kind {
         Outside::OneBadPose => {
             let bad = 1 + (rng.next_u64() % (poses as u64 - 1)) as usize;
-            let offset = unit_vector(&mut rng).map(|c| c * uniform(&mut rng, 5.0, 15.0) * mg);
+            let offset = unit_vector(&mut rng).map(|c| c * uniform_in(&mut rng, 5.0, 15.0) * mg);
             sim::simulate_with(
                 cfg,
                 &mut [&mut |_t: f64, pose: Option<usize>, r: &mut [f64; 3]| {
@@ -547,7 +340,7 @@ pub fn generate_outside(kind: Outside, seed: u64) -> SimLog {
             )
         }
         Outside::CrossAxis => {
-            let c: [f64; 3] = std::array::from_fn(|_| sign(&mut rng) * uniform(&mut rng, 3.0, 8.0) * 1e-3);
+            let c: [f64; 3] = std::array::from_fn(|_| random_sign(&mut rng) * uniform_in(&mut rng, 3.0, 8.0) * 1e-3);
             let g = sim::STANDARD_GRAVITY_MPS2;
             sim::simulate_with(
                 cfg,
@@ -560,7 +353,7 @@ pub fn generate_outside(kind: Outside, seed: u64) -> SimLog {
             )
         }
         Outside::Hysteresis => {
-            let h: [f64; 3] = std::array::from_fn(|_| uniform(&mut rng, 3.0, 8.0) * mg);
+            let h: [f64; 3] = std::array::from_fn(|_| uniform_in(&mut rng, 3.0, 8.0) * mg);
             let (mut last, mut previous_pose, mut bias) = (None::<[f64; 3]>, None, [0.0; 3]);
             sim::simulate_with(
                 cfg,
@@ -577,9 +370,9 @@ pub fn generate_outside(kind: Outside, seed: u64) -> SimLog {
             )
         }
         Outside::PeriodicBias => {
-            let amp: [f64; 3] = std::array::from_fn(|_| uniform(&mut rng, 2.0, 5.0) * mg);
-            let period = uniform(&mut rng, 40.0, 90.0);
-            let phase = uniform(&mut rng, 0.0, 6.3);
+            let amp: [f64; 3] = std::array::from_fn(|_| uniform_in(&mut rng, 2.0, 5.0) * mg);
+            let period = uniform_in(&mut rng, 40.0, 90.0);
+            let phase = uniform_in(&mut rng, 0.0, 6.3);
             sim::simulate_with(
                 cfg,
                 &mut [&mut |t: f64, _p: Option<usize>, r: &mut [f64; 3]| {
@@ -589,8 +382,7 @@ pub fn generate_outside(kind: Outside, seed: u64) -> SimLog {
             )
         }
     };
-    let temps_c = recording.times_s.iter().map(|&t| (scenario.temperature.at(t) * 100.0).round() / 100.0).collect();
-    SimLog { recording, temps_c }
+    with_thermometer(recording, &scenario.temperature)
 }
 
 /// Other shapes of the catalogue's effects than [`random_scenario`] injects (the diagnosis should
@@ -641,18 +433,15 @@ pub fn generate_shape(shape: Shape, seed: u64) -> SimLog {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x05A4_E000);
     let g = sim::STANDARD_GRAVITY_MPS2;
     let mg = g * 1e-3;
-    let poses = match cfg.plan {
-        Plan::Random(n) => n,
-        _ => 24,
-    };
+    let poses = cfg.plan.pose_count();
     let duration = cfg.initial_rest_s + poses as f64 * (cfg.seconds_per_pose + cfg.move_seconds);
     let amp = |rng: &mut Xoshiro256PlusPlus, lo: f64, hi: f64| -> [f64; 3] {
-        std::array::from_fn(|_| sign(rng) * uniform(rng, lo, hi) * mg)
+        std::array::from_fn(|_| random_sign(rng) * uniform_in(rng, lo, hi) * mg)
     };
     let recording = match shape {
         Shape::TwoStageDrift => {
             let (a1, a2) = (amp(&mut rng, 1.5, 4.0), amp(&mut rng, 1.5, 4.0));
-            let (t1, t2) = (duration * uniform(&mut rng, 0.03, 0.1), duration * uniform(&mut rng, 0.4, 1.0));
+            let (t1, t2) = (duration * uniform_in(&mut rng, 0.03, 0.1), duration * uniform_in(&mut rng, 0.4, 1.0));
             sim::simulate_with(
                 cfg,
                 &mut [&mut |t: f64, _p: Option<usize>, r: &mut [f64; 3]| {
@@ -673,7 +462,7 @@ pub fn generate_shape(shape: Shape, seed: u64) -> SimLog {
         }
         Shape::LaggedTemperature => {
             let bias = amp(&mut rng, 0.6, 1.5);
-            let lag = uniform(&mut rng, 60.0, 300.0);
+            let lag = uniform_in(&mut rng, 60.0, 300.0);
             let profile = scenario.temperature;
             let (mut sensor_c, mut last_t) = (None::<f64>, 0.0);
             sim::simulate_with(
@@ -688,7 +477,7 @@ pub fn generate_shape(shape: Shape, seed: u64) -> SimLog {
             )
         }
         Shape::CubicNonlinearity => {
-            let k3: [f64; 3] = std::array::from_fn(|_| sign(&mut rng) * uniform(&mut rng, 1.5, 5.0) * 1e-3);
+            let k3: [f64; 3] = std::array::from_fn(|_| random_sign(&mut rng) * uniform_in(&mut rng, 1.5, 5.0) * 1e-3);
             sim::simulate_with(
                 cfg,
                 &mut [&mut |_t: f64, _p: Option<usize>, r: &mut [f64; 3]| {
@@ -697,8 +486,7 @@ pub fn generate_shape(shape: Shape, seed: u64) -> SimLog {
             )
         }
     };
-    let temps_c = recording.times_s.iter().map(|&t| (scenario.temperature.at(t) * 100.0).round() / 100.0).collect();
-    SimLog { recording, temps_c }
+    with_thermometer(recording, &scenario.temperature)
 }
 
 /// The log as `t,ax,ay,az,temp` CSV text (counts as integers, other units with 10 significant

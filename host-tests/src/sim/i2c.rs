@@ -23,7 +23,7 @@
 //! ```
 //! use accelcal::mpu6050::{Address, Mpu6050};
 //! use accelcal::sensor::AccelSensor;
-//! use accelcal_host::i2c_sim::SimMpu6050;
+//! use accelcal_host::sim::i2c::SimMpu6050;
 //! let mut bus = SimMpu6050::from_counts(&[[0, 0, 16384], [1, -2, 16383]], 16384.0);
 //! bus.fail_at(1);
 //! let mut imu = Mpu6050::new(bus, Address::Ad0Low);
