@@ -13,6 +13,5 @@ pub mod labelled;
 pub mod output;
 pub mod paper;
 pub mod plots;
-pub mod report;
 pub mod report_html;
 pub mod sim;

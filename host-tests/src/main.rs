@@ -124,15 +124,6 @@ enum Command {
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
-    /// Size and cycle report of the firmware on an emulated Cortex-M4, against the budgets.
-    Report {
-        /// Machine-readable report on stdout.
-        #[arg(long)]
-        json: bool,
-        /// Exit with 1 when a budget marked enforced is exceeded.
-        #[arg(long)]
-        check: bool,
-    },
     /// Reproduce the paper's experiments (Table 2 Monte Carlo vs the Cramer-Rao bound, Fig. 3, 6, 7).
     Paper {
         /// Monte Carlo runs.
@@ -240,11 +231,6 @@ fn main() -> ExitCode {
         Command::Diagnose { input, json, plots, report, seed } => {
             diagnose_file(&input, json, plots.as_deref(), report.as_deref(), seed)
         }
-        Command::Report { json, check } => match accelcal_host::report::run(json, check) {
-            Ok(true) => Ok(()),
-            Ok(false) => Err(Failure::Verdict),
-            Err(e) => Err(Failure::Input(e)),
-        },
         Command::Paper { runs, noise_mg, plan, operator_seeds, out, json, seed } => {
             paper_cmd(PaperOptions { runs, noise_mg, plan, seed, operator_seeds }, out, json)
         }
