@@ -26,8 +26,9 @@ zero-wait-state case). Flash wait states, bus contention, load-use and FPU regis
 folding are not modelled, so the cycle figures are an estimate, typically within 10-30 % of a real
 Cortex-M4F running from zero-wait-state memory (or from flash behind the STM32 ART accelerator).
 
-Cortex-M0+ (ARMv6-M, no FPU: floats are compiler_builtins calls, emulated and priced like the rest; Unicorn's
-Cortex-M0 model, which faults on any ARMv7-M instruction), from the Cortex-M0+ TRM (r0p1, table 3-1, a
+Cortex-M0+ (ARMv6-M, no FPU: floats are compiler_builtins calls, emulated and priced like the rest; Unicorn
+emulates the M profile with Thumb-2, so every executed instruction is checked to be ARMv6-M: 16 bits wide, or
+one of BL, MSR, MRS, DMB, DSB, ISB), from the Cortex-M0+ TRM (r0p1, table 3-1, a
 2-stage pipeline): ALU, shifts, extends, MULS ... 1 (the single-cycle multiplier option, which the common
 parts have: RP2040, STM32G0/L0, SAMD21; the small 32-cycle one would cost far more); LDR/STR ... 2; LDM/STM/
 PUSH/POP ... 1 + N; B/BX/BLX ... 1 (+ P when taken, P = 1: 2 cycles taken); BL ... 2 + P = 3; POP {pc} ...
@@ -106,6 +107,8 @@ SINGLE_LOADS_STORES = {
     A.ARM_INS_STR, A.ARM_INS_STRB, A.ARM_INS_STRH, A.ARM_INS_STRT, A.ARM_INS_STRBT, A.ARM_INS_STRHT,
     A.ARM_INS_STREX,
 }
+# The only 32-bit instructions of ARMv6-M.
+ARMV6M_WIDE = {A.ARM_INS_BL, A.ARM_INS_MSR, A.ARM_INS_MRS, A.ARM_INS_DMB, A.ARM_INS_DSB, A.ARM_INS_ISB}
 MULTIPLE = {A.ARM_INS_LDM, A.ARM_INS_LDMDB, A.ARM_INS_STM, A.ARM_INS_STMDB, A.ARM_INS_PUSH, A.ARM_INS_POP}
 FP_MULTIPLE = {A.ARM_INS_VLDMIA, A.ARM_INS_VLDMDB, A.ARM_INS_VSTMIA, A.ARM_INS_VSTMDB, A.ARM_INS_VPUSH,
                A.ARM_INS_VPOP}
@@ -217,10 +220,10 @@ def price_rv(cs_insn):
 class Cpu:
     """One emulated core: Unicorn and Capstone modes, registers, memory and timing table."""
 
-    def __init__(self, name, cost_model, penalty, price, riscv=False, uc_model=None):
+    def __init__(self, name, cost_model, penalty, price, riscv=False, armv6m=False):
         self.name, self.cost_model, self.penalty, self.price = name, cost_model, penalty, price
         self.riscv = riscv
-        self.uc_model = uc_model
+        self.armv6m = armv6m
         if riscv:
             self.uc_mode = (UC_ARCH_RISCV, UC_MODE_RISCV32)
             self.cs_mode = (capstone.CS_ARCH_RISCV, capstone.CS_MODE_RISCV32 | capstone.CS_MODE_RISCVC)
@@ -241,9 +244,9 @@ class Cpu:
 CPUS = {
     "cortex-m4": Cpu("cortex-m4", "unicorn + Cortex-M4 timing table (+-10-30 % vs silicon); taken branch +{p} cycle",
                      1, price),
-    "cortex-m0plus": Cpu("cortex-m0plus", "unicorn (Cortex-M0 model) + Cortex-M0+ TRM timing table (load/store 2, "
+    "cortex-m0plus": Cpu("cortex-m0plus", "unicorn (every instruction checked ARMv6-M) + Cortex-M0+ TRM timing table (load/store 2, "
                          "taken branch 2, BL 3, single-cycle multiplier assumed; soft float); taken branch +{p} cycle", 1,
-                         price_m0plus, uc_model=U.UC_CPU_ARM_CORTEX_M0),
+                         price_m0plus, armv6m=True),
     "rv32imc": Cpu("rv32imc", "unicorn RV32 + a simple model, not a chip (ALU and mul 1, load 2, store 1, taken "
                    "branch and jump 1+{p}, div/rem 34)", 2, price_rv, riscv=True),
 }
@@ -307,8 +310,6 @@ class Emulator:
         self.deadline = time.monotonic() + timeout_s
         self.cs = cpu.capstone()
         self.uc = Uc(*cpu.uc_mode)
-        if cpu.uc_model is not None:
-            self.uc.ctl_set_cpu_model(cpu.uc_model)
         for base, size in cpu.memory:
             self.uc.mem_map(base, size)
         if cpu.riscv:
@@ -345,8 +346,13 @@ class Emulator:
             uc.emu_stop()
 
     def _decode(self, addr, size):
-        return [Insn(ins.address, ins.size, ins.insn_name(), *self.cpu.price(ins))
-                for ins in self.cs.disasm(bytes(self.uc.mem_read(addr, size)), addr)]
+        insns = list(self.cs.disasm(bytes(self.uc.mem_read(addr, size)), addr))
+        if self.cpu.armv6m:
+            for ins in insns:
+                if ins.size == 4 and ins.id not in ARMV6M_WIDE:
+                    sys.exit(f"cyclecount.py: {ins.mnemonic} {ins.op_str} at {ins.address:#x} ({self._where(addr)}) "
+                             "is not an ARMv6-M instruction")
+        return [Insn(ins.address, ins.size, ins.insn_name(), *self.cpu.price(ins)) for ins in insns]
 
     def _price_block(self, addr, size):
         insns = self._decode(addr, size)

@@ -125,6 +125,8 @@ pub struct TargetReport {
     pub generations: Option<u64>,
     /// LM iterations from the coarse start.
     pub lm_iterations: Option<u64>,
+    /// The full calibration's final objective (f32), as the bench printed its bits.
+    pub objective: Option<f32>,
     /// Flash.
     pub flash_bytes: Flash,
     /// RAM.
@@ -270,9 +272,15 @@ fn target_report(target: &Target, m: &Measured) -> Result<TargetReport, String> 
         population: stdout_field(out, "bench: sizes", "population"),
         generations: stdout_field(out, "bench: full_calibration", "generations"),
         lm_iterations: stdout_field(out, "bench: lm", "iterations"),
+        objective: objective_bits(out).map(f32::from_bits),
         flash_bytes,
         ram_bytes,
     })
+}
+
+/// The bits of the full calibration's final objective in the bench's output.
+fn objective_bits(stdout: &str) -> Option<u32> {
+    stdout_field(stdout, "bench: full_calibration", "objective_bits").and_then(|b| u32::try_from(b).ok())
 }
 
 /// The figure of `report` that budget `key` limits.
@@ -411,8 +419,11 @@ fn comparison_table(s: &mut String, targets: &[TargetReport]) {
     let header: Vec<String> = targets.iter().map(|r| format!("{} ({})", r.core, r.target)).collect();
     let _ = writeln!(s, "\n| measure | {} |", header.join(" | "));
     let _ = writeln!(s, "|---|{}", "---:|".repeat(targets.len()));
-    let rows: [(&str, Figure); 7] = [
+    let rows: [(&str, Figure); 8] = [
         ("library calibration path, flash (B)", |r| r.flash_bytes.library),
+        ("of which compiler_builtins: soft float, 64-bit, memcpy (B)", |r| {
+            r.flash_bytes.library_by_crate.get("compiler_builtins").copied().unwrap_or(0)
+        }),
         ("LM alone from the coarse start (cycles)", |r| r.functions["lm"].cycles),
         ("full calibration (cycles)", |r| r.functions["full_calibration"].cycles),
         ("initial estimate (cycles)", |r| r.functions["initial_estimate"].cycles),
@@ -424,6 +435,9 @@ fn comparison_table(s: &mut String, targets: &[TargetReport]) {
         let cells: Vec<String> = targets.iter().map(|r| figure(r).to_string()).collect();
         let _ = writeln!(s, "| {what} | {} |", cells.join(" | "));
     }
+    let objectives: Vec<String> =
+        targets.iter().map(|r| r.objective.map_or("?".into(), |o| format!("{o:e}"))).collect();
+    let _ = writeln!(s, "| full calibration: final objective (f32) | {} |", objectives.join(" | "));
     let _ = writeln!(s);
     for r in targets {
         let _ = writeln!(s, "- {}: {}", r.core, r.cost_model);
@@ -548,6 +562,7 @@ mod tests {
             population: None,
             generations: None,
             lm_iterations: None,
+            objective: None,
             flash_bytes: flash,
             ram_bytes: ram,
         }
@@ -566,6 +581,14 @@ mod tests {
         keys.sort_unstable();
         keys.dedup();
         assert_eq!(keys.len(), BUDGETS.len());
+    }
+
+    #[test]
+    fn the_objective_is_read_from_its_bits() {
+        let out =
+            "bench: full_calibration generations 10 evaluations 245 iterations 5 pass 1 objective_bits 933146429\n";
+        assert_eq!(objective_bits(out), Some(933_146_429));
+        assert_eq!(objective_bits("bench: full_calibration objective_bits 4294967296"), None);
     }
 
     #[test]
