@@ -436,8 +436,8 @@ fn comparison_table(s: &mut String, targets: &[TargetReport]) {
         let _ = writeln!(s, "| {what} | {} |", cells.join(" | "));
     }
     let objectives: Vec<String> =
-        targets.iter().map(|r| r.objective.map_or("?".into(), |o| format!("{o:e}"))).collect();
-    let _ = writeln!(s, "| full calibration: final objective (f32) | {} |", objectives.join(" | "));
+        targets.iter().map(|r| r.objective.map_or("?".into(), |o| format!("{o:?}"))).collect();
+    let _ = writeln!(s, "| full calibration: final objective (f32, all its digits) | {} |", objectives.join(" | "));
     let _ = writeln!(s);
     for r in targets {
         let _ = writeln!(s, "- {}: {}", r.core, r.cost_model);
