@@ -644,7 +644,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("elf", help="the bench firmware ELF")
     ap.add_argument("--cpu", choices=sorted(CPUS), default="cortex-m4", help="core and timing table")
-    ap.add_argument("--functions", default="accumulate_sample,apply_sample,taga_generation,full_calibration,lm,initial_estimate")
+    ap.add_argument("--functions", default="accumulate_fifo,accumulate_sample,apply_sample,taga_generation,full_calibration,lm,initial_estimate")
     ap.add_argument("--branch-penalty", type=int, default=None,
                     help="extra cycles of a taken branch (P; default 1 on ARM, 2 on RISC-V)")
     ap.add_argument("--timeout", type=float, default=600.0, help="seconds")

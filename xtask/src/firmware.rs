@@ -30,8 +30,15 @@ pub const TARGETS: [Target; 3] = [
 pub const PROFILE: &str = "release";
 
 /// The bench image's measured functions (examples/bench.rs), in report order.
-pub const FUNCTIONS: [&str; 6] =
-    ["accumulate_sample", "apply_sample", "taga_generation", "lm", "initial_estimate", "full_calibration"];
+pub const FUNCTIONS: [&str; 7] = [
+    "accumulate_fifo",
+    "accumulate_sample",
+    "apply_sample",
+    "taga_generation",
+    "lm",
+    "initial_estimate",
+    "full_calibration",
+];
 
 /// Seconds the emulator may run per image (a soft-float Cortex-M0+ image runs the longest).
 const EMULATOR_TIMEOUT_S: u32 = 1800;
@@ -39,6 +46,8 @@ const EMULATOR_TIMEOUT_S: u32 = 1800;
 /// One statistic over the calls of a measured function.
 #[derive(Debug, Clone, Deserialize)]
 pub struct CallStat {
+    /// Sum over the calls.
+    pub total: u64,
     /// Mean per call.
     pub mean: f64,
     /// Largest call.

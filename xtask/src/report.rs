@@ -66,6 +66,8 @@ pub struct FunctionFigures {
     pub calls: u64,
     /// Executed instructions, mean per call.
     pub instructions: u64,
+    /// Estimated cycles of all the calls.
+    pub total_cycles: u64,
     /// Estimated cycles, mean per call.
     pub cycles: u64,
     /// Estimated cycles of the longest call.
@@ -117,6 +119,10 @@ pub struct TargetReport {
     pub functions: BTreeMap<&'static str, FunctionFigures>,
     /// Apply's cycles per sample (its calls take a batch).
     pub apply_cycles_per_sample: u64,
+    /// Accumulate's cycles per sample when a FIFO read's samples are pushed in one call's loop.
+    pub fifo_cycles_per_sample: u64,
+    /// Samples per FIFO read.
+    pub fifo_samples_per_call: u64,
     /// Samples per apply call.
     pub apply_samples_per_call: u64,
     /// The device GA population.
@@ -230,6 +236,7 @@ fn function_figures(emulation: &Emulation) -> Result<BTreeMap<&'static str, Func
             let figures = FunctionFigures {
                 calls: run.calls,
                 instructions: run.instructions.mean.round() as u64,
+                total_cycles: run.cycles.total,
                 cycles: run.cycles.mean.round() as u64,
                 max_cycles: run.cycles.max,
                 peak_stack_bytes: run.peak_stack_bytes,
@@ -244,6 +251,7 @@ fn target_report(target: &Target, m: &Measured) -> Result<TargetReport, String> 
     let functions = function_figures(emu)?;
     let out = emu.stdout.as_str();
     let apply_samples_per_call = stdout_field(out, "bench: apply", "samples_per_call").unwrap_or(1).max(1);
+    let samples = stdout_field(out, "bench: samples", "samples").ok_or("the bench did not print its sample count")?;
     let bench = ImageSizes::read(&m.bench_elf)?;
     let qemu_example = m.qemu_elf.as_deref().map(ImageSizes::read).transpose()?.map(|s| s.flash_bytes);
     let code = &emu.static_code;
@@ -267,6 +275,8 @@ fn target_report(target: &Target, m: &Measured) -> Result<TargetReport, String> 
         core: target.core,
         cost_model: emu.cost_model.clone(),
         apply_cycles_per_sample: functions["apply_sample"].cycles.div_ceil(apply_samples_per_call),
+        fifo_cycles_per_sample: functions["accumulate_fifo"].total_cycles.div_ceil(samples.max(1)),
+        fifo_samples_per_call: stdout_field(out, "bench: accumulate", "samples_per_call").unwrap_or(0),
         functions,
         apply_samples_per_call,
         population: stdout_field(out, "bench: sizes", "population"),
@@ -347,9 +357,11 @@ fn budget_table(s: &mut String, report: &Report, r: &TargetReport) {
     let _ = writeln!(s, "| measure | calls | instructions | cycles | budget | status |");
     let _ = writeln!(s, "|---|---:|---:|---:|---:|---|");
     let apply = format!("apply one sample (per sample of a {}-sample call)", r.apply_samples_per_call);
+    let fifo = format!("accumulate one sample of a {}-sample FIFO read (per sample)", r.fifo_samples_per_call);
     let generation = format!("one TAGA generation, 24 poses, pop. {} (mean)", opt(r.population));
     let rows = [
         ("accumulate_sample", "accumulate one sample (mean per call)", "accumulate_cycles_per_sample"),
+        ("accumulate_fifo", fifo.as_str(), ""),
         ("apply_sample", apply.as_str(), "apply_cycles_per_sample"),
         ("taga_generation", generation.as_str(), ""),
         ("lm", "LM alone from the coarse start", "lm_cycles"),
@@ -358,7 +370,11 @@ fn budget_table(s: &mut String, report: &Report, r: &TargetReport) {
     ];
     for (key, what, budget) in rows {
         let f = &r.functions[key];
-        let cycles = if key == "apply_sample" { r.apply_cycles_per_sample } else { f.cycles };
+        let cycles = match key {
+            "apply_sample" => r.apply_cycles_per_sample,
+            "accumulate_fifo" => r.fifo_cycles_per_sample,
+            _ => f.cycles,
+        };
         let _ =
             writeln!(s, "| {what} | {} | {} | {cycles} | {} |", f.calls, f.instructions, budget_cell(report, budget));
     }
@@ -419,7 +435,7 @@ fn comparison_table(s: &mut String, targets: &[TargetReport]) {
     let header: Vec<String> = targets.iter().map(|r| format!("{} ({})", r.core, r.target)).collect();
     let _ = writeln!(s, "\n| measure | {} |", header.join(" | "));
     let _ = writeln!(s, "|---|{}", "---:|".repeat(targets.len()));
-    let rows: [(&str, Figure); 8] = [
+    let rows: [(&str, Figure); 9] = [
         ("library calibration path, flash (B)", |r| r.flash_bytes.library),
         ("of which compiler_builtins: soft float, 64-bit, memcpy (B)", |r| {
             r.flash_bytes.library_by_crate.get("compiler_builtins").copied().unwrap_or(0)
@@ -428,6 +444,7 @@ fn comparison_table(s: &mut String, targets: &[TargetReport]) {
         ("full calibration (cycles)", |r| r.functions["full_calibration"].cycles),
         ("initial estimate (cycles)", |r| r.functions["initial_estimate"].cycles),
         ("accumulate one sample (cycles)", |r| r.functions["accumulate_sample"].cycles),
+        ("accumulate, per sample of a FIFO read (cycles)", |r| r.fifo_cycles_per_sample),
         ("apply one sample (cycles)", |r| r.apply_cycles_per_sample),
         ("RAM: static + peak stack of the solve (B)", |r| r.ram_bytes.solve),
     ];
@@ -543,7 +560,14 @@ mod tests {
 
     /// A report whose every function figure is `n` cycles.
     fn target_report(n: u64) -> TargetReport {
-        let f = FunctionFigures { calls: 1, instructions: n, cycles: n, max_cycles: n, peak_stack_bytes: n };
+        let f = FunctionFigures {
+            calls: 1,
+            instructions: n,
+            total_cycles: n,
+            cycles: n,
+            max_cycles: n,
+            peak_stack_bytes: n,
+        };
         let flash = Flash {
             library: n,
             library_by_crate: BTreeMap::new(),
@@ -559,6 +583,8 @@ mod tests {
             functions: FUNCTIONS.iter().map(|k| (*k, f.clone())).collect(),
             apply_cycles_per_sample: n,
             apply_samples_per_call: 1,
+            fifo_cycles_per_sample: n,
+            fifo_samples_per_call: 1,
             population: None,
             generations: None,
             lm_iterations: None,
