@@ -66,6 +66,8 @@ pub struct FunctionFigures {
     pub calls: u64,
     /// Executed instructions, mean per call.
     pub instructions: u64,
+    /// Executed instructions of all the calls.
+    pub total_instructions: u64,
     /// Estimated cycles of all the calls.
     pub total_cycles: u64,
     /// Estimated cycles, mean per call.
@@ -121,6 +123,8 @@ pub struct TargetReport {
     pub apply_cycles_per_sample: u64,
     /// Accumulate's cycles per sample when a FIFO read's samples are pushed in one call's loop.
     pub fifo_cycles_per_sample: u64,
+    /// Accumulate's instructions per sample in the same loop.
+    pub fifo_instructions_per_sample: u64,
     /// Samples per FIFO read.
     pub fifo_samples_per_call: u64,
     /// Samples per apply call.
@@ -236,6 +240,7 @@ fn function_figures(emulation: &Emulation) -> Result<BTreeMap<&'static str, Func
             let figures = FunctionFigures {
                 calls: run.calls,
                 instructions: run.instructions.mean.round() as u64,
+                total_instructions: run.instructions.total,
                 total_cycles: run.cycles.total,
                 cycles: run.cycles.mean.round() as u64,
                 max_cycles: run.cycles.max,
@@ -276,6 +281,7 @@ fn target_report(target: &Target, m: &Measured) -> Result<TargetReport, String> 
         cost_model: emu.cost_model.clone(),
         apply_cycles_per_sample: functions["apply_sample"].cycles.div_ceil(apply_samples_per_call),
         fifo_cycles_per_sample: functions["accumulate_fifo"].total_cycles.div_ceil(samples.max(1)),
+        fifo_instructions_per_sample: functions["accumulate_fifo"].total_instructions.div_ceil(samples.max(1)),
         fifo_samples_per_call: stdout_field(out, "bench: accumulate", "samples_per_call").unwrap_or(0),
         functions,
         apply_samples_per_call,
@@ -357,7 +363,8 @@ fn budget_table(s: &mut String, report: &Report, r: &TargetReport) {
     let _ = writeln!(s, "| measure | calls | instructions | cycles | budget | status |");
     let _ = writeln!(s, "|---|---:|---:|---:|---:|---|");
     let apply = format!("apply one sample (per sample of a {}-sample call)", r.apply_samples_per_call);
-    let fifo = format!("accumulate one sample of a {}-sample FIFO read (per sample)", r.fifo_samples_per_call);
+    let fifo =
+        format!("accumulate one sample of a {}-sample FIFO read (per sample; calls: reads)", r.fifo_samples_per_call);
     let generation = format!("one TAGA generation, 24 poses, pop. {} (mean)", opt(r.population));
     let rows = [
         ("accumulate_sample", "accumulate one sample (mean per call)", "accumulate_cycles_per_sample"),
@@ -370,13 +377,12 @@ fn budget_table(s: &mut String, report: &Report, r: &TargetReport) {
     ];
     for (key, what, budget) in rows {
         let f = &r.functions[key];
-        let cycles = match key {
-            "apply_sample" => r.apply_cycles_per_sample,
-            "accumulate_fifo" => r.fifo_cycles_per_sample,
-            _ => f.cycles,
+        let (instructions, cycles) = match key {
+            "apply_sample" => (f.instructions, r.apply_cycles_per_sample),
+            "accumulate_fifo" => (r.fifo_instructions_per_sample, r.fifo_cycles_per_sample),
+            _ => (f.instructions, f.cycles),
         };
-        let _ =
-            writeln!(s, "| {what} | {} | {} | {cycles} | {} |", f.calls, f.instructions, budget_cell(report, budget));
+        let _ = writeln!(s, "| {what} | {} | {instructions} | {cycles} | {} |", f.calls, budget_cell(report, budget));
     }
     memory_rows(s, report, r);
 }
@@ -563,6 +569,7 @@ mod tests {
         let f = FunctionFigures {
             calls: 1,
             instructions: n,
+            total_instructions: n,
             total_cycles: n,
             cycles: n,
             max_cycles: n,
@@ -584,6 +591,7 @@ mod tests {
             apply_cycles_per_sample: n,
             apply_samples_per_call: 1,
             fifo_cycles_per_sample: n,
+            fifo_instructions_per_sample: n,
             fifo_samples_per_call: 1,
             population: None,
             generations: None,
