@@ -20,6 +20,13 @@ fn main() {
     if let Err(e) = std::fs::copy("memory.x", out.join("memory.x")) {
         panic!("cannot copy memory.x to {}: {e}", out.display());
     }
+    // RISC-V has no cortex-m-rt: the bench image's own linker script is its `link.x`.
+    println!("cargo:rerun-if-changed=examples/riscv/link.x");
+    if std::env::var("CARGO_CFG_TARGET_ARCH").as_deref() == Ok("riscv32")
+        && let Err(e) = std::fs::copy("examples/riscv/link.x", out.join("link.x"))
+    {
+        panic!("cannot copy examples/riscv/link.x to {}: {e}", out.display());
+    }
     println!("cargo:rustc-link-arg-examples=-L{}", out.display());
     println!("cargo:rustc-link-arg-examples=-Tlink.x");
     println!("cargo:rustc-link-arg-examples=--nmagic");

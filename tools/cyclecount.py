@@ -1,11 +1,15 @@
 #!/usr/bin/env python3
-"""Instruction and estimated Cortex-M4 cycle counts of the bench image's functions (examples/bench.rs).
+"""Instruction and estimated cycle counts of the bench image's functions (examples/bench.rs), per core.
 
-Runs the firmware ELF in the Unicorn emulator (Thumb-2, M-profile, with the FPU that cortex-m-rt's Reset
-handler enables), from its reset vector to its semihosting exit. Every call of a function named in
---functions is measured from its first instruction to its return: the executed instructions are counted
-per translated block, each instruction is classified with Capstone and priced from a timing table taken
-from the ARM Cortex-M4 Technical Reference Manual (r0p1, table 3-1):
+--cpu cortex-m4 (default; thumbv7em-none-eabihf), cortex-m0plus (thumbv6m-none-eabi) or rv32imc
+(riscv32imc-unknown-none-elf). Runs the firmware ELF in the Unicorn emulator from its reset (the ARM vector
+table; the RISC-V ELF entry) to its exit (ARM semihosting; RISC-V the SiFive test device at 0x100000, output
+to the UART at 0x10000000, QEMU `virt`'s layout). Every call of a function named in --functions is measured
+from its first instruction to its return: the executed instructions are counted per translated block, each
+instruction is classified with Capstone and priced from the core's timing table.
+
+Cortex-M4 (Thumb-2, M-profile, with the FPU that cortex-m-rt's Reset handler enables), from the ARM
+Cortex-M4 Technical Reference Manual (r0p1, table 3-1):
 
   ALU, shifts, bit fields, MUL, long multiplies, IT ........ 1       MLA, MLS ...................... 2
   LDR/STR (single) ......................................... 2, or 1 when it directly follows another
@@ -22,11 +26,24 @@ zero-wait-state case). Flash wait states, bus contention, load-use and FPU regis
 folding are not modelled, so the cycle figures are an estimate, typically within 10-30 % of a real
 Cortex-M4F running from zero-wait-state memory (or from flash behind the STM32 ART accelerator).
 
+Cortex-M0+ (ARMv6-M, no FPU: floats are compiler_builtins calls, emulated and priced like the rest; Unicorn
+emulates the M profile with Thumb-2, so every executed instruction is checked to be ARMv6-M: 16 bits wide, or
+one of BL, MSR, MRS, DMB, DSB, ISB), from the Cortex-M0+ TRM (r0p1, table 3-1, a
+2-stage pipeline): ALU, shifts, extends, MULS ... 1 (the single-cycle multiplier option, which the common
+parts have: RP2040, STM32G0/L0, SAMD21; the small 32-cycle one would cost far more); LDR/STR ... 2; LDM/STM/
+PUSH/POP ... 1 + N; B/BX/BLX ... 1 (+ P when taken, P = 1: 2 cycles taken); BL ... 2 + P = 3; POP {pc} ...
+2 + N + P. Zero-wait-state memory.
+
+RV32IMC (riscv32imc-unknown-none-elf): a simple model, not a chip: ALU, LUI/AUIPC, MUL/MULH ... 1; loads 2;
+stores 1; conditional branches 1 (+ P when taken), JAL/JALR 1 + P, P = 2 (3 cycles taken); DIV/DIVU/REM/REMU
+34. Zero-wait-state memory; cores range from a 2-stage pipeline (taken branch 2-3) to multi-issue.
+
 The stack of every measured call is measured by painting the free RAM below the stack pointer at its
 entry (from the end of .bss up) with a pattern and finding, at its return, the lowest byte overwritten.
 
 Statically, the code a firmware links for these functions is found by walking the call graph from their
-symbols (direct BL/B targets in the disassembly) and summing the symbol sizes reached, by crate.
+symbols (direct BL/B targets in the disassembly; on RISC-V JAL, branches and AUIPC + JALR pairs) and summing
+the symbol sizes reached, by crate.
 
 Cross-check: the instruction counts equal, call by call, those of an independent QEMU 7.2 run of the same
 image (`qemu-system-arm -M netduinoplus2 -cpu cortex-m4 -singlestep -d exec,nochain`, one trace line per
@@ -50,8 +67,10 @@ try:
     from capstone import arm_const as A
     from elftools.elf.elffile import ELFFile
     from elftools.elf.sections import SymbolTableSection
-    from unicorn import UC_ARCH_ARM, UC_HOOK_BLOCK, UC_HOOK_INTR, UC_MODE_MCLASS, UC_MODE_THUMB, Uc, UcError
+    from unicorn import (UC_ARCH_ARM, UC_ARCH_RISCV, UC_HOOK_BLOCK, UC_HOOK_INTR, UC_HOOK_MEM_WRITE,
+                         UC_MODE_MCLASS, UC_MODE_RISCV32, UC_MODE_THUMB, Uc, UcError)
     from unicorn import arm_const as U
+    from unicorn import riscv_const as R
 except ImportError as e:  # pragma: no cover
     sys.exit(f"cyclecount.py: {e}: python3 -m pip install unicorn capstone pyelftools")
 
@@ -59,6 +78,12 @@ FLASH = (0x0800_0000, 512 * 1024)
 RAM = (0x2000_0000, 128 * 1024)
 # System control space (SCB, NVIC, SysTick, FPU registers): plain memory here.
 PPB = (0xE000_0000, 0x10_0000)
+# RISC-V (examples/riscv/link.x, QEMU virt): code and data from 0x80000000, RAM up to 0x800A0000; the
+# SiFive test device (exit) and the 16550 UART (output) as write-hooked pages.
+RV_MEMORY = (0x8000_0000, 640 * 1024)
+RV_TEST_DEVICE = 0x10_0000
+RV_UART = 0x1000_0000
+RV_TEST_PASS = 0x5555
 PAINT = 0xA5
 # Semihosting operations (ARM "Semihosting for AArch32 and AArch64").
 SYS_OPEN, SYS_WRITEC, SYS_WRITE0, SYS_WRITE, SYS_EXIT, SYS_EXIT_EXTENDED = 0x01, 0x03, 0x04, 0x05, 0x18, 0x20
@@ -82,6 +107,8 @@ SINGLE_LOADS_STORES = {
     A.ARM_INS_STR, A.ARM_INS_STRB, A.ARM_INS_STRH, A.ARM_INS_STRT, A.ARM_INS_STRBT, A.ARM_INS_STRHT,
     A.ARM_INS_STREX,
 }
+# The only 32-bit instructions of ARMv6-M.
+ARMV6M_WIDE = {A.ARM_INS_BL, A.ARM_INS_MSR, A.ARM_INS_MRS, A.ARM_INS_DMB, A.ARM_INS_DSB, A.ARM_INS_ISB}
 MULTIPLE = {A.ARM_INS_LDM, A.ARM_INS_LDMDB, A.ARM_INS_STM, A.ARM_INS_STMDB, A.ARM_INS_PUSH, A.ARM_INS_POP}
 FP_MULTIPLE = {A.ARM_INS_VLDMIA, A.ARM_INS_VLDMDB, A.ARM_INS_VSTMIA, A.ARM_INS_VSTMDB, A.ARM_INS_VPUSH,
                A.ARM_INS_VPOP}
@@ -151,6 +178,80 @@ def price(cs_insn):
     return 1, writes_pc(cs_insn), False
 
 
+def price_m0plus(cs_insn):
+    """(base cycles, may branch, is a pipelined single load/store) on the Cortex-M0+ (table above)."""
+    i = cs_insn.id
+    if i == A.ARM_INS_BL:
+        return 2, True, False
+    if i in BRANCHES:
+        return 1, True, False
+    if i in MULTIPLE:
+        first = 0 if i in (A.ARM_INS_PUSH, A.ARM_INS_POP) else 1
+        regs = sum(1 for op in cs_insn.operands[first:] if op.type == A.ARM_OP_REG)
+        pc = writes_pc(cs_insn)
+        return 1 + regs + (1 if pc else 0), pc, False
+    if i in SINGLE_LOADS_STORES:
+        return 2, writes_pc(cs_insn), False
+    return 1, writes_pc(cs_insn), False
+
+
+RV_LOADS = {"lb", "lh", "lw", "lbu", "lhu", "c.lw", "c.lwsp"}
+RV_STORES = {"sb", "sh", "sw", "c.sw", "c.swsp"}
+RV_DIVIDES = {"div", "divu", "rem", "remu"}
+RV_JUMPS = {"jal", "jalr", "j", "jr", "ret", "c.j", "c.jal", "c.jr", "c.jalr"}
+
+
+def rv_is_branch(name):
+    return name in RV_JUMPS or name.startswith("b") or name.startswith("c.b")
+
+
+def price_rv(cs_insn):
+    """(base cycles, may branch, is a pipelined single load/store) in the RV32IMC model (table above)."""
+    name = cs_insn.mnemonic
+    if rv_is_branch(name):
+        return 1, True, False
+    if name in RV_LOADS:
+        return 2, False, False
+    if name in RV_DIVIDES:
+        return 34, False, False
+    return 1, False, False
+
+
+class Cpu:
+    """One emulated core: Unicorn and Capstone modes, registers, memory and timing table."""
+
+    def __init__(self, name, cost_model, penalty, price, riscv=False, armv6m=False):
+        self.name, self.cost_model, self.penalty, self.price = name, cost_model, penalty, price
+        self.riscv = riscv
+        self.armv6m = armv6m
+        if riscv:
+            self.uc_mode = (UC_ARCH_RISCV, UC_MODE_RISCV32)
+            self.cs_mode = (capstone.CS_ARCH_RISCV, capstone.CS_MODE_RISCV32 | capstone.CS_MODE_RISCVC)
+            self.sp, self.ra, self.pc = R.UC_RISCV_REG_SP, R.UC_RISCV_REG_RA, R.UC_RISCV_REG_PC
+            self.memory = (RV_MEMORY,)
+        else:
+            self.uc_mode = (UC_ARCH_ARM, UC_MODE_THUMB | UC_MODE_MCLASS)
+            self.cs_mode = (capstone.CS_ARCH_ARM, capstone.CS_MODE_THUMB | capstone.CS_MODE_MCLASS)
+            self.sp, self.ra, self.pc = U.UC_ARM_REG_SP, U.UC_ARM_REG_LR, U.UC_ARM_REG_PC
+            self.memory = (FLASH, RAM, PPB)
+
+    def capstone(self):
+        cs = capstone.Cs(*self.cs_mode)
+        cs.detail = True
+        return cs
+
+
+CPUS = {
+    "cortex-m4": Cpu("cortex-m4", "unicorn + Cortex-M4 timing table (+-10-30 % vs silicon); taken branch +{p} cycle",
+                     1, price),
+    "cortex-m0plus": Cpu("cortex-m0plus", "unicorn (every instruction checked ARMv6-M) + Cortex-M0+ TRM timing table (load/store 2, "
+                         "taken branch 2, BL 3, single-cycle multiplier assumed; soft float); taken branch +{p} cycle", 1,
+                         price_m0plus, armv6m=True),
+    "rv32imc": Cpu("rv32imc", "unicorn RV32 + a simple model, not a chip (ALU and mul 1, load 2, store 1, taken "
+                   "branch and jump 1+{p}, div/rem 34)", 2, price_rv, riscv=True),
+}
+
+
 class Image:
     def __init__(self, path):
         self.path = path
@@ -158,6 +259,7 @@ class Image:
             self.raw = f.read()
         with open(path, "rb") as f:
             elf = ELFFile(f)
+            self.entry = elf["e_entry"]
             self.segments = [(s["p_paddr"], s.data()) for s in elf.iter_segments()
                              if s["p_type"] == "PT_LOAD" and s["p_filesz"]]
             self.symbols = {}
@@ -199,17 +301,22 @@ class Measurement:
 class Emulator:
     """Runs the image from reset to its semihosting exit; one block hook counts the measured calls."""
 
-    def __init__(self, image, functions, branch_penalty, timeout_s, profile=False):
+    def __init__(self, image, cpu, functions, branch_penalty, timeout_s, profile=False):
         self.image = image
+        self.cpu = cpu
         self.profile = profile
         self.by_block = {}  # (measured function, block address) -> [executions, cycles, lowest sp]
         self.penalty = branch_penalty
         self.deadline = time.monotonic() + timeout_s
-        self.cs = capstone.Cs(capstone.CS_ARCH_ARM, capstone.CS_MODE_THUMB | capstone.CS_MODE_MCLASS)
-        self.cs.detail = True
-        self.uc = Uc(UC_ARCH_ARM, UC_MODE_THUMB | UC_MODE_MCLASS)
-        for base, size in (FLASH, RAM, PPB):
+        self.cs = cpu.capstone()
+        self.uc = Uc(*cpu.uc_mode)
+        for base, size in cpu.memory:
             self.uc.mem_map(base, size)
+        if cpu.riscv:
+            for page in (RV_TEST_DEVICE, RV_UART):
+                self.uc.mem_map(page, 0x1000)
+            self.uc.hook_add(UC_HOOK_MEM_WRITE, self._on_device_write, begin=RV_TEST_DEVICE, end=RV_TEST_DEVICE + 3)
+            self.uc.hook_add(UC_HOOK_MEM_WRITE, self._on_device_write, begin=RV_UART, end=RV_UART)
         for addr, data in image.segments:
             self.uc.mem_write(addr, data)
         self.entries = {image.symbol(f): f for f in functions}
@@ -229,9 +336,23 @@ class Emulator:
         self.stop_reason = ("interrupt", intno)
         uc.emu_stop()
 
+    def _on_device_write(self, uc, _access, addr, _size, value, _):
+        """RISC-V: a byte to the UART is output; a word to the test device ends the run."""
+        if addr == RV_UART:
+            self.stdout.append(chr(value & 0xFF))
+        else:
+            self.exit_ok = value == RV_TEST_PASS
+            self.stop_reason = ("exit", value)
+            uc.emu_stop()
+
     def _decode(self, addr, size):
-        return [Insn(ins.address, ins.size, ins.insn_name(), *price(ins))
-                for ins in self.cs.disasm(bytes(self.uc.mem_read(addr, size)), addr)]
+        insns = list(self.cs.disasm(bytes(self.uc.mem_read(addr, size)), addr))
+        if self.cpu.armv6m:
+            for ins in insns:
+                if ins.size == 4 and ins.id not in ARMV6M_WIDE:
+                    sys.exit(f"cyclecount.py: {ins.mnemonic} {ins.op_str} at {ins.address:#x} ({self._where(addr)}) "
+                             "is not an ARMv6-M instruction")
+        return [Insn(ins.address, ins.size, ins.insn_name(), *self.cpu.price(ins)) for ins in insns]
 
     def _price_block(self, addr, size):
         insns = self._decode(addr, size)
@@ -268,12 +389,12 @@ class Emulator:
             entry[0] += 1
             entry[1] += n
             entry[2] += cycles
-            entry[3] = min(entry[3], uc.reg_read(U.UC_ARM_REG_SP))
+            entry[3] = min(entry[3], uc.reg_read(self.cpu.sp))
 
     def _begin(self, name):
         uc = self.uc
-        sp = uc.reg_read(U.UC_ARM_REG_SP)
-        ret = uc.reg_read(U.UC_ARM_REG_LR) & ~1
+        sp = uc.reg_read(self.cpu.sp)
+        ret = uc.reg_read(self.cpu.ra) & ~1
         uc.mem_write(self.paint_floor, bytes([PAINT]) * (sp - self.paint_floor))
         self.current = (name, sp, ret)
         self.ins = self.cyc = 0
@@ -333,6 +454,8 @@ class Emulator:
         return False
 
     def run(self):
+        if self.cpu.riscv:
+            return self._run_riscv()
         sp, reset = self._read_words(FLASH[0], 2)
         self.uc.reg_write(U.UC_ARM_REG_SP, sp)
         pc = reset & ~1
@@ -355,6 +478,21 @@ class Emulator:
                 sys.exit(f"cyclecount.py: stopped at {pc:#x} ({self._where(pc)}) without exiting (time limit?)")
             else:
                 sys.exit(f"cyclecount.py: exception {self.stop_reason[1]} at {pc:#x} ({self._where(pc)})")
+
+
+    def _run_riscv(self):
+        """From the ELF entry to the test device's exit (the image sets its own stack pointer)."""
+        remaining = self.deadline - time.monotonic()
+        try:
+            self.uc.emu_start(self.image.entry, 0, timeout=int(remaining * 1e6))
+        except UcError as e:
+            pc = self.uc.reg_read(R.UC_RISCV_REG_PC)
+            sys.exit(f"cyclecount.py: emulation error at {pc:#x} ({self._where(pc)}): {e}")
+        pc = self.uc.reg_read(R.UC_RISCV_REG_PC)
+        if self.stop_reason is None:
+            sys.exit(f"cyclecount.py: stopped at {pc:#x} ({self._where(pc)}) without exiting (time limit?)")
+        if self.stop_reason[0] != "exit":
+            sys.exit(f"cyclecount.py: exception {self.stop_reason[1]} at {pc:#x} ({self._where(pc)})")
 
 
 def profile(emu):
@@ -416,14 +554,43 @@ def code_instructions(cs, code, base):
     return decode(literal_words(decode(set())))
 
 
-def static_code(image, roots):
-    """Code bytes reachable from `roots` through direct calls and tail calls (B/BL/CBZ targets), by crate.
+def arm_targets(cs, code, base):
+    """Direct branch and call targets (B/BL/CBZ/CBNZ) of one Thumb function."""
+    for ins in code_instructions(cs, code, base):
+        if ins.id in (A.ARM_INS_B, A.ARM_INS_BL, A.ARM_INS_CBZ, A.ARM_INS_CBNZ):
+            ops = [op for op in ins.operands if op.type == A.ARM_OP_IMM]
+            if ops:
+                yield ops[-1].imm
+
+
+def rv_targets(cs, code, base):
+    """Direct jump, branch and call targets of one RISC-V function: JAL/J/branches (PC-relative immediates)
+    and the AUIPC + JALR pairs of unrelaxed calls and tail calls."""
+    upper = {}  # register -> address an AUIPC put in it
+    for ins in cs.disasm(code, base):
+        ops = ins.operands
+        regs = [op.reg for op in ops if op.type == capstone.riscv.RISCV_OP_REG]
+        imms = [op.imm for op in ops if op.type == capstone.riscv.RISCV_OP_IMM]
+        if ins.mnemonic == "auipc" and regs and imms:
+            hi = imms[0] - (1 << 20) if imms[0] >= 1 << 19 else imms[0]
+            upper[regs[0]] = ins.address + (hi << 12)
+            continue
+        if ins.mnemonic == "jalr" and len(regs) >= 2 and regs[1] in upper and imms:
+            yield upper[regs[1]] + imms[-1]
+        elif rv_is_branch(ins.mnemonic) and ins.mnemonic not in ("jalr", "jr", "ret", "c.jr", "c.jalr") and imms:
+            yield ins.address + imms[-1]
+        if regs:
+            upper.pop(regs[0], None)
+
+
+def static_code(image, roots, cpu):
+    """Code bytes reachable from `roots` through direct calls and tail calls, by crate.
 
     The walk stops at core's panic entry points: the panic handler belongs to the application."""
     by_start = {start: (size, name) for start, size, name in image.functions}
     starts = sorted(by_start)
-    cs = capstone.Cs(capstone.CS_ARCH_ARM, capstone.CS_MODE_THUMB | capstone.CS_MODE_MCLASS)
-    cs.detail = True
+    cs = cpu.capstone()
+    targets = rv_targets if cpu.riscv else arm_targets
 
     def containing(addr):
         k = bisect.bisect_right(starts, addr) - 1
@@ -440,13 +607,10 @@ def static_code(image, roots):
         size, name = by_start[f]
         if "panicking" in name:
             continue
-        for ins in code_instructions(cs, image.code(f, size), f):
-            if ins.id in (A.ARM_INS_B, A.ARM_INS_BL, A.ARM_INS_CBZ, A.ARM_INS_CBNZ):
-                ops = [op for op in ins.operands if op.type == A.ARM_OP_IMM]
-                if ops:
-                    target = containing(ops[-1].imm)
-                    if target is not None and target != f:
-                        todo.append(target)
+        for addr in targets(cs, image.code(f, size), f):
+            target = containing(addr)
+            if target is not None and target != f:
+                todo.append(target)
     crates = {}
     functions = []
     for f in sorted(seen):
@@ -478,27 +642,33 @@ def crate_of(symbol):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("elf", help="the bench firmware ELF (thumbv7em-none-eabihf)")
-    ap.add_argument("--functions", default="accumulate_sample,apply_sample,taga_generation,full_calibration,lm,initial_estimate")
-    ap.add_argument("--branch-penalty", type=int, default=1, help="extra cycles of a taken branch (P, 1..3)")
+    ap.add_argument("elf", help="the bench firmware ELF")
+    ap.add_argument("--cpu", choices=sorted(CPUS), default="cortex-m4", help="core and timing table")
+    ap.add_argument("--functions", default="accumulate_fifo,accumulate_sample,apply_sample,taga_generation,full_calibration,lm,initial_estimate")
+    ap.add_argument("--branch-penalty", type=int, default=None,
+                    help="extra cycles of a taken branch (P; default 1 on ARM, 2 on RISC-V)")
     ap.add_argument("--timeout", type=float, default=600.0, help="seconds")
     ap.add_argument("--profile", action="store_true",
                     help="also attribute instructions, cycles and stack depth to the symbols executed")
     args = ap.parse_args()
     functions = [f for f in args.functions.split(",") if f]
     image = Image(args.elf)
-    emu = Emulator(image, functions, args.branch_penalty, args.timeout, args.profile)
+    cpu = CPUS[args.cpu]
+    penalty = cpu.penalty if args.branch_penalty is None else args.branch_penalty
+    emu = Emulator(image, cpu, functions, penalty, args.timeout, args.profile)
     started = time.monotonic()
     emu.run()
     out = {
         "elf": args.elf,
         "exit_ok": emu.exit_ok,
         "stdout": "".join(emu.stdout),
-        "branch_penalty": args.branch_penalty,
+        "cpu": cpu.name,
+        "branch_penalty": penalty,
+        "cost_model": cpu.cost_model.format(p=penalty),
         "functions": {},
         # What a firmware links for the calibration path: accumulate, calibrate, apply. (taga_generation and
         # lm are benchmark-only copies of code that full_calibration contains.)
-        "static_code": static_code(image, ["accumulate_sample", "full_calibration", "apply_sample"]),
+        "static_code": static_code(image, ["accumulate_sample", "full_calibration", "apply_sample"], cpu),
         "seconds": round(time.monotonic() - started, 2),
     }
     for name, m in emu.results.items():

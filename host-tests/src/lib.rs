@@ -11,7 +11,6 @@ pub mod labelled;
 pub mod output;
 pub mod paper;
 pub mod plots;
-pub mod report;
 pub mod report_html;
 pub mod sim;
 pub mod stats;

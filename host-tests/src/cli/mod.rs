@@ -53,15 +53,6 @@ enum Command {
     Calibrate(calibrate::CalibrateArgs),
     /// Explain a calibration's residual gap: where it lies and which unmodelled effect causes it.
     Diagnose(diagnose::DiagnoseArgs),
-    /// Size and cycle report of the firmware on an emulated Cortex-M4, against the budgets.
-    Report {
-        /// Machine-readable report on stdout.
-        #[arg(long)]
-        json: bool,
-        /// Exit with 1 when a budget marked enforced is exceeded.
-        #[arg(long)]
-        check: bool,
-    },
     /// Reproduce the paper's experiments (Table 2 Monte Carlo vs the Cramer-Rao bound, Fig. 3, 6, 7).
     Paper(paper::PaperArgs),
 }
@@ -93,11 +84,6 @@ pub fn run() -> ExitCode {
         Command::Simulate(args) => simulate::run(&args),
         Command::Calibrate(args) => calibrate::run(&args),
         Command::Diagnose(args) => diagnose::run(&args),
-        Command::Report { json, check } => match accelcal_host::report::run(json, check) {
-            Ok(true) => Ok(()),
-            Ok(false) => Err(Failure::Verdict),
-            Err(e) => Err(Failure::Input(e)),
-        },
         Command::Paper(args) => paper::run(&args),
     };
     match result {
