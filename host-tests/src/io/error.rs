@@ -283,22 +283,7 @@ impl fmt::Display for CsvError {
                  (concatenated captures? drop the time column with --columns)"
             ),
             Self::WrongUnits { file, declared, median_magnitude, looks_like, header } => {
-                let typical = match declared {
-                    Units::G => "about 1",
-                    Units::Mps2 => "about 9.8",
-                    _ => "hundreds to tens of thousands",
-                };
-                let by = header.as_ref().map_or(String::new(), |h| format!(" (as the header `{}` says)", clip(h)));
-                write!(
-                    f,
-                    "{file}: values no accelerometer reads in {declared}{by}: the median |a| is \
-                     {median_magnitude:.4}, a static accelerometer reads {typical}"
-                )?;
-                match (looks_like, header) {
-                    (Some(u), Some(_)) => write!(f, "; the values look like {u}: use --units {u}"),
-                    (Some(u), None) => write!(f, "; the values look like {u}: use --units {u} (or --units auto)"),
-                    (None, _) => f.write_str("; check the columns"),
-                }
+                write_wrong_units(f, file, *declared, *median_magnitude, *looks_like, header.as_deref())
             }
             Self::UnknownUnits { file, median_magnitude } => write!(
                 f,
@@ -318,6 +303,33 @@ impl fmt::Display for CsvError {
                  {first_line}); too many to skip"
             ),
         }
+    }
+}
+
+/// The message of [`CsvError::WrongUnits`].
+fn write_wrong_units(
+    f: &mut fmt::Formatter<'_>,
+    file: &str,
+    declared: Units,
+    median_magnitude: f64,
+    looks_like: Option<Units>,
+    header: Option<&str>,
+) -> fmt::Result {
+    let typical = match declared {
+        Units::G => "about 1",
+        Units::Mps2 => "about 9.8",
+        _ => "hundreds to tens of thousands",
+    };
+    let by = header.map_or(String::new(), |h| format!(" (as the header `{}` says)", clip(h)));
+    write!(
+        f,
+        "{file}: values no accelerometer reads in {declared}{by}: the median |a| is {median_magnitude:.4}, a \
+         static accelerometer reads {typical}"
+    )?;
+    match (looks_like, header) {
+        (Some(u), Some(_)) => write!(f, "; the values look like {u}: use --units {u}"),
+        (Some(u), None) => write!(f, "; the values look like {u}: use --units {u} (or --units auto)"),
+        (None, _) => f.write_str("; check the columns"),
     }
 }
 

@@ -1,5 +1,5 @@
 //! CSV records through the `csv` crate, each with its 1-based file line; blank lines and `#`
-//! comments are skipped, cells are trimmed and unquoted.
+//! comments are skipped, cells are unquoted (and trimmed by [`super::text::cell`]).
 
 use std::io::Read;
 
@@ -55,8 +55,8 @@ impl<R: Read> Records<R> {
     /// A record of nothing but blanks (one empty cell, or empty cells between tabs), or a comment
     /// whose `#` follows blanks.
     fn is_blank_or_comment(&self, record: &ByteRecord) -> bool {
-        let all_empty = record.iter().all(<[u8]>::is_empty);
+        let all_empty = record.iter().all(|c| c.trim_ascii().is_empty());
         let blank = all_empty && (record.len() <= 1 || self.delimiter == Delimiter::Tab);
-        blank || record.get(0).is_some_and(|c| c.starts_with(b"#"))
+        blank || record.get(0).is_some_and(|c| c.trim_ascii_start().starts_with(b"#"))
     }
 }

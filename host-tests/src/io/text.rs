@@ -142,12 +142,12 @@ impl<R: Read> Read for LineEnds<R> {
 }
 
 /// The `csv` crate's reader as every table is read: no header record (the header is found first),
-/// rows of any length (checked against the header with their line), cells trimmed, `#` comments.
+/// rows of any length (checked against the header with their line), `#` comments. Cells are trimmed
+/// as they are read ([`cell`]): the crate's own trimming copies every record.
 pub(crate) fn csv_reader<R: Read>(source: R, delimiter: Delimiter, comments: bool) -> csv::Reader<R> {
     csv::ReaderBuilder::new()
         .has_headers(false)
         .flexible(true)
-        .trim(csv::Trim::All)
         .comment(comments.then_some(b'#'))
         .delimiter(delimiter.byte())
         .from_reader(source)
@@ -155,20 +155,23 @@ pub(crate) fn csv_reader<R: Read>(source: R, delimiter: Delimiter, comments: boo
 
 /// Drops the empty cells a run of spaces leaves between whitespace-delimited cells.
 pub(crate) fn squeeze_whitespace(record: &mut csv::ByteRecord, scratch: &mut csv::ByteRecord) {
-    if record.iter().all(|c| !c.is_empty()) {
+    if record.iter().all(|c| !c.trim_ascii().is_empty()) {
         return;
     }
     scratch.clear();
-    for cell in record.iter().filter(|c| !c.is_empty()) {
+    for cell in record.iter().filter(|c| !c.trim_ascii().is_empty()) {
         scratch.push_field(cell);
     }
     std::mem::swap(record, scratch);
 }
 
-/// Cell `i` of a record as text (Latin-1 when not UTF-8); empty past the last cell.
+/// Cell `i` of a record as trimmed text (Latin-1 when not UTF-8); empty past the last cell.
 pub(crate) fn cell(record: &csv::ByteRecord, i: usize) -> Cow<'_, str> {
     let bytes = record.get(i).unwrap_or_default();
-    std::str::from_utf8(bytes).map_or_else(|_| Cow::Owned(latin1(bytes)), Cow::Borrowed)
+    match std::str::from_utf8(bytes) {
+        Ok(text) => Cow::Borrowed(text.trim()),
+        Err(_) => Cow::Owned(latin1(bytes).trim().to_string()),
+    }
 }
 
 /// Splits one line into trimmed, unquoted cells (`"a,b"` is one cell, `""` in quotes a quote).
