@@ -20,7 +20,8 @@ pub(crate) struct Parser<'a> {
     pub(crate) notes: Vec<String>,
 }
 
-/// The data records' count, the first one's line and cell count, and the temperature cells missing.
+/// The first data record's line and cell count; with a temperature column also the records' count
+/// and the temperature cells missing.
 struct Survey {
     records: usize,
     first: Option<(usize, usize)>,
@@ -76,7 +77,7 @@ impl Parser<'_> {
         Records::new(&self.file, data, delimiter, at.line, at.ends_with_cr)
     }
 
-    /// A first pass over the records: how many, the first one, the temperature cells missing.
+    /// A first pass over the records (only to the first without a temperature column).
     fn survey(&self, text: &str, at: &HeaderAt, delimiter: Delimiter, temp: Option<usize>) -> Result<Survey, CsvError> {
         let mut records = self.records(text, at, delimiter);
         let mut record = ByteRecord::new();
@@ -86,6 +87,9 @@ impl Parser<'_> {
             survey.first = survey.first.or(Some((line, record.len())));
             let missing = |i: usize| i < record.len() && parse_number(&cell(&record, i), delimiter) == Ok(None);
             survey.temp_missing += usize::from(temp.is_some_and(missing));
+            if temp.is_none() {
+                break; // Only the first record is needed.
+            }
         }
         Ok(survey)
     }

@@ -581,4 +581,41 @@ mod tests {
         assert_eq!(streamed.table.dropped.truncated, 1);
         assert!(streamed.table.warnings.iter().any(|w| w.contains("truncated")), "{:?}", streamed.table.warnings);
     }
+
+    #[test]
+    fn lone_cr_and_cr_lf_files_stream_as_lf_with_the_same_lines() {
+        let text = log();
+        let lf = temp_file("lines_lf.csv", &text);
+        let opts = (ReadOptions::default(), AccumulateOptions::default());
+        let expected = stream_poses(&lf, &opts.0, &opts.1, 2000).unwrap().accumulation;
+        for (name, end) in [("lines_cr.csv", "\r"), ("lines_crlf.csv", "\r\n")] {
+            let body = text.replace('\n', end);
+            // The prefix ends on a CR: in the CR LF file the LF after it must not count as a line.
+            let prefix = body[2000..].find('\r').unwrap() + 2001;
+            let path = temp_file(name, &body);
+            let streamed = stream_poses(&path, &opts.0, &opts.1, prefix).unwrap().accumulation;
+            assert_eq!(streamed.poses, expected.poses, "{name}");
+            assert_eq!(streamed.spans, expected.spans, "{name}");
+        }
+        let bad = text.replacen("29.99,", "29.99,x", 1).replace('\n', "\r");
+        let e = stream_poses(&temp_file("bad_cr.csv", &bad), &opts.0, &opts.1, 2000).unwrap_err();
+        assert!(e.to_string().contains("bad_cr.csv:3001: column `ax`"), "{e}");
+    }
+
+    #[test]
+    fn quoted_cells_and_whitespace_delimited_rows_stream_as_in_memory() {
+        let text = log();
+        let quoted: String = text.lines().map(|l| format!("\"{}\"\n", l.replacen(',', "\",\"", 3))).collect();
+        let spaced: String = text.lines().map(|l| format!("  {}\n", l.replace(',', "   "))).collect();
+        let tabbed: String = text.lines().map(|l| format!("{}\n", l.replace(',', " \t "))).collect();
+        for (name, body) in [("quoted.csv", quoted), ("spaced.csv", spaced), ("tabbed.csv", tabbed)] {
+            let path = temp_file(name, &body);
+            let table = super::super::read_csv(&path, &ReadOptions::default()).unwrap();
+            let in_memory = poses::accumulate(&table, &AccumulateOptions::default()).unwrap();
+            let streamed = stream_poses(&path, &ReadOptions::default(), &AccumulateOptions::default(), 2000).unwrap();
+            assert_eq!(in_memory.poses.len(), 12, "{name}");
+            assert_eq!(streamed.accumulation.poses, in_memory.poses, "{name}");
+            assert_eq!(streamed.accumulation.spans, in_memory.spans, "{name}");
+        }
+    }
 }
