@@ -8,7 +8,7 @@ use accelcal::calibrate::{CalibrationConfig, Init, Method};
 use accelcal::model::{PARAM_COUNT, Params};
 use accelcal_host::calib;
 use accelcal_host::csvio::{self, AccumulateOptions, ColumnSpec, ReadOptions, Units};
-use accelcal_host::csvstream;
+use accelcal_host::io::stream as csvstream;
 
 use super::Failure;
 

@@ -4,20 +4,20 @@
 //! settings: sample rate, block, stale repeats, noise floor, time-gap threshold); then every row of the
 //! file (the prefix's, then the rest, line by line) is fed to the library's accumulator without being
 //! kept. A second pass finds the lines and times of the poses' first and last samples. The checks of
-//! [`crate::csvio::read_csv`] apply to every row (cells, numbers, time order, physical range, NaN
+//! [`super::read_csv`] apply to every row (cells, numbers, time order, physical range, NaN
 //! share); the units and the detector's settings come from the prefix.
 
-use std::borrow::Cow;
 use std::fmt;
-use std::io::{BufRead, BufReader, Read};
+use std::io::{BufReader, Read};
 use std::path::Path;
 
 use accelcal::accumulator::{Accumulator, AccumulatorConfig, AccumulatorError, Pose};
+use csv::ByteRecord;
 
-use crate::csvio::{
-    self, AccumulateOptions, Accumulation, Columns, CsvError, MAX_POSES, MAX_SKIPPED_FRACTION, Parser, PoseSpan,
-    ReadOptions, Table,
-};
+use super::records::Records;
+use super::rows::{Outcome, RowReader};
+use super::{Columns, CsvError, MAX_SKIPPED_FRACTION, ReadOptions, Table, all_by_index};
+use crate::poses::{self, AccumulateOptions, Accumulation, MAX_POSES, PoseSpan};
 
 /// Files at least this large are read by [`stream_poses`] in `calibrate` (smaller ones in memory).
 pub const STREAM_MIN_BYTES: u64 = 64 << 20;
@@ -72,7 +72,7 @@ pub fn is_large(path: &Path) -> bool {
 /// first `prefix_bytes` (normally [`PREFIX_BYTES`]) into memory.
 ///
 /// # Errors
-/// The [`CsvError`] of the first bad row (as [`csvio::read_csv`]), or the accumulator's error.
+/// The [`CsvError`] of the first bad row (as [`super::read_csv`]), or the accumulator's error.
 pub fn stream_poses(
     path: &Path,
     opts: &ReadOptions,
@@ -83,12 +83,12 @@ pub fn stream_poses(
     if !path.exists() {
         return Err(CsvError::Missing { file }.into());
     }
-    let (prefix, prefix_len) = read_prefix(path, &file, prefix_bytes)?;
-    let (mut table, columns) = csvio::read_csv_bytes_with_columns(&file, &prefix, opts)?;
-    let first_line = 1 + prefix.iter().filter(|&&b| b == b'\n').count();
+    let prefix = read_prefix(path, &file, prefix_bytes)?;
+    let (mut table, columns) = super::read_csv_bytes_with_columns(&file, &prefix.bytes, opts)?;
+    let (prefix_len, first_line, after_cr) = (prefix.bytes.len(), prefix.lines + 1, prefix.bytes.ends_with(b"\r"));
     drop(prefix);
     let settings = Settings::from_prefix(&table, acc_opts);
-    let source = Source { path, file: &file, opts, columns: &columns, prefix_len, first_line };
+    let source = Source { path, file: &file, opts, columns: &columns, prefix_len, first_line, after_cr };
     let run = match settings.block {
         8 => source.detect::<8>(&table, &settings)?,
         16 => source.detect::<16>(&table, &settings)?,
@@ -118,23 +118,26 @@ pub fn stream_poses(
     Ok(Streamed { table, rows: run.totals.rows, accumulation })
 }
 
-/// The first `prefix_bytes` of the file cut after its last line end, and their length. A file whose
-/// prefix ends lines with a lone CR is refused (it has no LF to stream by).
-fn read_prefix(path: &Path, file: &str, prefix_bytes: usize) -> Result<(Vec<u8>, usize), CsvError> {
-    let io = |e: std::io::Error| CsvError::Io { file: file.to_string(), message: e.to_string() };
-    let f = std::fs::File::open(path).map_err(io)?;
-    let mut prefix = Vec::with_capacity(prefix_bytes.min(PREFIX_BYTES));
-    f.take(prefix_bytes as u64).read_to_end(&mut prefix).map_err(io)?;
-    let cut = prefix.iter().rposition(|&b| b == b'\n').map_or(prefix.len(), |i| i + 1);
-    prefix.truncate(cut);
-    if prefix.windows(2).any(|w| w[0] == b'\r' && w[1] != b'\n') {
-        let message = "lines end with a lone CR (old Mac); too large to read in memory: convert to LF".to_string();
-        return Err(CsvError::Io { file: file.to_string(), message });
-    }
-    Ok((prefix, cut))
+/// The first bytes of a file, cut after a line end, and the lines they hold.
+struct Prefix {
+    bytes: Vec<u8>,
+    lines: usize,
 }
 
-/// The detector's settings, as [`csvio::accumulate`] derives them, from the prefix.
+/// The first `prefix_bytes` of the file cut after its last line end (LF, CR LF or a lone CR).
+fn read_prefix(path: &Path, file: &str, prefix_bytes: usize) -> Result<Prefix, CsvError> {
+    let io = |e: std::io::Error| CsvError::Io { file: file.to_string(), message: e.to_string() };
+    let f = std::fs::File::open(path).map_err(io)?;
+    let mut bytes = Vec::with_capacity(prefix_bytes.min(PREFIX_BYTES));
+    f.take(prefix_bytes as u64).read_to_end(&mut bytes).map_err(io)?;
+    let cut = bytes.iter().rposition(|&b| b == b'\n' || b == b'\r').map_or(bytes.len(), |i| i + 1);
+    bytes.truncate(cut);
+    let lone_cr = bytes.windows(2).filter(|w| w[0] == b'\r' && w[1] != b'\n').count();
+    let lines = bytes.iter().filter(|&&b| b == b'\n').count() + lone_cr + usize::from(bytes.ends_with(b"\r"));
+    Ok(Prefix { bytes, lines })
+}
+
+/// The detector's settings, as [`poses::accumulate`] derives them, from the prefix.
 struct Settings {
     config: AccumulatorConfig,
     block: usize,
@@ -145,13 +148,13 @@ struct Settings {
 
 impl Settings {
     fn from_prefix(table: &Table, opts: &AccumulateOptions) -> Self {
-        let repeats = csvio::repeat_fraction(&table.samples);
-        let skip_repeats = opts.skip_repeats.unwrap_or_else(|| csvio::repeats_look_stale(&table.samples));
+        let repeats = poses::repeat_fraction(&table.samples);
+        let skip_repeats = opts.skip_repeats.unwrap_or_else(|| poses::repeats_look_stale(&table.samples));
         let fed_fraction = if skip_repeats { 1.0 - repeats } else { 1.0 };
         let sample_rate_hz = opts.sample_rate_hz.or_else(|| table.sample_rate_hz()).map(|r| r * fed_fraction);
-        let block = opts.block_samples.unwrap_or_else(|| csvio::choose_block_samples(sample_rate_hz));
+        let block = opts.block_samples.unwrap_or_else(|| poses::choose_block_samples(sample_rate_hz));
         let mut config = opts.config;
-        config.min_noise_variance = config.min_noise_variance.max(csvio::quantisation_variance(&table.samples));
+        config.min_noise_variance = config.min_noise_variance.max(poses::quantisation_variance(&table.samples));
         let gap_s = table.times_s.as_ref().and_then(|t| {
             let span = t.last()? - t.first()?;
             (t.len() >= 2 && span > 0.0).then(|| opts.gap_factor * span / (t.len() - 1) as f64)
@@ -180,7 +183,7 @@ struct Feed {
     push: bool,
 }
 
-/// The state deciding what to do with each row, as `Run::go` in `csvio` does.
+/// The state deciding what to do with each row, as `Run::go` in `poses` does.
 struct Feeder<'a> {
     settings: &'a Settings,
     previous: Option<(Option<f64>, [f64; 3])>,
@@ -222,7 +225,10 @@ struct Source<'a> {
     opts: &'a ReadOptions,
     columns: &'a Columns,
     prefix_len: usize,
+    /// File line of the first line after the prefix.
     first_line: usize,
+    /// The prefix ends with a CR (an LF first after it ends no line).
+    after_cr: bool,
 }
 
 impl Source<'_> {
@@ -295,7 +301,7 @@ impl Source<'_> {
     }
 
     /// Calls `f(line, time, sample, totals)` for every data row: the prefix table's rows, then the
-    /// rest of the file read line by line and checked as [`csvio::read_csv`] checks rows.
+    /// rest of the file's records, checked as [`super::read_csv`] checks rows.
     fn for_each_row(
         &self,
         table: &Table,
@@ -305,32 +311,36 @@ impl Source<'_> {
         for (i, sample) in table.samples.iter().enumerate() {
             f(table.line_of_row[i], table.times_s.as_ref().map(|t| t[i]), *sample, totals);
         }
-        let mut reader = self.open_rest()?;
+        let (mut records, ends_with_newline) = self.open_rest(table)?;
         let mut check = RowCheck::new(self, table);
-        let (mut current, mut next) = (Vec::new(), Vec::new());
-        let mut line = self.first_line;
-        let read = |r: &mut BufReader<std::fs::File>, buf: &mut Vec<u8>| {
-            buf.clear();
-            r.read_until(b'\n', buf).map_err(|e| CsvError::Io { file: self.file.to_string(), message: e.to_string() })
-        };
-        let mut has_current = read(&mut reader, &mut current)? > 0;
-        while has_current {
-            let has_next = read(&mut reader, &mut next)? > 0;
-            if let Some((time, sample)) = check.row(line, &current, !has_next, totals)? {
+        let (mut record, mut next) = (ByteRecord::new(), ByteRecord::new());
+        let mut current = records.next_into(&mut record)?;
+        while let Some(line) = current {
+            let following = records.next_into(&mut next)?;
+            let last = following.is_none().then_some(ends_with_newline);
+            if let Some((time, sample)) = check.row(line, &record, last, totals)? {
                 f(line, time, sample, totals);
             }
-            std::mem::swap(&mut current, &mut next);
-            has_current = has_next;
-            line += 1;
+            std::mem::swap(&mut record, &mut next);
+            current = following;
         }
         Ok(())
     }
 
-    fn open_rest(&self) -> Result<BufReader<std::fs::File>, CsvError> {
+    /// The records after the prefix, and whether the file ends with a line end.
+    fn open_rest(&self, table: &Table) -> Result<(Records<BufReader<std::fs::File>>, bool), CsvError> {
+        use std::io::{Seek, SeekFrom};
         let io = |e: std::io::Error| CsvError::Io { file: self.file.to_string(), message: e.to_string() };
         let mut f = std::fs::File::open(self.path).map_err(io)?;
-        std::io::Seek::seek(&mut f, std::io::SeekFrom::Start(self.prefix_len as u64)).map_err(io)?;
-        Ok(BufReader::with_capacity(1 << 16, f))
+        let mut last = [0u8];
+        let ends_with_newline = match f.seek(SeekFrom::End(-1)) {
+            Ok(_) => f.read_exact(&mut last).map(|()| matches!(last[0], b'\n' | b'\r')).map_err(io)?,
+            Err(_) => true,
+        };
+        f.seek(SeekFrom::Start(self.prefix_len as u64)).map_err(io)?;
+        let reader = BufReader::with_capacity(1 << 16, f);
+        let records = Records::new(self.file, reader, table.delimiter, self.first_line - 1, self.after_cr);
+        Ok((records, ends_with_newline))
     }
 }
 
@@ -339,13 +349,11 @@ type TimedSample = (Option<f64>, [f64; 3]);
 
 /// The checks of one streamed row, with the state they need (previous time and line).
 struct RowCheck<'a> {
-    parser: Parser<'a>,
+    rows: RowReader<'a>,
     source: &'a Source<'a>,
-    header: &'a [String],
-    delimiter: csvio::Delimiter,
     factor: f64,
     limit: f64,
-    units: csvio::Units,
+    units: super::Units,
     accel_names: &'a [String; 3],
     previous: Option<(usize, f64)>,
 }
@@ -353,11 +361,19 @@ struct RowCheck<'a> {
 impl<'a> RowCheck<'a> {
     fn new(source: &'a Source<'a>, table: &'a Table) -> Self {
         let previous = table.times_s.as_ref().and_then(|t| Some((*table.line_of_row.last()?, *t.last()?)));
-        Self {
-            parser: Parser { file: source.file.to_string(), opts: source.opts, notes: Vec::new() },
-            source,
+        // With every column by index any row holding them is read (the prefix checked the count).
+        let by_index = all_by_index(source.opts);
+        let rows = RowReader {
+            file: source.file,
+            columns: source.columns,
             header: &table.header,
             delimiter: table.delimiter,
+            expected_cells: if by_index { source.columns.max_index() + 1 } else { table.header.len() },
+            at_least: by_index,
+        };
+        Self {
+            rows,
+            source,
             factor: table.units_header.as_ref().map_or(1.0, |h| h.factor),
             limit: table.units.non_physical_limit(),
             units: table.units,
@@ -366,61 +382,32 @@ impl<'a> RowCheck<'a> {
         }
     }
 
-    /// One line: `Ok(Some((time, sample)))` for a row read, `Ok(None)` for a line without one (blank,
-    /// comment, dropped row, counted in `totals`), or the row's error.
+    /// One record: `Ok(Some((time, sample)))` for a row read, `Ok(None)` for a row dropped (counted
+    /// in `totals`), or the row's error. `last` as in [`RowReader::read`].
     fn row(
         &mut self,
         line: usize,
-        bytes: &[u8],
-        is_last: bool,
+        record: &ByteRecord,
+        last: Option<bool>,
         totals: &mut Totals,
     ) -> Result<Option<TimedSample>, CsvError> {
-        let file = self.source.file;
-        if bytes.contains(&0) {
-            return Err(CsvError::Binary { file: file.to_string(), line, what: "NUL bytes" });
-        }
-        let ends_with_newline = bytes.ends_with(b"\n");
-        let text: Cow<'_, str> = match std::str::from_utf8(bytes) {
-            Ok(t) => Cow::Borrowed(t),
-            Err(_) => Cow::Owned(bytes.iter().map(|&b| char::from(b)).collect()),
-        };
-        let text = text.trim_end_matches(['\n', '\r']);
-        if csvio::is_blank_or_comment(text) {
-            return Ok(None);
-        }
-        let cells = csvio::split_cells(text, self.delimiter);
-        // With every column by index any row holding them is read (the prefix checked the count).
-        let (expected, ragged) = if csvio::all_by_index(self.source.opts) {
-            let needed = self.source.columns.max_index() + 1;
-            (needed, cells.len() < needed)
-        } else {
-            (self.header.len(), cells.len() != self.header.len())
-        };
-        if ragged {
-            if is_last && cells.len() < expected {
-                totals.truncated += 1;
+        let row = match self.rows.read(record, line, last)? {
+            Outcome::Row(row) => row,
+            Outcome::Stale => {
+                totals.stale_flag += 1;
                 return Ok(None);
             }
-            return Err(CsvError::RaggedRow { file: file.to_string(), line, cells: cells.len(), expected });
-        }
-        if self.parser.is_stale(&cells, line, self.source.columns, self.header, self.delimiter)? {
-            totals.stale_flag += 1;
-            return Ok(None);
-        }
-        let row = match self.parser.parse_row(&cells, line, self.source.columns, self.header, self.delimiter) {
-            Ok(Some(row)) => row,
-            Ok(None) => {
+            Outcome::NonFinite => {
                 totals.non_finite += 1;
                 if totals.first_non_finite_line == 0 {
                     totals.first_non_finite_line = line;
                 }
                 return Ok(None);
             }
-            Err(_) if is_last && !ends_with_newline => {
+            Outcome::Truncated(_) => {
                 totals.truncated += 1;
                 return Ok(None);
             }
-            Err(e) => return Err(e),
         };
         let sample = row.accel.map(|v| v * self.factor);
         self.check_range(line, sample)?;
@@ -536,8 +523,8 @@ mod tests {
         let text = log();
         let path = temp_file("log.csv", &text);
         let opts = ReadOptions::default();
-        let table = csvio::read_csv(&path, &opts).unwrap();
-        let in_memory = csvio::accumulate(&table, &AccumulateOptions::default()).unwrap();
+        let table = super::super::read_csv(&path, &opts).unwrap();
+        let in_memory = poses::accumulate(&table, &AccumulateOptions::default()).unwrap();
         let streamed = stream_poses(&path, &opts, &AccumulateOptions::default(), 2000).unwrap();
         assert!(streamed.table.samples.len() < 100, "the prefix must be a small part of the file");
         assert_eq!(in_memory.poses.len(), 12);
@@ -566,8 +553,8 @@ mod tests {
         }
         let path = temp_file("stale_gap.csv", &text);
         let opts = ReadOptions::default();
-        let table = csvio::read_csv(&path, &opts).unwrap();
-        let in_memory = csvio::accumulate(&table, &AccumulateOptions::default()).unwrap();
+        let table = super::super::read_csv(&path, &opts).unwrap();
+        let in_memory = poses::accumulate(&table, &AccumulateOptions::default()).unwrap();
         let streamed = stream_poses(&path, &opts, &AccumulateOptions::default(), 4000).unwrap().accumulation;
         assert!(in_memory.skipped_repeats > 10_000 && in_memory.interruptions == 1, "{in_memory:?}");
         assert_eq!((streamed.skipped_repeats, streamed.interruptions), (in_memory.skipped_repeats, 1));
@@ -593,5 +580,42 @@ mod tests {
         let streamed = stream_poses(&path, &ReadOptions::default(), &AccumulateOptions::default(), 2000).unwrap();
         assert_eq!(streamed.table.dropped.truncated, 1);
         assert!(streamed.table.warnings.iter().any(|w| w.contains("truncated")), "{:?}", streamed.table.warnings);
+    }
+
+    #[test]
+    fn lone_cr_and_cr_lf_files_stream_as_lf_with_the_same_lines() {
+        let text = log();
+        let lf = temp_file("lines_lf.csv", &text);
+        let opts = (ReadOptions::default(), AccumulateOptions::default());
+        let expected = stream_poses(&lf, &opts.0, &opts.1, 2000).unwrap().accumulation;
+        for (name, end) in [("lines_cr.csv", "\r"), ("lines_crlf.csv", "\r\n")] {
+            let body = text.replace('\n', end);
+            // The prefix ends on a CR: in the CR LF file the LF after it must not count as a line.
+            let prefix = body[2000..].find('\r').unwrap() + 2001;
+            let path = temp_file(name, &body);
+            let streamed = stream_poses(&path, &opts.0, &opts.1, prefix).unwrap().accumulation;
+            assert_eq!(streamed.poses, expected.poses, "{name}");
+            assert_eq!(streamed.spans, expected.spans, "{name}");
+        }
+        let bad = text.replacen("29.99,", "29.99,x", 1).replace('\n', "\r");
+        let e = stream_poses(&temp_file("bad_cr.csv", &bad), &opts.0, &opts.1, 2000).unwrap_err();
+        assert!(e.to_string().contains("bad_cr.csv:3001: column `ax`"), "{e}");
+    }
+
+    #[test]
+    fn quoted_cells_and_whitespace_delimited_rows_stream_as_in_memory() {
+        let text = log();
+        let quoted: String = text.lines().map(|l| format!("\"{}\"\n", l.replacen(',', "\",\"", 3))).collect();
+        let spaced: String = text.lines().map(|l| format!("  {}\n", l.replace(',', "   "))).collect();
+        let tabbed: String = text.lines().map(|l| format!("{}\n", l.replace(',', " \t "))).collect();
+        for (name, body) in [("quoted.csv", quoted), ("spaced.csv", spaced), ("tabbed.csv", tabbed)] {
+            let path = temp_file(name, &body);
+            let table = super::super::read_csv(&path, &ReadOptions::default()).unwrap();
+            let in_memory = poses::accumulate(&table, &AccumulateOptions::default()).unwrap();
+            let streamed = stream_poses(&path, &ReadOptions::default(), &AccumulateOptions::default(), 2000).unwrap();
+            assert_eq!(in_memory.poses.len(), 12, "{name}");
+            assert_eq!(streamed.accumulation.poses, in_memory.poses, "{name}");
+            assert_eq!(streamed.accumulation.spans, in_memory.spans, "{name}");
+        }
     }
 }

@@ -1,0 +1,284 @@
+//! Pose detection, not I/O: the rows of a [`Table`] fed through the library's static detector
+//! ([`Accumulator`]) with settings taken from the data (block length from the sample rate, the
+//! quantisation floor, stale repeats skipped when they look like stale reads, time gaps
+//! interrupting the stream), and where each pose lies in the file.
+//!
+//! ```
+//! use accelcal_host::io::{ReadOptions, read_csv_str};
+//! use accelcal_host::poses::{AccumulateOptions, accumulate};
+//! let mut text = String::from("t,ax,ay,az\n");
+//! for i in 0..300 {
+//!     text.push_str(&format!("{:.2},0.0,0.0,{}\n", f64::from(i) * 0.01, 1.0 + 0.001 * f64::from(i % 3)));
+//! }
+//! let table = read_csv_str("still.csv", &text, &ReadOptions::default()).unwrap();
+//! let found = accumulate(&table, &AccumulateOptions::default()).unwrap();
+//! assert_eq!(found.poses.len(), 1);
+//! ```
+
+use accelcal::accumulator::{Accumulator, AccumulatorConfig, AccumulatorError, Pose, Rejections};
+
+use crate::io::Table;
+
+/// Pose capacity of the accumulator used by [`accumulate`].
+pub const MAX_POSES: usize = crate::calib::MAX_POSES;
+
+/// Block lengths (samples) [`accumulate`] can use; the block length is a const generic of the
+/// library's accumulator, so only these are compiled in.
+pub const BLOCK_SIZES: [usize; 5] = [8, 16, 32, 64, 128];
+
+/// Block duration [`accumulate`] aims at when the sample rate is known, seconds.
+pub const TARGET_BLOCK_S: f64 = 0.16;
+
+/// Block length used when the sample rate is unknown (no time column), samples.
+pub const DEFAULT_BLOCK_SAMPLES: usize = 16;
+
+/// Static-detection settings for [`accumulate`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AccumulateOptions {
+    /// The library's detector settings. Its `min_noise_variance` is raised to the quantisation floor
+    /// measured in the data (`sum over axes of q^2 / 12`, `q` the smallest step between readings).
+    pub config: AccumulatorConfig,
+    /// Sample rate, Hz; `None` takes it from the time column (if any).
+    pub sample_rate_hz: Option<f64>,
+    /// Block length, samples (one of [`BLOCK_SIZES`]); `None` chooses about [`TARGET_BLOCK_S`] of
+    /// samples from the sample rate, or [`DEFAULT_BLOCK_SAMPLES`] without one.
+    pub block_samples: Option<usize>,
+    /// A time step longer than this multiple of the mean step interrupts the stream (a pose never
+    /// spans a gap in the recording). Defaults to 10.
+    pub gap_factor: f64,
+    /// Skip rows that repeat the previous row exactly (all three axes): stale reads of a sensor polled
+    /// faster than its output data rate. `None` (default) decides from the data with
+    /// [`repeats_look_stale`]: a coarsely quantised sensor repeats readings too, and those are kept.
+    /// Stale readings are not independent samples, and the library's detector assumes independent
+    /// noise.
+    pub skip_repeats: Option<bool>,
+}
+
+/// Least fraction of rows repeating their predecessor (all three axes) for [`repeats_look_stale`].
+pub const STALE_REPEAT_FRACTION: f64 = 0.2;
+
+/// Least ratio of all-axes repeats to the count independent axes would give (per window of
+/// [`STALE_WINDOW_ROWS`]) for [`repeats_look_stale`]. Quantisation measures about 1.05, stale reads
+/// of a sensor polled 4x its data rate 1.6, 2x: 3.
+pub const STALE_DEPENDENCE_RATIO: f64 = 1.3;
+
+/// Rows per window in which [`repeats_look_stale`] compares the repeats of the axes.
+pub const STALE_WINDOW_ROWS: usize = 64;
+
+impl Default for AccumulateOptions {
+    fn default() -> Self {
+        Self {
+            config: AccumulatorConfig::DEFAULT,
+            sample_rate_hz: None,
+            block_samples: None,
+            gap_factor: 10.0,
+            skip_repeats: None,
+        }
+    }
+}
+
+/// Fraction of rows that repeat the previous row exactly (all three axes).
+pub fn repeat_fraction(samples: &[[f64; 3]]) -> f64 {
+    if samples.len() < 2 {
+        return 0.0;
+    }
+    samples.windows(2).filter(|w| w[0] == w[1]).count() as f64 / (samples.len() - 1) as f64
+}
+
+/// `true` when rows repeating their predecessor exactly look like stale reads, not quantisation: more
+/// than [`STALE_REPEAT_FRACTION`] of the rows repeat on all three axes, and all three repeat together
+/// more than [`STALE_DEPENDENCE_RATIO`] times as often as the per-axis repeats would by chance. A stale
+/// read repeats the whole sample; a quantised sensor whose noise is below one step repeats each axis
+/// on its own (counted per window, so that still and moving stretches are not mixed).
+pub fn repeats_look_stale(samples: &[[f64; 3]]) -> bool {
+    if repeat_fraction(samples) <= STALE_REPEAT_FRACTION {
+        return false;
+    }
+    let (mut observed, mut expected) = (0.0, 0.0);
+    for window in samples.windows(2).collect::<Vec<_>>().chunks(STALE_WINDOW_ROWS) {
+        let per_axis = [0, 1, 2].map(|a| window.iter().filter(|w| w[0][a] == w[1][a]).count() as f64);
+        let n = window.len() as f64;
+        observed += window.iter().filter(|w| w[0] == w[1]).count() as f64;
+        expected += per_axis[0] * per_axis[1] * per_axis[2] / (n * n);
+    }
+    observed > STALE_DEPENDENCE_RATIO * expected
+}
+
+/// Where a pose came from in the file.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PoseSpan {
+    /// First row averaged (index into the table).
+    pub first_row: usize,
+    /// Last row averaged.
+    pub last_row: usize,
+    /// File line of the first row.
+    pub first_line: usize,
+    /// File line of the last row.
+    pub last_line: usize,
+    /// Time of the first row, seconds (with a time column).
+    pub start_s: Option<f64>,
+    /// Time of the last row, seconds.
+    pub end_s: Option<f64>,
+}
+
+/// The result of [`accumulate`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Accumulation {
+    /// The poses found, in order.
+    pub poses: Vec<Pose>,
+    /// Where each pose came from.
+    pub spans: Vec<PoseSpan>,
+    /// Static intervals rejected, by reason.
+    pub rejections: Rejections,
+    /// Poses dropped because [`MAX_POSES`] were already stored.
+    pub dropped_full: u32,
+    /// Gaps in the time stamps that interrupted the stream.
+    pub interruptions: u32,
+    /// Block length used, samples.
+    pub block_samples: usize,
+    /// Sample rate used to choose it (of the rows fed, after skipping stale repeats), Hz.
+    pub sample_rate_hz: Option<f64>,
+    /// Rows skipped as stale repeats of the previous row.
+    pub skipped_repeats: usize,
+    /// The noise floor imposed (quantisation), input unit squared, summed over axes.
+    pub min_noise_variance: f32,
+    /// The detector's final noise variance estimate, input unit squared, summed over axes.
+    pub noise_variance: f32,
+}
+
+/// The block length [`accumulate`] picks for a sample rate: the one of [`BLOCK_SIZES`] nearest (in
+/// ratio) to [`TARGET_BLOCK_S`] of samples; [`DEFAULT_BLOCK_SAMPLES`] without a rate.
+pub fn choose_block_samples(sample_rate_hz: Option<f64>) -> usize {
+    let Some(rate) = sample_rate_hz.filter(|r| r.is_finite() && *r > 0.0) else {
+        return DEFAULT_BLOCK_SAMPLES;
+    };
+    let target = (rate * TARGET_BLOCK_S).max(1.0).log2();
+    BLOCK_SIZES
+        .iter()
+        .copied()
+        .min_by(|a, b| ((*a as f64).log2() - target).abs().total_cmp(&((*b as f64).log2() - target).abs()))
+        .unwrap_or(DEFAULT_BLOCK_SAMPLES)
+}
+
+/// The quantisation floor of the readings: `sum over axes of q^2 / 12` with `q` the smallest non-zero
+/// step between consecutive readings of that axis (input unit squared).
+pub fn quantisation_variance(samples: &[[f64; 3]]) -> f32 {
+    let mut total = 0.0;
+    for a in 0..3 {
+        let step = samples
+            .windows(2)
+            .map(|w| (w[1][a] as f32 - w[0][a] as f32).abs())
+            .filter(|d| *d > 0.0)
+            .fold(f32::INFINITY, f32::min);
+        if step.is_finite() {
+            total += step * step / 12.0;
+        }
+    }
+    total
+}
+
+/// Feeds every row of `table` (as `f32`, in the table's units) through the library's
+/// `Accumulator::<f32, MAX_POSES, BLOCK>` and returns the poses it found, where they are in the file
+/// and what was rejected. Time gaps (see [`AccumulateOptions::gap_factor`]) interrupt the stream.
+///
+/// # Errors
+/// [`AccumulatorError::InvalidConfig`] for an invalid `opts.config` or a block length not in
+/// [`BLOCK_SIZES`]. A full pose buffer is not an error: the poses beyond [`MAX_POSES`] are counted in
+/// [`Accumulation::dropped_full`].
+pub fn accumulate(table: &Table, opts: &AccumulateOptions) -> Result<Accumulation, AccumulatorError> {
+    let repeats = repeat_fraction(&table.samples);
+    let skip_repeats = opts.skip_repeats.unwrap_or_else(|| repeats_look_stale(&table.samples));
+    let fed_fraction = if skip_repeats { 1.0 - repeats } else { 1.0 };
+    let sample_rate_hz = opts.sample_rate_hz.or_else(|| table.sample_rate_hz()).map(|r| r * fed_fraction);
+    let block = opts.block_samples.unwrap_or_else(|| choose_block_samples(sample_rate_hz));
+    let mut config = opts.config;
+    let floor = quantisation_variance(&table.samples);
+    config.min_noise_variance = config.min_noise_variance.max(floor);
+    let run = Run { table, config, gap_factor: opts.gap_factor, skip_repeats };
+    let mut out = match block {
+        8 => run.go::<8>()?,
+        16 => run.go::<16>()?,
+        32 => run.go::<32>()?,
+        64 => run.go::<64>()?,
+        128 => run.go::<128>()?,
+        _ => return Err(AccumulatorError::InvalidConfig),
+    };
+    out.sample_rate_hz = sample_rate_hz;
+    out.min_noise_variance = config.min_noise_variance;
+    Ok(out)
+}
+
+struct Run<'a> {
+    table: &'a Table,
+    config: AccumulatorConfig,
+    gap_factor: f64,
+    skip_repeats: bool,
+}
+
+impl Run<'_> {
+    fn go<const BLOCK: usize>(&self) -> Result<Accumulation, AccumulatorError> {
+        let table = self.table;
+        let mut acc = Accumulator::<f32, MAX_POSES, BLOCK>::new(self.config)?;
+        let mut dropped_full = 0u32;
+        let mut interruptions = 0u32;
+        let mut handle = |r: Result<_, AccumulatorError>| match r {
+            Ok(_) | Err(AccumulatorError::NonFiniteSample) => Ok(()),
+            Err(AccumulatorError::Full) => {
+                dropped_full += 1;
+                Ok(())
+            }
+            Err(e) => Err(e),
+        };
+        let gap_s = table.times_s.as_ref().and_then(|t| {
+            let span = t.last()? - t.first()?;
+            (t.len() >= 2 && span > 0.0).then(|| self.gap_factor * span / (t.len() - 1) as f64)
+        });
+        // Table row of each sample pushed (pose indices count pushed samples).
+        let mut row_of_pushed: Vec<usize> = Vec::with_capacity(table.samples.len());
+        for (i, s) in table.samples.iter().enumerate() {
+            if let (Some(t), Some(gap)) = (&table.times_s, gap_s)
+                && i > 0
+                && t[i] - t[i - 1] > gap
+            {
+                interruptions += 1;
+                handle(acc.interrupt())?;
+            }
+            if self.skip_repeats && i > 0 && table.samples[i - 1] == *s {
+                continue;
+            }
+            row_of_pushed.push(i);
+            handle(acc.push(s.map(|v| v as f32)))?;
+        }
+        handle(acc.finish())?;
+        let poses = acc.poses().to_vec();
+        let last_pushed = row_of_pushed.len().saturating_sub(1);
+        let spans = poses
+            .iter()
+            .map(|p| {
+                let first = (p.start_index as usize).min(last_pushed);
+                let last = (p.end_index as usize).saturating_sub(1).clamp(first, last_pushed);
+                let (first_row, last_row) = (row_of_pushed[first], row_of_pushed[last]);
+                PoseSpan {
+                    first_row,
+                    last_row,
+                    first_line: table.line_of_row[first_row],
+                    last_line: table.line_of_row[last_row],
+                    start_s: table.times_s.as_ref().map(|t| t[first_row]),
+                    end_s: table.times_s.as_ref().map(|t| t[last_row]),
+                }
+            })
+            .collect();
+        Ok(Accumulation {
+            poses,
+            spans,
+            rejections: acc.rejections(),
+            dropped_full,
+            interruptions,
+            block_samples: BLOCK,
+            sample_rate_hz: None,
+            skipped_repeats: table.samples.len() - row_of_pushed.len(),
+            min_noise_variance: self.config.min_noise_variance,
+            noise_variance: acc.noise_variance(),
+        })
+    }
+}
