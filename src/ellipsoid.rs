@@ -31,15 +31,12 @@
 //! assert!((fit.params.nonorth[1] + 0.02).abs() < 1e-3);
 //! ```
 
-use crate::linalg::{DETERMINED_PIVOT, Matrix, solve_spd_holding_in_place, weak_pivots};
+use crate::linalg::{DETERMINED_PIVOT, Matrix, add_outer_product, solve_spd_holding_in_place, weak_pivots};
 use crate::model::{PARAM_COUNT, Params};
 
-/// Quadric coefficients `[xx, yy, zz, xy, xz, yz, x, y, z]`.
+/// Quadric coefficients `[xx, yy, zz, x, y, z, xy, xz, yz]`: the cross terms last, so that in the
+/// factorisation that finds the undetermined ones they (not a scale or the centre) are held at 0.
 const COEFFS: usize = 9;
-
-/// Order in which the quadric coefficients enter the factorisation that finds the undetermined ones:
-/// the cross terms last, so that they (not a scale or the centre) are the ones held at 0.
-const COEFF_ORDER: [usize; COEFFS] = [0, 1, 2, 6, 7, 8, 3, 4, 5];
 
 /// Largest number of poses [`fit_ellipsoid`] leaves out.
 pub const MAX_EXCLUDED: usize = 8;
@@ -281,9 +278,9 @@ fn check_spread(means: &[[f32; 3]], keep: &[bool]) -> Result<(), EllipsoidError>
     for (i, row) in cov.iter_mut().enumerate() {
         row[i] -= shift;
     }
-    match crate::linalg::cholesky(&cov) {
-        Ok(_) => Ok(()),
-        Err(_) => Err(EllipsoidError::Degenerate { missing: missing_directions(means, keep) }),
+    match lower_factor(&cov) {
+        Some(_) => Ok(()),
+        None => Err(EllipsoidError::Degenerate { missing: missing_directions(means, keep) }),
     }
 }
 
@@ -388,54 +385,63 @@ fn fit_once(means: &[[f32; 3]], keep: &[bool], gravity: f32) -> Result<(Params, 
             v[0] * v[0],
             v[1] * v[1],
             v[2] * v[2],
-            2.0 * v[0] * v[1],
-            2.0 * v[0] * v[2],
-            2.0 * v[1] * v[2],
             v[0],
             v[1],
             v[2],
+            2.0 * v[0] * v[1],
+            2.0 * v[0] * v[2],
+            2.0 * v[1] * v[2],
         ];
         for i in 0..COEFFS {
             atb[i] += row[i];
-            for j in 0..=i {
-                ata[i][j] += row[i] * row[j];
-            }
         }
+        add_outer_product(&mut ata, &row, 1.0);
     }
-    let held = weak_pivots(&ata, &COEFF_ORDER, DETERMINED_PIVOT);
-    if held[..3].iter().chain(&held[6..]).any(|&h| h) {
+    let held = weak_pivots(&ata, DETERMINED_PIVOT);
+    if held[..6].iter().any(|&h| h) {
         return Err(degenerate());
     }
     // `atb` becomes the quadric coefficients.
     solve_spd_holding_in_place(&mut ata, &mut atb, &held).map_err(|_| degenerate())?;
     let params = factor(&atb, m0, s, gravity).ok_or_else(degenerate)?;
     // Quadric cross terms xy, xz, yz map to Mxx, Myy, Mzz.
-    Ok((params, [held[3], held[4], held[5]]))
+    Ok((params, [held[6], held[7], held[8]]))
 }
 
 /// `v^T A v + b^T v = 1` in `v = (m - m0) / s` to the paper's `Ka`, `B`; `None` unless an ellipsoid.
 fn factor(theta: &[f32; COEFFS], m0: [f32; 3], s: f32, gravity: f32) -> Option<Params> {
-    let a = [[theta[0], theta[3], theta[4]], [theta[3], theta[1], theta[5]], [theta[4], theta[5], theta[2]]];
-    let b = [theta[6], theta[7], theta[8]];
-    // Centre: A v0 = -b / 2.
-    let v0 = crate::linalg::solve_lu(a, b.map(|x| -0.5 * x)).ok()?;
+    let a = [[theta[0], theta[6], theta[7]], [theta[6], theta[1], theta[8]], [theta[7], theta[8], theta[2]]];
+    let b = [theta[3], theta[4], theta[5]];
+    // A = L^T L, L lower-triangular; the centre solves A v0 = -b / 2: L^T y = -b / 2, then L v0 = y.
+    let l = lower_factor(&a)?;
+    let (sx, sy, sz) = (l.scale[0], l.scale[1], l.scale[2]);
+    let (mx, my, mz) = (l.nonorth[0], l.nonorth[1], l.nonorth[2]);
+    let y2 = -0.5 * b[2] / sz;
+    let y1 = (-0.5 * b[1] - mz * y2) / sy;
+    let y0 = (-0.5 * b[0] - mx * y1 - my * y2) / sx;
+    let v0 = l.invert([y0, y1, y2])?;
     let k = 1.0 - 0.5 * (b[0] * v0[0] + b[1] * v0[1] + b[2] * v0[2]);
     if !(k > 0.0) {
         return None;
     }
-    // Ka^T Ka = g^2 A / (k s^2), factored with Ka lower-triangular (bottom row first).
-    let w = gravity * gravity / (k * s * s);
-    let n = |i: usize, j: usize| w * a[i][j];
-    let szz = sqrt_positive(n(2, 2))?;
-    let mzz = n(1, 2) / szz;
-    let myy = n(0, 2) / szz;
-    let syy = sqrt_positive(n(1, 1) - mzz * mzz)?;
-    let mxx = (n(0, 1) - myy * mzz) / syy;
-    let sxx = sqrt_positive(n(0, 0) - mxx * mxx - myy * myy)?;
+    // Ka^T Ka = g^2 A / (k s^2): Ka = L g / (s sqrt(k)).
+    let w = gravity / (s * crate::linalg::sqrt_f32(k));
+    let ka = Params { bias: [0.0; 3], scale: l.scale.map(|v| w * v), nonorth: l.nonorth.map(|v| w * v) };
     let center = [m0[0] + s * v0[0], m0[1] + s * v0[1], m0[2] + s * v0[2]];
-    let ka = Params { bias: [0.0; 3], scale: [sxx, syy, szz], nonorth: [mxx, myy, mzz] };
     let params = Params { bias: ka.ka_times(center), ..ka };
     params.is_finite().then_some(params)
+}
+
+/// The lower-triangular `L` with `L^T L = a` (a Cholesky factorisation in reversed order, bottom row
+/// first), as the `Ka` of a model without bias; `None` unless `a` is positive definite.
+fn lower_factor(a: &Matrix<3>) -> Option<Params> {
+    let szz = sqrt_positive(a[2][2])?;
+    let mzz = a[1][2] / szz;
+    let myy = a[0][2] / szz;
+    let syy = sqrt_positive(a[1][1] - mzz * mzz)?;
+    let mxx = (a[0][1] - myy * mzz) / syy;
+    let sxx = sqrt_positive(a[0][0] - mxx * mxx - myy * myy)?;
+    Some(Params { bias: [0.0; 3], scale: [sxx, syy, szz], nonorth: [mxx, myy, mzz] })
 }
 
 fn sqrt_positive(v: f32) -> Option<f32> {

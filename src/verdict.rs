@@ -10,7 +10,7 @@
 use crate::accumulator::Pose;
 use crate::ellipsoid::PoseList;
 use crate::frame::{Deviation, Frame, NormPose, modulus_error_gradient};
-use crate::linalg::{Matrix, spd_inverse_in_place};
+use crate::linalg::{Matrix, add_outer_product, spd_inverse_holding_in_place};
 use crate::model::{PARAM_COUNT, Params};
 
 /// The poses of a calibration: the captured poses, the normalised poses the optimisers use, and for
@@ -214,10 +214,11 @@ pub fn information_matrix(
     for (pose, m) in set.pairs() {
         let var = if all_noisy { scale * error_variance(x, frame, pose, m)? } else { scale };
         let (_, g) = modulus_error_gradient(x, m);
-        for i in 0..PARAM_COUNT {
-            for j in 0..PARAM_COUNT {
-                info[i][j] += g[i] * g[j] / var;
-            }
+        add_outer_product(&mut info, &g, 1.0 / var);
+    }
+    for i in 0..PARAM_COUNT {
+        for j in 0..i {
+            info[j][i] = info[i][j];
         }
     }
     Some(info)
@@ -244,24 +245,7 @@ pub fn covariance_holding(mut info: Matrix<PARAM_COUNT>, held: &[bool; PARAM_COU
 /// [`covariance_holding`] in place: `info` becomes the covariance; `false` (and `info` unusable)
 /// when it cannot be inverted.
 pub fn covariance_holding_in_place(info: &mut Matrix<PARAM_COUNT>, held: &[bool; PARAM_COUNT]) -> bool {
-    for i in 0..PARAM_COUNT {
-        for j in 0..PARAM_COUNT {
-            if held[i] || held[j] {
-                info[i][j] = if i == j { 1.0 } else { 0.0 };
-            }
-        }
-    }
-    if spd_inverse_in_place(info).is_err() {
-        return false;
-    }
-    for i in 0..PARAM_COUNT {
-        for j in 0..PARAM_COUNT {
-            if held[i] || held[j] {
-                info[i][j] = 0.0;
-            }
-        }
-    }
-    true
+    spd_inverse_holding_in_place(info, held).is_ok()
 }
 
 /// The largest standard deviation each parameter may have under `bounds` (paper convention,
@@ -321,13 +305,9 @@ pub fn undetermined_parameters(x: &Deviation, norm: &[NormPose]) -> [bool; PARAM
     let mut info = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
     for n in norm {
         let (_, g) = modulus_error_gradient(x, n);
-        for i in 0..PARAM_COUNT {
-            for j in 0..=i {
-                info[i][j] += g[i] * g[j];
-            }
-        }
+        add_outer_product(&mut info, &g, 1.0);
     }
-    crate::linalg::weak_pivots(&info, &[0, 1, 2, 3, 4, 5, 6, 7, 8], crate::linalg::DETERMINED_PIVOT)
+    crate::linalg::weak_pivots(&info, crate::linalg::DETERMINED_PIVOT)
 }
 
 /// Standard deviations of the paper-convention parameters from a deviation covariance.
