@@ -31,7 +31,9 @@
 //! assert!((fit.params.nonorth[1] + 0.02).abs() < 1e-3);
 //! ```
 
-use crate::linalg::{DETERMINED_PIVOT, Matrix, add_outer_product, solve_spd_holding_in_place, weak_pivots};
+use crate::linalg::{
+    DETERMINED_PIVOT, Matrix, add_outer_product, larger, smaller, solve_spd_holding_in_place, weak_pivots,
+};
 use crate::model::{PARAM_COUNT, Params};
 
 /// Quadric coefficients `[xx, yy, zz, x, y, z, xy, xz, yz]`: the cross terms last, so that in the
@@ -225,7 +227,7 @@ pub fn fit_ellipsoid(
         let (params, held) = fitted?;
         let errors = ModulusErrors { means, keep, params: &params, gravity };
         let (worst, worst_abs) = errors.worst();
-        let limit = rule.floor_g.max(rule.robust_sigmas * 1.4826 * errors.median_abs());
+        let limit = crate::linalg::larger(rule.floor_g, rule.robust_sigmas * 1.4826 * errors.median_abs());
         if !(worst_abs > limit) || !room {
             return Ok(EllipsoidFit { params, excluded, held, rmse_g: errors.rms() });
         }
@@ -300,7 +302,7 @@ const PLAUSIBLE_NONORTH: f32 = 0.1;
 /// `true` for an ellipsoid an accelerometer can have.
 fn plausible(p: &Params) -> bool {
     let s = p.scale;
-    let (lo, hi) = (s[0].min(s[1]).min(s[2]), s[0].max(s[1]).max(s[2]));
+    let (lo, hi) = (smaller(smaller(s[0], s[1]), s[2]), larger(larger(s[0], s[1]), s[2]));
     let m = p.nonorth;
     hi <= PLAUSIBLE_SCALE_RATIO * lo
         && m[0].abs() <= PLAUSIBLE_NONORTH * s[0]
@@ -317,11 +319,16 @@ struct ModulusErrors<'a> {
 }
 
 impl ModulusErrors<'_> {
+    /// The error of pose `i`; `None` when it is not kept. Out of line: every statistic below calls it.
+    #[inline(never)]
+    fn of(&self, i: usize) -> Option<f32> {
+        let (m, &kept) = (self.means.get(i)?, self.keep.get(i)?);
+        let f = self.params.apply(*m);
+        kept.then(|| crate::linalg::sqrt_f32(crate::model::norm_squared(f)) / self.gravity - 1.0)
+    }
+
     fn iter(&self) -> impl Iterator<Item = (usize, f32)> + '_ {
-        self.means.iter().zip(self.keep).enumerate().filter(|(_, (_, k))| **k).map(|(i, (m, _))| {
-            let f = self.params.apply(*m);
-            (i, crate::linalg::sqrt_f32(crate::model::norm_squared(f)) / self.gravity - 1.0)
-        })
+        (0..self.means.len()).filter_map(|i| self.of(i).map(|e| (i, e)))
     }
 
     fn worst(&self) -> (usize, f32) {
@@ -462,7 +469,7 @@ pub fn missing_directions(means: &[[f32; 3]], keep: &[bool]) -> Directions {
     let half = (0..3).map(|a| 0.5 * (hi[a] - lo[a])).fold(0.0f32, |x, y| if y > x { y } else { x });
     let mut seen = 0u8;
     for (m, _) in means.iter().zip(keep).filter(|(_, k)| **k) {
-        let u: [f32; 3] = core::array::from_fn(|a| (m[a] - 0.5 * (hi[a] + lo[a])) / half.max(f32::MIN_POSITIVE));
+        let u: [f32; 3] = core::array::from_fn(|a| (m[a] - 0.5 * (hi[a] + lo[a])) / larger(half, f32::MIN_POSITIVE));
         let norm = crate::linalg::sqrt_f32(crate::model::norm_squared(u));
         for a in 0..3 {
             seen |= visited(u, norm, a);

@@ -70,6 +70,19 @@ pub fn solve_lu<const N: usize>(mut a: Matrix<N>, mut b: [f32; N]) -> Result<[f3
     if x.iter().all(|v| v.is_finite()) { Ok(x) } else { Err(LinalgError::Singular) }
 }
 
+/// The larger of `a` and `b`; `b` when either is NaN. Inline comparisons: `f32::max` and `f32::min`
+/// are out-of-line library calls on a Cortex-M4F.
+#[inline]
+pub(crate) fn larger(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
+}
+
+/// The smaller of `a` and `b`; `b` when either is NaN (see [`larger`]).
+#[inline]
+pub(crate) fn smaller(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
+}
+
 /// Square root to within 2 ulp for normal `x >= 0`, in a dozen single-precision operations (reciprocal
 /// square root from the exponent bits, three Newton steps): `libm::sqrtf` is a bit-by-bit software
 /// routine on targets without a stable square-root instruction in `core` (Cortex-M4F: ~100 cycles).

@@ -10,7 +10,7 @@
 use crate::accumulator::Pose;
 use crate::ellipsoid::PoseList;
 use crate::frame::{Deviation, Frame, NormPose, modulus_error_gradient};
-use crate::linalg::{Matrix, add_outer_product, spd_inverse_holding_in_place};
+use crate::linalg::{Matrix, add_outer_product, larger, spd_inverse_holding_in_place};
 use crate::model::{PARAM_COUNT, Params};
 
 /// The poses of a calibration: the captured poses, the normalised poses the optimisers use, and for
@@ -198,7 +198,7 @@ pub fn information_matrix(
             return None;
         }
         let sum: f32 = set.norm.iter().map(|m| crate::model::square(crate::frame::modulus_error(x, m))).sum();
-        (sum / dof).max(f32::MIN_POSITIVE)
+        larger(sum / dof, f32::MIN_POSITIVE)
     } else if inflate && n > free {
         let chi2: f32 = set
             .pairs()
@@ -206,7 +206,7 @@ pub fn information_matrix(
                 Some(crate::model::square(crate::frame::modulus_error(x, m)) / error_variance(x, frame, p, m)?)
             })
             .sum();
-        (chi2 / dof).max(1.0)
+        larger(chi2 / dof, 1.0)
     } else {
         1.0
     };
@@ -285,7 +285,7 @@ pub fn parameters_to_hold(
         }
         let worst = (0..PARAM_COUNT)
             .filter(|&i| !held[i])
-            .map(|i| (i, crate::linalg::sqrt_f32(cov[i][i].max(0.0)) / HOLD_STD[i]))
+            .map(|i| (i, crate::linalg::sqrt_f32(larger(cov[i][i], 0.0)) / HOLD_STD[i]))
             .fold(None, |a: Option<(usize, f32)>, b| if a.is_none_or(|a| !(b.1 <= a.1)) { Some(b) } else { a });
         match worst {
             // (`i < PARAM_COUNT` always; said so the bounds check goes.)
@@ -321,7 +321,7 @@ pub fn param_std(frame: &Frame, covariance: &Matrix<PARAM_COUNT>) -> [f32; PARAM
                 v += t[i][a] * covariance[a][b] * t[i][b];
             }
         }
-        *o = crate::linalg::sqrt_f32(v.max(0.0));
+        *o = crate::linalg::sqrt_f32(larger(v, 0.0));
     }
     out
 }
@@ -345,7 +345,7 @@ pub fn noise_floor_mg(x: &Deviation, frame: &Frame, set: &PoseSet<'_>, fitted: u
 fn rmse_normalised_mg(x: &Deviation, norm: &[NormPose]) -> f32 {
     let mut sum = 0.0;
     for n in norm {
-        let m = crate::linalg::sqrt_f32((1.0 + crate::frame::modulus_error(x, n)).max(0.0));
+        let m = crate::linalg::sqrt_f32(larger(1.0 + crate::frame::modulus_error(x, n), 0.0));
         sum += crate::model::square(m - 1.0);
     }
     if norm.is_empty() { f32::NAN } else { crate::linalg::sqrt_f32(sum / norm.len() as f32) * 1000.0 }
