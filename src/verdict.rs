@@ -191,21 +191,23 @@ pub fn information_matrix(
     if n < free || n == 0 {
         return None;
     }
-    let all_noisy = set.pairs().all(|(p, m)| error_variance(x, frame, p, m).is_some());
+    // One pass for the residual variance, the chi-square and whether every pose carries its noise.
+    let (mut sum, mut chi2, mut all_noisy) = (0.0f32, 0.0f32, true);
+    for (p, m) in set.pairs() {
+        let e2 = crate::model::square(crate::frame::modulus_error(x, m));
+        sum += e2;
+        match error_variance(x, frame, p, m) {
+            Some(var) => chi2 += e2 / var,
+            None => all_noisy = false,
+        }
+    }
     let dof = n.saturating_sub(free).max(1) as f32;
     let scale = if !all_noisy {
         if n == free {
             return None;
         }
-        let sum: f32 = set.norm.iter().map(|m| crate::model::square(crate::frame::modulus_error(x, m))).sum();
         larger(sum / dof, f32::MIN_POSITIVE)
     } else if inflate && n > free {
-        let chi2: f32 = set
-            .pairs()
-            .filter_map(|(p, m)| {
-                Some(crate::model::square(crate::frame::modulus_error(x, m)) / error_variance(x, frame, p, m)?)
-            })
-            .sum();
         larger(chi2 / dof, 1.0)
     } else {
         1.0
