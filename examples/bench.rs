@@ -10,7 +10,8 @@
 //!
 //! | symbol | what one call does |
 //! |---|---|
-//! | `accumulate_sample` | `Accumulator<i16, 24, 32>::push` of one raw sample (called for every sample of the stream) |
+//! | `accumulate_fifo` | `Accumulator<i16, 24, 32>::push` of each sample of one FIFO read (`FIFO_SAMPLES` samples, push inlined in the loop as in a firmware's read loop; the report gives cycles per sample) |
+//! | `accumulate_sample` | `Accumulator<i16, 24, 32>::push` of one raw sample through a call (a second accumulator fed the same stream sample by sample) |
 //! | `apply_sample` | `Params::apply_in_place` of a batch of `APPLY_BATCH` samples (the pose means; the report gives cycles per sample) |
 //! | `taga_generation` | one `Ga::step` on the normalised 24-pose problem, population `POP` (called `GENERATIONS` = 10 times) |
 //! | `lm` | `levenberg_marquardt` from the coarse start (deviation 0) |
@@ -62,6 +63,8 @@ mod firmware {
     /// on this bench, measured with tools/cyclecount.py) at 1.24 M instead of 1.68 M cycles and a smaller
     /// GA state (1976 B instead of 3192 B).
     const POP: usize = 24;
+    /// Samples per `accumulate_fifo` call: one read of a sensor FIFO (the LIS3DH's holds 32).
+    pub const FIFO_SAMPLES: usize = 32;
     /// Samples per `apply_sample` call (a stream is calibrated in batches: the parameters stay in
     /// registers).
     pub const APPLY_BATCH: usize = 24;
@@ -76,6 +79,19 @@ mod firmware {
     #[inline(never)]
     pub fn accumulate_sample(acc: &mut Acc, sample: [i16; 3]) -> Result<Option<Event>, AccumulatorError> {
         acc.push(sample)
+    }
+
+    /// One FIFO read of samples into the accumulator; the last event, or the first error.
+    #[unsafe(no_mangle)]
+    #[inline(never)]
+    pub fn accumulate_fifo(acc: &mut Acc, samples: &[[i16; 3]]) -> Result<Option<Event>, AccumulatorError> {
+        let mut last = None;
+        for &sample in samples {
+            if let Some(event) = acc.push(sample)? {
+                last = Some(event);
+            }
+        }
+        Ok(last)
     }
 
     /// A batch of samples through the calibration model, in place.
@@ -145,26 +161,49 @@ mod firmware {
         loop {}
     }
 
-    /// The simulated sensor's whole stream through `accumulate_sample`.
+    /// The simulated sensor's whole stream through `accumulate_fifo` in reads of `FIFO_SAMPLES`, and
+    /// through `accumulate_sample` one by one into a second accumulator: both must find the same poses.
     fn accumulate_stream() -> Acc {
         let mut sensor = SimSensor::new(SIM_SEED);
-        let mut acc = match Acc::new(AccumulatorConfig::DEFAULT) {
-            Ok(acc) => acc,
-            Err(_) => fail("accumulator config"),
-        };
-        let mut samples = 0u32;
-        while let Ok(sample) = sensor.read_raw() {
-            if black_box(accumulate_sample(&mut acc, sample)).is_err() {
+        let (mut acc, mut one_by_one) =
+            match (Acc::new(AccumulatorConfig::DEFAULT), Acc::new(AccumulatorConfig::DEFAULT)) {
+                (Ok(a), Ok(b)) => (a, b),
+                _ => fail("accumulator config"),
+            };
+        let (mut fifo, mut samples) = ([[0i16; 3]; FIFO_SAMPLES], 0usize);
+        loop {
+            let read = fill_fifo(&mut sensor, &mut fifo);
+            for &sample in &fifo[..read] {
+                if black_box(accumulate_sample(&mut one_by_one, sample)).is_err() {
+                    fail("accumulate");
+                }
+            }
+            if black_box(accumulate_fifo(&mut acc, black_box(&fifo[..read]))).is_err() {
                 fail("accumulate");
             }
-            samples += 1;
+            samples += read;
+            if read < FIFO_SAMPLES {
+                break;
+            }
         }
-        if acc.finish().is_err() {
+        if acc.finish().is_err() || one_by_one.finish().is_err() || acc.poses() != one_by_one.poses() {
             fail("finish");
         }
         let rate_hz = sim_sensor::SAMPLE_RATE_HZ as u32;
         hprintln!("bench: samples {} at {} Hz, poses {}", samples, rate_hz, acc.poses().len());
+        hprintln!("bench: accumulate samples_per_call {}", FIFO_SAMPLES);
         acc
+    }
+
+    /// Reads up to a FIFO's worth of samples; fewer only at the end of the stream.
+    fn fill_fifo(sensor: &mut SimSensor, fifo: &mut [[i16; 3]; FIFO_SAMPLES]) -> usize {
+        for (i, slot) in fifo.iter_mut().enumerate() {
+            match sensor.read_raw() {
+                Ok(sample) => *slot = sample,
+                Err(_) => return i,
+            }
+        }
+        FIFO_SAMPLES
     }
 
     /// One `apply_sample` call on a batch of the pose means.

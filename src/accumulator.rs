@@ -7,8 +7,9 @@
 //! in (a one-block delay line). A closed pose is kept if it is long enough, never touched the rails and
 //! its own variance is noise-like; otherwise it is counted as rejected with the reason.
 //!
-//! Sums are exact: `i16` counts are summed in `i64` relative to the pose's first sample, `f32` samples
-//! in `f64`; the hot path has no division and no float for `i16`.
+//! Sums are exact: `i16` counts are summed raw in `i64` (so that a block adds to a pose with six
+//! additions), `f32` samples in `f64` relative to a reference sample; the hot path has no division and
+//! no float for `i16`.
 //!
 //! ```
 //! use accelcal::accumulator::{Accumulator, AccumulatorConfig};
@@ -29,12 +30,12 @@ use core::ops::{Add, AddAssign, Mul, Sub};
 /// from the reference sample is below `2^32`).
 pub const MAX_POSE_SAMPLES: u32 = i32::MAX as u32;
 
-/// Exact sums of one block of samples, relative to its first sample.
+/// Exact sums of one block of samples, relative to its reference ([`Reading::block_reference`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BlockSums<S> {
-    /// Per-axis sum of `sample - first`.
+    /// Per-axis sum of `sample - reference`.
     pub sum: [S; 3],
-    /// Per-axis sum of `(sample - first)^2`.
+    /// Per-axis sum of `(sample - reference)^2`.
     pub sum_sq: [S; 3],
     /// A sample of the block is saturated.
     pub saturated: bool,
@@ -46,18 +47,24 @@ pub trait Reading: Copy + Default {
     type Sum: Copy + Default + AddAssign + Add<Output = Self::Sum> + Sub<Output = Self::Sum> + Mul<Output = Self::Sum>;
     /// Variance (sum over axes) below which no noise can be resolved: the quantisation floor.
     const QUANTUM_VARIANCE: f32;
+    /// Sums are kept relative to a reference sample (the first of a block or pose), for precision;
+    /// `false`: summed raw (the reference is zero), exact in the sum type, merged by addition.
+    const RELATIVE: bool;
+    /// The reference of a block whose first sample is `first`: `first`, or zero for raw sums.
+    fn block_reference(first: Self) -> Self;
     /// `self - reference` in the sum type (exact).
     fn delta(self, reference: Self) -> Self::Sum;
     /// `n` in the sum type.
     fn count(n: u32) -> Self::Sum;
-    /// The exact sums of `samples` relative to the first one (zero for none), and whether one of them
-    /// is saturated at `limit`. Called once per block.
+    /// The exact sums of `samples` relative to [`Reading::block_reference`] of the first one (zero for
+    /// none), and whether one of them is saturated at `limit`. Called once per block.
     fn block_sums(axes: [&[Self]; 3], limit: Self::Limit) -> BlockSums<Self::Sum>;
     /// Mean and (population) variance of `n` samples, from their sums relative to `reference`
     /// (pose close; no software `f64` for `i16` on a Cortex-M4F).
     fn mean_and_variance(reference: Self, sum: Self::Sum, sum_sq: Self::Sum, n: u32) -> (f32, f32);
-    /// A (small, relative) sum as `f32` (block statistics).
-    fn sum_to_f32(s: Self::Sum) -> f32;
+    /// Mean offset from the reference and population variance of one block of `n` samples, in `f32`
+    /// (the block statistics: no exact rounding needed).
+    fn block_mean_and_variance(sum: Self::Sum, sum_sq: Self::Sum, n: u32) -> (f32, f32);
     /// The value as `f32` (exact for `i16`; no software `f64` on a Cortex-M4F).
     fn to_f32(self) -> f32;
     /// `false` for NaN or infinity.
@@ -99,9 +106,10 @@ fn ratio_to_f32(total: i64, n: u32) -> f32 {
 
 /// Raw sums `(sum x, sum x^2)` of one axis of a block of `i16` samples (at most `2^16`: the `i32` sum
 /// is exact, `2^16 * 2^15 = 2^31`), two samples per step; each square (at most `2^30`) is one
-/// multiply-accumulate into the `i64` (`smlal` on a Cortex-M4).
+/// multiply-accumulate into the `i64` (`smlal` on a Cortex-M4). Raw sums of a pose stay exact in `i64`:
+/// at most `2^31` samples, `2^31 * 2^30 = 2^61`.
 #[inline(always)]
-fn raw_i16_axis_sums(values: &[i16]) -> (i64, i64) {
+fn raw_i16_axis_sums(values: &[i16]) -> (i32, i64) {
     let (mut sum, mut sum_sq) = (0i32, 0i64);
     let mut pairs = values.chunks_exact(2);
     for pair in &mut pairs {
@@ -114,12 +122,32 @@ fn raw_i16_axis_sums(values: &[i16]) -> (i64, i64) {
         sum += a;
         sum_sq += i64::from(a) * i64::from(a);
     }
-    (i64::from(sum), sum_sq)
+    (sum, sum_sq)
+}
+
+/// One axis of a block: raw `(sum, sum of squares, saturated)`.
+#[inline(always)]
+fn i16_axis_block_sums(values: &[i16], limit: i32) -> (i64, i64, bool) {
+    let first = values.first().copied().unwrap_or(0);
+    let (sum, sum_sq) = raw_i16_axis_sums(values);
+    // Every sample is within sqrt(sum (x - first)^2) of the first: none can reach the limit (nor a rail)
+    // when that sum < (min(limit, i16::MAX) - |first|)^2. Exact: every product is of two 32-bit factors
+    // (one multiply each) and every term is below 2^47. Only otherwise are the samples checked.
+    let (n, r) = (values.len() as i32, i32::from(first));
+    let about_first = sum_sq - 2 * i64::from(r) * i64::from(sum) + i64::from(n) * i64::from(r * r);
+    let margin = limit.min(i32::from(i16::MAX)) - r.abs();
+    let saturated = (margin <= 0 || about_first >= i64::from(margin) * i64::from(margin))
+        && values.iter().any(|v| v.saturated(limit));
+    (i64::from(sum), sum_sq, saturated)
 }
 
 impl Reading for i16 {
     type Sum = i64;
     const QUANTUM_VARIANCE: f32 = 3.0 / 12.0;
+    const RELATIVE: bool = false;
+    fn block_reference(_first: i16) -> i16 {
+        0
+    }
     #[inline]
     fn delta(self, reference: Self) -> i64 {
         i64::from(self) - i64::from(reference)
@@ -128,22 +156,14 @@ impl Reading for i16 {
         i64::from(n)
     }
     fn block_sums(axes: [&[i16]; 3], limit: i32) -> BlockSums<i64> {
-        let mut out = BlockSums { sum: [0; 3], sum_sq: [0; 3], saturated: false };
-        for a in 0..3 {
-            let values = axes[a];
-            let Some(&first) = values.first() else { continue };
-            let (raw, raw_sq) = raw_i16_axis_sums(values);
-            let (n, r) = (values.len() as i64, i64::from(first));
-            out.sum[a] = raw - n * r;
-            out.sum_sq[a] = raw_sq - 2 * r * raw + n * r * r;
-            // Every sample is within sqrt(sum_sq) of the first: none can reach the limit (nor a rail)
-            // when sum_sq < (min(limit, i16::MAX) - |first|)^2. Only otherwise are the samples checked.
-            let margin = i64::from(limit.min(i32::from(i16::MAX))) - r.abs();
-            if margin <= 0 || out.sum_sq[a] >= margin * margin {
-                out.saturated |= values.iter().any(|v| v.saturated(limit));
-            }
-        }
-        out
+        let [x, y, z] = axes.map(|values| i16_axis_block_sums(values, limit));
+        BlockSums { sum: [x.0, y.0, z.0], sum_sq: [x.1, y.1, z.1], saturated: x.2 | y.2 | z.2 }
+    }
+    fn block_mean_and_variance(sum: i64, sum_sq: i64, n: u32) -> (f32, f32) {
+        // n^2 variance = n sum_sq - sum^2, exact: n <= 2^16, sum_sq <= 2^46, |sum| <= 2^31.
+        let n_inverse = 1.0 / n.max(1) as f32;
+        let n_squared_variance = i64::from(n) * sum_sq - sum * sum;
+        (i64_to_f32(sum) * n_inverse, i64_to_f32(n_squared_variance) * n_inverse * n_inverse)
     }
     fn mean_and_variance(reference: i16, sum: i64, sum_sq: i64, n: u32) -> (f32, f32) {
         let count = n.max(1);
@@ -159,9 +179,6 @@ impl Reading for i16 {
         (mean, if variance > 0.0 { variance } else { 0.0 })
     }
     #[inline]
-    fn sum_to_f32(s: i64) -> f32 {
-        i64_to_f32(s)
-    }
     fn to_f32(self) -> f32 {
         f32::from(self)
     }
@@ -183,6 +200,10 @@ impl Reading for i16 {
 impl Reading for f32 {
     type Sum = f64;
     const QUANTUM_VARIANCE: f32 = 0.0;
+    const RELATIVE: bool = true;
+    fn block_reference(first: f32) -> f32 {
+        first
+    }
     #[inline]
     fn delta(self, reference: Self) -> f64 {
         f64::from(self) - f64::from(reference)
@@ -210,8 +231,10 @@ impl Reading for f32 {
         let variance = sum_sq / n - m * m;
         ((f64::from(reference) + m) as f32, if variance > 0.0 { variance as f32 } else { 0.0 })
     }
-    fn sum_to_f32(s: f64) -> f32 {
-        s as f32
+    fn block_mean_and_variance(sum: f64, sum_sq: f64, n: u32) -> (f32, f32) {
+        let n_inverse = 1.0 / n.max(1) as f32;
+        let m = sum as f32 * n_inverse;
+        (m, sum_sq as f32 * n_inverse - m * m)
     }
     fn to_f32(self) -> f32 {
         self
@@ -431,7 +454,8 @@ impl<R: Reading> Sums<R> {
         }
     }
 
-    /// Adds `other` (relative to its own reference) to these sums, exactly. A merge that would take the
+    /// Adds `other` (relative to its own reference; raw sums when not [`Reading::RELATIVE`]) to these
+    /// sums, exactly. A merge that would take the
     /// count above [`MAX_POSE_SAMPLES`] is not made: the count saturates and the sums stay exact.
     fn merge(&mut self, other: &Self) {
         if other.n > MAX_POSE_SAMPLES - self.n.min(MAX_POSE_SAMPLES) {
@@ -440,6 +464,12 @@ impl<R: Reading> Sums<R> {
         self.end_index = other.end_index;
         let n = R::count(other.n);
         for a in 0..3 {
+            if !R::RELATIVE {
+                // Raw sums: both references are zero.
+                self.sum_sq[a] += other.sum_sq[a];
+                self.sum[a] += other.sum[a];
+                continue;
+            }
             let shift = other.reference[a].delta(self.reference[a]);
             self.sum_sq[a] += other.sum_sq[a] + (other.sum[a] * shift + other.sum[a] * shift) + n * shift * shift;
             self.sum[a] += other.sum[a] + n * shift;
@@ -450,13 +480,11 @@ impl<R: Reading> Sums<R> {
 
     /// Per-axis mean offset from the reference and variance, in `f32` (block statistics).
     fn mean_offset_and_variance(&self) -> ([f32; 3], [f32; 3]) {
-        let n_inverse = 1.0 / self.n.max(1) as f32;
         let mut mean = [0.0; 3];
         let mut var = [0.0; 3];
         for a in 0..3 {
-            let m = R::sum_to_f32(self.sum[a]) * n_inverse;
+            let (m, v) = R::block_mean_and_variance(self.sum[a], self.sum_sq[a], self.n);
             mean[a] = m;
-            let v = R::sum_to_f32(self.sum_sq[a]) * n_inverse - m * m;
             var[a] = if v > 0.0 { v } else { 0.0 };
         }
         (mean, var)
@@ -492,9 +520,11 @@ pub struct Accumulator<R: Reading, const POSES: usize, const BLOCK: usize> {
     /// Index of the open block's first sample.
     block_start: u32,
     saturation_limit: R::Limit,
-    /// The last block (the delay line: while a pose is open it is merged in only once the next block
-    /// is still too).
-    previous: Option<BlockStats<R>>,
+    /// The last two blocks, written in turn (no copies): `blocks[previous_slot]` is the delay line (while a
+    /// pose is open it is merged in only once the next block is still too), valid if `has_previous`.
+    blocks: [BlockStats<R>; 2],
+    previous_slot: usize,
+    has_previous: bool,
     pose: Option<Sums<R>>,
     noise_variance: f32,
     /// Samples seen (saturating), except those in `buffer`.
@@ -519,7 +549,9 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
             buffered: 0,
             block_start: 0,
             saturation_limit: R::saturation_limit(config.full_scale),
-            previous: None,
+            blocks: [BlockStats { sums: Sums::new([R::default(); 3], 0), mean: [0.0; 3], variance: 0.0 }; 2],
+            previous_slot: 0,
+            has_previous: false,
             pose: None,
             noise_variance: f32::INFINITY,
             counted: 0,
@@ -562,16 +594,17 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
     /// is closed as if motion had started. Poses already stored are kept.
     pub fn interrupt(&mut self) -> Result<Option<Event>, AccumulatorError> {
         self.drop_block();
-        self.previous = None;
+        self.has_previous = false;
         self.close_pose()
     }
 
     /// Ends the stream: a pose still open is closed with every quiet block it has (no motion followed).
     pub fn finish(&mut self) -> Result<Option<Event>, AccumulatorError> {
         self.drop_block();
-        if let (Some(pose), Some(last)) = (self.pose.as_mut(), self.previous.take()) {
-            pose.merge(&last.sums);
+        if let (Some(pose), true) = (self.pose.as_mut(), self.has_previous) {
+            pose.merge(&self.blocks[self.previous_slot % 2].sums);
         }
+        self.has_previous = false;
         self.close_pose()
     }
 
@@ -592,29 +625,36 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         self.block_start = self.counted;
     }
 
-    /// The full buffer's sums; the next block starts at the next sample.
-    fn take_block(&mut self) -> Sums<R> {
+    /// Sums the full buffer into `blocks[slot]` (field by field, in place: no copies of the sums) with
+    /// its statistics; the next block starts at the next sample.
+    #[inline(always)]
+    fn take_block(&mut self, slot: usize) {
         let [x, y, z] = &self.buffer;
-        let BlockSums { sum, sum_sq, saturated } = R::block_sums([x, y, z], self.saturation_limit);
-        let (start_index, reference) = (self.block_start, [x[0], y[0], z[0]]);
+        let sums = R::block_sums([x, y, z], self.saturation_limit);
+        let block = &mut self.blocks[slot % 2];
+        block.sums.reference = [x[0], y[0], z[0]].map(R::block_reference);
+        (block.sums.sum, block.sums.sum_sq, block.sums.saturated) = (sums.sum, sums.sum_sq, sums.saturated);
+        (block.sums.n, block.sums.start_index) = (BLOCK as u32, self.block_start);
+        let (offset, var) = block.sums.mean_offset_and_variance();
+        for a in 0..3 {
+            block.mean[a] = offset[a] + block.sums.reference[a].to_f32();
+        }
+        block.variance = var[0] + var[1] + var[2];
         self.drop_block();
-        Sums { reference, sum, sum_sq, n: BLOCK as u32, start_index, end_index: self.counted, saturated }
+        self.blocks[slot % 2].sums.end_index = self.counted;
     }
 
     // Once per BLOCK samples: kept out of line so that `push`, inlined into the caller's sample loop, stays
     // small (inlined, its register pressure made every push save and restore all FPU registers).
     #[inline(never)]
     fn close_block(&mut self) -> Result<Option<Event>, AccumulatorError> {
-        let sums = self.take_block();
-        let (offset, var) = sums.mean_offset_and_variance();
-        let mut mean = offset;
-        for (m, r) in mean.iter_mut().zip(sums.reference) {
-            *m += r.to_f32();
-        }
-        let variance = var[0] + var[1] + var[2];
+        let slot = (self.previous_slot + 1) % 2;
+        self.take_block(slot);
+        let (mean, variance) = (self.blocks[slot].mean, self.blocks[slot].variance);
         let noise = self.update_noise(mean, variance);
-        let drift = self.previous.as_ref().map(|p| {
-            let d = [mean[0] - p.mean[0], mean[1] - p.mean[1], mean[2] - p.mean[2]];
+        let previous = &self.blocks[self.previous_slot % 2];
+        let drift = self.has_previous.then(|| {
+            let d = [mean[0] - previous.mean[0], mean[1] - previous.mean[1], mean[2] - previous.mean[2]];
             (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) * (BLOCK as f32 * 0.5) / noise
         });
         let event = if self.pose.is_some() {
@@ -626,7 +666,7 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
                 && drift.is_some_and(|d| d <= self.config.drift_enter_factor);
             Ok(self.open_pose(quiet, noise))
         };
-        self.previous = Some(BlockStats { sums, mean, variance });
+        (self.previous_slot, self.has_previous) = (slot, true);
         event
     }
 
@@ -648,15 +688,18 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         if !still {
             return self.close_pose();
         }
-        if let (Some(pose), Some(last)) = (self.pose.as_mut(), self.previous.as_ref()) {
-            pose.merge(&last.sums);
+        if let (Some(pose), true) = (self.pose.as_mut(), self.has_previous) {
+            pose.merge(&self.blocks[self.previous_slot % 2].sums);
         }
         Ok(None)
     }
 
     /// Two quiet blocks in a row with little change between them open a pose (with the first of them).
     fn open_pose(&mut self, quiet: bool, noise: f32) -> Option<Event> {
-        let last = self.previous.as_ref().filter(|p| quiet && p.variance <= self.config.enter_factor * noise)?;
+        let last = &self.blocks[self.previous_slot % 2];
+        if !(self.has_previous && quiet && last.variance <= self.config.enter_factor * noise) {
+            return None;
+        }
         let mut pose = Sums::new(last.sums.reference, last.sums.start_index);
         pose.merge(&last.sums);
         self.pose = Some(pose);
@@ -733,16 +776,17 @@ mod tests {
         pose.n = MAX_POSE_SAMPLES - 10;
         pose.sum = [5; 3];
         pose.sum_sq = [7; 3];
-        let mut block = Sums::<i16>::new([100; 3], 50);
-        block.n = 32;
+        // i16 sums are raw: a block of samples at 100.
+        let mut block = Sums::<i16>::new([0; 3], 50);
+        (block.n, block.sum, block.sum_sq) = (32, [3200; 3], [320_000; 3]);
         block.end_index = 82;
         pose.merge(&block);
         assert_eq!(pose.n, MAX_POSE_SAMPLES - 10, "a merge past the limit is not made");
         assert_eq!((pose.sum, pose.sum_sq), ([5; 3], [7; 3]));
-        block.n = 10;
+        (block.n, block.sum, block.sum_sq) = (10, [1000; 3], [100_000; 3]);
         pose.merge(&block);
         assert_eq!(pose.n, MAX_POSE_SAMPLES);
-        assert_eq!(pose.sum[0], 5 + 10 * 100);
+        assert_eq!((pose.sum[0], pose.sum_sq[0]), (5 + 10 * 100, 7 + 10 * 100 * 100));
         assert_eq!(pose.end_index, 82);
         pose.merge(&block);
         assert_eq!(pose.n, MAX_POSE_SAMPLES, "the count saturates");

@@ -516,6 +516,16 @@ impl<R: Rng, const POP: usize, const MAX_POSES: usize> Calibrator<R, POP, MAX_PO
         Ok(Self { config: *config, prepared, ga })
     }
 
+    /// The GA between steps (the GA methods), to watch its best and mean cost per generation.
+    pub fn ga(&self) -> Option<&Ga<R, POP, PARAM_COUNT>> {
+        self.ga.as_ref()
+    }
+
+    /// The frame of the initial estimate: the GA's individuals are deviations in it.
+    pub fn frame(&self) -> &Frame {
+        self.prepared.normalized.frame()
+    }
+
     /// One bounded step on the same `poses` as [`Calibrator::new`]: a GA generation while the GA runs,
     /// then the polish and the verdict.
     pub fn step(&mut self, poses: &[Pose]) -> Result<Step, CalibrationError> {

@@ -2,8 +2,11 @@
 //! and a JSON-ready summary. Every number comes from `accelcal`; nothing is re-implemented here.
 
 use accelcal::accumulator::Pose;
-use accelcal::calibrate::{Calibration, CalibrationConfig, CalibrationError, Method, NormalizedPoses, calibrate};
-use accelcal::frame::{Deviation, modulus_error};
+use std::ops::ControlFlow;
+
+use accelcal::calibrate::{Calibration, CalibrationConfig, CalibrationError, Calibrator, NormalizedPoses, Step};
+use accelcal::frame::{Deviation, Frame, modulus_error};
+use accelcal::ga::Ga;
 use accelcal::model::{Params, STANDARD_GRAVITY_MPS2};
 
 use crate::csvio::{DroppedRows, Units};
@@ -70,9 +73,39 @@ pub struct HostCalibration {
     pub rmse_loo_mg: Option<f32>,
 }
 
-/// Runs the library's calibration with a GA seeded by `seed`.
+/// The GA of a calibration as [`run_observed`] shows it.
+pub type HostGa = Ga<Xoshiro128PlusPlus, POPULATION, { accelcal::model::PARAM_COUNT }>;
+
+/// Runs the library's calibration with a GA seeded by `seed`: `accelcal calibrate`'s pipeline, and
+/// the paper reproduction's (with the paper's initialisation, intervals and operators in `config`).
 pub fn run(poses: &[Pose], config: &CalibrationConfig, seed: u64) -> Result<Calibration, CalibrationError> {
-    calibrate::<_, POPULATION, MAX_POSES>(poses, config, Xoshiro128PlusPlus::seed_from_u64(seed))
+    match run_observed(poses, config, seed, |_, _| ControlFlow::Continue(()))? {
+        Some(calibration) => Ok(calibration),
+        None => unreachable!("an observer that never breaks runs to the end"),
+    }
+}
+
+/// [`run`] stepped (the library's [`Calibrator`], same result for the same seed), with `observe`
+/// shown the GA and the frame of its individuals after the first population and after each
+/// generation (never for Newton or LM alone). `observe` breaking stops the run: `Ok(None)`.
+pub fn run_observed(
+    poses: &[Pose],
+    config: &CalibrationConfig,
+    seed: u64,
+    mut observe: impl FnMut(&HostGa, &Frame) -> ControlFlow<()>,
+) -> Result<Option<Calibration>, CalibrationError> {
+    let rng = Xoshiro128PlusPlus::seed_from_u64(seed);
+    let mut calibrator = Calibrator::<_, POPULATION, MAX_POSES>::new(poses, config, rng)?;
+    loop {
+        if let Some(ga) = calibrator.ga()
+            && observe(ga, calibrator.frame()).is_break()
+        {
+            return Ok(None);
+        }
+        if let Step::Finished(calibration) = calibrator.step(poses)? {
+            return Ok(Some(calibration));
+        }
+    }
 }
 
 /// [`run`] plus the leave-one-pose-out RMSE: each pose is predicted by an LM fit of the others
@@ -106,41 +139,52 @@ fn loo_rmse_mg(poses: &[Pose], config: &CalibrationConfig, params: &Params) -> O
     Some(((sum / all.len() as f64).sqrt() * 1000.0) as f32)
 }
 
-/// Parses a method name (`newton`, `lm`, `taga`, `taga+lm`).
-pub fn parse_method(s: &str) -> Result<Method, String> {
-    [Method::Newton, Method::Lm, Method::Taga, Method::TagaLm]
-        .into_iter()
-        .find(|m| m.name() == s)
-        .ok_or_else(|| format!("unknown method '{s}' (expected newton, lm, taga or taga+lm)"))
-}
-
-/// JSON of the parameters: `{"bias": [..], "scale": [..], "nonorth": [..]}`.
+/// JSON of the parameters: `{"bias": [..], "scale": [..], "nonorth": [..]}` (the library's
+/// `Serialize`).
 pub fn params_json(p: &Params) -> serde_json::Value {
-    serde_json::json!({ "bias": p.bias, "scale": p.scale, "nonorth": p.nonorth })
+    serde_json::to_value(p).unwrap_or_default()
 }
 
-/// A non-finite float as JSON `null`.
-pub fn num(v: f32) -> serde_json::Value {
-    if v.is_finite() { serde_json::json!(v) } else { serde_json::Value::Null }
+/// A verdict as the host reports it: what failed, by name, and what was held or left out.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct VerdictSummary {
+    /// No bound failed.
+    pub pass: bool,
+    /// RMSE after calibration above its bound.
+    pub rmse_over_limit: bool,
+    /// RMSE far above the noise floor.
+    pub model_misfit: bool,
+    /// Parameters outside the plausible range.
+    pub implausible: bool,
+    /// Names of the parameters the poses do not determine well enough.
+    pub undetermined: Vec<&'static str>,
+    /// Names of the parameters held at nominal.
+    pub held_at_nominal: Vec<&'static str>,
+    /// Poses left out (indices from 0).
+    pub poses_left_out: Vec<u16>,
 }
 
-/// JSON of a verdict.
+impl From<&accelcal::verdict::Verdict> for VerdictSummary {
+    fn from(v: &accelcal::verdict::Verdict) -> Self {
+        let f = &v.failures;
+        Self {
+            pass: v.pass(),
+            rmse_over_limit: f.rmse,
+            model_misfit: f.model_misfit,
+            implausible: f.implausible,
+            undetermined: held_names(&f.undetermined),
+            held_at_nominal: held_names(&v.warnings.held),
+            poses_left_out: v.warnings.excluded.as_slice().to_vec(),
+        }
+    }
+}
+
+/// JSON of a verdict ([`VerdictSummary`], keys sorted).
 pub fn verdict_json(v: &accelcal::verdict::Verdict) -> serde_json::Value {
-    let f = &v.failures;
-    let undetermined: Vec<&str> =
-        accelcal::model::PARAM_NAMES.iter().zip(f.undetermined).filter(|(_, u)| *u).map(|(n, _)| *n).collect();
-    serde_json::json!({
-        "pass": v.pass(),
-        "rmse_over_limit": f.rmse,
-        "model_misfit": f.model_misfit,
-        "implausible": f.implausible,
-        "undetermined": undetermined,
-        "held_at_nominal": held_names(&v.warnings.held),
-        "poses_left_out": v.warnings.excluded.as_slice(),
-    })
+    serde_json::to_value(VerdictSummary::from(v)).unwrap_or_default()
 }
 
-/// Names of the parameters flagged in `held`.
+/// Names of the parameters flagged (held, or undetermined).
 pub fn held_names(held: &[bool; accelcal::model::PARAM_COUNT]) -> Vec<&'static str> {
     accelcal::model::PARAM_NAMES.iter().zip(held).filter(|(_, h)| **h).map(|(n, _)| *n).collect()
 }
@@ -165,33 +209,107 @@ pub fn warnings_line(v: &accelcal::verdict::Verdict) -> String {
     parts.join("; ")
 }
 
-/// The rows dropped while reading (by reason) and while finding poses (stale repeats), with their
-/// names as in [`rows_dropped_json`].
-fn rows_dropped(dropped: &DroppedRows, stale_repeats: usize) -> [(&'static str, usize); 4] {
-    [
-        ("non_finite", dropped.non_finite),
-        ("stale_flag", dropped.stale_flag),
-        ("stale_repeat", stale_repeats),
-        ("truncated_last_line", dropped.truncated),
-    ]
+/// The rows dropped while reading (by reason), while finding poses (stale repeats), and their total.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct RowsDropped {
+    /// A needed cell empty, NaN or infinite.
+    pub non_finite: usize,
+    /// Marked stale by a stale-flag column.
+    pub stale_flag: usize,
+    /// Repeats of the previous reading skipped by the pose detection.
+    pub stale_repeat: usize,
+    /// A truncated last line.
+    pub truncated_last_line: usize,
+    /// All of them.
+    pub total: usize,
+}
+
+impl RowsDropped {
+    /// The counts of `dropped` and the stale repeats.
+    pub fn new(dropped: &DroppedRows, stale_repeats: usize) -> Self {
+        let total = dropped.non_finite + dropped.stale_flag + stale_repeats + dropped.truncated;
+        Self {
+            non_finite: dropped.non_finite,
+            stale_flag: dropped.stale_flag,
+            stale_repeat: stale_repeats,
+            truncated_last_line: dropped.truncated,
+            total,
+        }
+    }
+
+    /// The reasons by name, as in the JSON.
+    fn reasons(&self) -> [(&'static str, usize); 4] {
+        [
+            ("non_finite", self.non_finite),
+            ("stale_flag", self.stale_flag),
+            ("stale_repeat", self.stale_repeat),
+            ("truncated_last_line", self.truncated_last_line),
+        ]
+    }
 }
 
 /// JSON of the rows dropped, by reason, and their total: every reason, zeros included.
 pub fn rows_dropped_json(dropped: &DroppedRows, stale_repeats: usize) -> serde_json::Value {
-    let reasons = rows_dropped(dropped, stale_repeats);
-    let mut object = serde_json::Map::new();
-    for (name, count) in reasons {
-        object.insert(name.into(), count.into());
-    }
-    object.insert("total".into(), reasons.iter().map(|r| r.1).sum::<usize>().into());
-    serde_json::Value::Object(object)
+    serde_json::to_value(RowsDropped::new(dropped, stale_repeats)).unwrap_or_default()
 }
 
 /// One text line of the rows dropped (`rows dropped: 12 (non_finite 2, stale_flag 10)`), `None`
 /// when none were.
 pub fn rows_dropped_line(dropped: &DroppedRows, stale_repeats: usize) -> Option<String> {
-    let reasons = rows_dropped(dropped, stale_repeats);
-    let total: usize = reasons.iter().map(|r| r.1).sum();
-    let parts: Vec<String> = reasons.iter().filter(|r| r.1 > 0).map(|(name, n)| format!("{name} {n}")).collect();
+    let rows = RowsDropped::new(dropped, stale_repeats);
+    let total = rows.total;
+    let parts: Vec<String> = rows.reasons().iter().filter(|r| r.1 > 0).map(|(name, n)| format!("{name} {n}")).collect();
     (total > 0).then(|| format!("rows dropped: {total} ({})", parts.join(", ")))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::{SimConfig, simulate_pose_means};
+    use accelcal::calibrate::{Method, calibrate};
+
+    fn paper_poses() -> (Vec<Pose>, f32) {
+        let cfg = SimConfig::paper(3);
+        (simulate_pose_means(&cfg), cfg.gravity as f32)
+    }
+
+    #[test]
+    fn the_stepped_pipeline_equals_the_librarys_calibrate_and_shows_every_generation() {
+        let (poses, gravity) = paper_poses();
+        let config = CalibrationConfig { gravity, ..CalibrationConfig::DEFAULT };
+        let rng = Xoshiro128PlusPlus::seed_from_u64(7);
+        let at_once = calibrate::<_, POPULATION, MAX_POSES>(&poses, &config, rng).unwrap();
+        let mut seen = Vec::new();
+        let stepped = run_observed(&poses, &config, 7, |ga, _| {
+            seen.push((ga.generation(), ga.best_cost()));
+            ControlFlow::Continue(())
+        });
+        let stepped = stepped.unwrap().expect("runs to the end");
+        assert_eq!(stepped, at_once);
+        assert!(stepped.generations > 0);
+        assert_eq!(seen.len(), stepped.generations as usize + 1, "the first population and each generation");
+        assert!(seen.iter().enumerate().all(|(i, (g, _))| *g == i as u32), "{seen:?}");
+        assert!(seen.windows(2).all(|w| w[1].1 <= w[0].1), "elitism: the best never worsens: {seen:?}");
+    }
+
+    #[test]
+    fn breaking_stops_the_run_and_gradient_methods_show_no_ga() {
+        let (poses, gravity) = paper_poses();
+        let config = CalibrationConfig { gravity, ..CalibrationConfig::TAGA_ALONE };
+        let mut calls = 0;
+        let stopped = run_observed(&poses, &config, 1, |ga, _| {
+            calls += 1;
+            if ga.generation() == 3 { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+        });
+        assert_eq!(stopped, Ok(None));
+        assert_eq!(calls, 4);
+        let newton = CalibrationConfig { method: Method::Newton, ..config };
+        let mut ga_seen = false;
+        let cal = run_observed(&poses, &newton, 1, |_, _| {
+            ga_seen = true;
+            ControlFlow::Continue(())
+        });
+        assert_eq!(cal.unwrap().map(|c| c.generations), Some(0));
+        assert!(!ga_seen);
+    }
 }

@@ -6,20 +6,17 @@
 //!   the start, inflated by its residuals);
 //! - the closed-form ellipsoid start with intervals from its uncertainty.
 //!
-//! Both run the paper's TAGA at population 40 (the host's) with the library's own set-up
-//! ([`ga_solver`] for the paper's box, [`search_box`] for the uncertainty box).
+//! Each runs the paper's TAGA at population 40 (the host's) through the calibration pipeline
+//! ([`calib::run_observed`], as `accelcal calibrate` runs it), watching its best cost per generation.
+
+use std::ops::ControlFlow;
 
 use accelcal::accumulator::Pose;
-use accelcal::calibrate::{CalibrationConfig, Init, Intervals, NormalizedPoses, search_box};
+use accelcal::calibrate::{CalibrationConfig, Init, Intervals, Method};
 use accelcal::coarse::SearchWidths;
-use accelcal::frame::{Deviation, objective};
-use accelcal::ga::{Ga, GaConfig};
-use accelcal::model::PARAM_COUNT;
-use accelcal::solve::levenberg_marquardt;
-use rand_core::SeedableRng;
-use rand_xoshiro::Xoshiro128PlusPlus;
+use accelcal::ga::GaConfig;
 
-use crate::calib::{MAX_POSES, POPULATION};
+use crate::calib;
 use crate::sim::{Plan, SimConfig, simulate_pose_means};
 
 /// Generations run at most.
@@ -43,42 +40,27 @@ pub struct Convergence {
     pub runs: usize,
 }
 
-/// The generation at which TAGA's best is first within [`WITHIN`] of `optimum`, or `None`.
-fn generations_to(
-    mut ga: Ga<Xoshiro128PlusPlus, POPULATION, PARAM_COUNT>,
-    norm: &[accelcal::frame::NormPose],
-    optimum: f32,
-) -> Option<u32> {
-    let cost = |x: &Deviation| objective(x, norm);
-    for generation in 0..=MAX_GENERATIONS {
-        if ga.best_cost() <= WITHIN * optimum {
-            return Some(generation);
-        }
-        ga.step(&cost);
-    }
-    None
-}
-
-/// One run from `init` with the paper's fixed box (`fixed`) or the uncertainty box: `None` when the
-/// initial estimate or the GA could not be set up.
+/// One run from `init` with the paper's fixed box (`fixed`) or the uncertainty box, through the
+/// calibration pipeline ([`calib::run_observed`]): the first generation whose best cost is within
+/// [`WITHIN`] of the LM optimum from the same start (`Some(None)` if none is by
+/// [`MAX_GENERATIONS`]), or `None` when the initial estimate or the GA could not be set up.
 fn one(poses: &[Pose], init: Init, fixed: bool, seed: u64, gravity: f32) -> Option<Option<u32>> {
-    let config =
-        GaConfig { max_generations: MAX_GENERATIONS, stall_generations: 0, ..CalibrationConfig::TAGA_ALONE.ga };
-    let norm = NormalizedPoses::<MAX_POSES>::prepare(poses, init, gravity, &Default::default()).ok()?;
-    let p = norm.poses();
-    let optimum = levenberg_marquardt(norm.start(), p, &CalibrationConfig::DEFAULT.lm).ok()?.cost;
-    let start = norm.start();
-    let rng = Xoshiro128PlusPlus::seed_from_u64(seed);
-    let bounds = if fixed {
-        SearchWidths::DEFAULT.search_box(&start).ok()?
-    } else {
-        search_box(&Intervals::DEFAULT, &start, norm.frame(), &norm.pose_set(poses), &[false; PARAM_COUNT]).ok()?
-    };
-    let mut ga = Ga::<_, POPULATION, PARAM_COUNT>::empty(config, bounds, rng);
-    let cost = |x: &Deviation| objective(x, p);
-    ga.initialize(&cost).ok()?;
-    ga.inject(&start, &cost);
-    Some(generations_to(ga, p, optimum))
+    let intervals = if fixed { Intervals::Fixed(SearchWidths::DEFAULT) } else { Intervals::DEFAULT };
+    let ga = GaConfig { max_generations: MAX_GENERATIONS, stall_generations: 0, ..CalibrationConfig::TAGA_ALONE.ga };
+    let config = CalibrationConfig { gravity, init, intervals, ga, ..CalibrationConfig::TAGA_ALONE };
+    let lm = CalibrationConfig { method: Method::Lm, ..config };
+    // The objective is normalised by g^4 in the GA; the calibration reports it in (output unit)^4.
+    let optimum = calib::run(poses, &lm, seed).ok()?.objective / gravity.powi(4);
+    let mut reached = None;
+    let finished = calib::run_observed(poses, &config, seed, |ga, _| {
+        if ga.best_cost() <= WITHIN * optimum {
+            reached = Some(ga.generation());
+            return ControlFlow::Break(());
+        }
+        ControlFlow::Continue(())
+    });
+    finished.ok()?;
+    Some(reached)
 }
 
 fn summary(init: &'static str, mut generations: Vec<u32>) -> Convergence {
@@ -95,8 +77,9 @@ const SETUPS: [(&str, Init, bool); 3] = [
     ("ellipsoid, uncertainty box", Init::Ellipsoid, false),
 ];
 
-/// Generations-to-1 % for each set-up over `runs` experiments of `plan` (seeds `seed..`).
-pub fn compare(plan: Plan, seed: u64, runs: usize, noise_mg: f64) -> Vec<Convergence> {
+/// Generations-to-1 % for each set-up over `runs` experiments of `plan` (seeds `seed..`);
+/// `progress` is called after each experiment of each set-up (`3 runs` times).
+pub fn compare(plan: Plan, seed: u64, runs: usize, noise_mg: f64, mut progress: impl FnMut()) -> Vec<Convergence> {
     SETUPS
         .iter()
         .map(|&(name, init, fixed)| {
@@ -105,7 +88,9 @@ pub fn compare(plan: Plan, seed: u64, runs: usize, noise_mg: f64) -> Vec<Converg
                     let s = seed + run as u64;
                     let cfg = SimConfig { noise_mg, ..SimConfig::for_plan(plan, s) };
                     let poses: Vec<Pose> = simulate_pose_means(&cfg);
-                    one(&poses, init, fixed, s, cfg.gravity as f32).map(|r| r.unwrap_or(MAX_GENERATIONS + 1))
+                    let reached = one(&poses, init, fixed, s, cfg.gravity as f32);
+                    progress();
+                    reached.map(|r| r.unwrap_or(MAX_GENERATIONS + 1))
                 })
                 .collect();
             summary(name, generations)

@@ -2,18 +2,22 @@
 //! Table 2 as a Monte Carlo against the Cramer-Rao bound, Fig. 3 (operators on Rastrigin), Fig. 6/7
 //! (one TAGA run), and the bound of the paper's 24 positions against a 26-direction cube.
 
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::ops::ControlFlow;
+
 use accelcal::accumulator::Pose;
-use accelcal::calibrate::{CalibrationConfig, NormalizedPoses, ga_solver};
+use accelcal::calibrate::{Calibration, CalibrationConfig, Init, Intervals, Method, NormalizedPoses};
 use accelcal::coarse::SearchWidths;
-use accelcal::frame::{Deviation, objective};
+use accelcal::ellipsoid::OutlierRule;
 use accelcal::ga::{Ga, GaConfig, Operators, SearchBox, rastrigin};
 use accelcal::model::{PARAM_COUNT, PARAM_NAMES, Params};
-use accelcal::solve::{levenberg_marquardt, newton};
+use accelcal::solve::levenberg_marquardt;
 use accelcal::verdict::{deviation_covariance, param_std};
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro128PlusPlus;
 
-use crate::calib::{MAX_POSES, POPULATION};
+use crate::calib::{self, MAX_POSES, POPULATION};
 use crate::sim::{Plan, SimConfig, simulate_pose_means};
 
 /// The paper's Table 2: relative errors (%) of classical Newton and of the paper's method.
@@ -138,6 +142,21 @@ pub fn crlb_rel_pct(plan: Plan, seed: u64, runs: usize, noise_mg: f64) -> [f64; 
     sum.map(|s| (s / n.max(1) as f64).sqrt())
 }
 
+/// The paper's set-up of the calibration pipeline ([`calib::run`], as `accelcal calibrate` runs
+/// it): the six-position start, the fixed search widths, every pose kept, TAGA with the paper's
+/// operators run to convergence (200 generations at most), `method` after it.
+pub fn paper_config(method: Method, gravity: f32) -> CalibrationConfig {
+    CalibrationConfig {
+        gravity,
+        method,
+        init: Init::SixPosition,
+        intervals: Intervals::Fixed(SearchWidths::DEFAULT),
+        outliers: OutlierRule::KEEP_ALL,
+        ga: CalibrationConfig::TAGA_ALONE.ga,
+        ..CalibrationConfig::DEFAULT
+    }
+}
+
 /// What one Monte Carlo experiment gave.
 struct RunOutcome {
     /// Relative errors (%) per method of [`METHODS`]; `None` where the solve failed.
@@ -149,99 +168,101 @@ struct RunOutcome {
     iterations: [u32; 5],
 }
 
-/// One Monte Carlo experiment.
-fn one_run(cfg: &SimConfig, ga_seed: u64) -> Option<RunOutcome> {
-    let poses = simulate_pose_means(cfg);
-    let config = CalibrationConfig::DEFAULT;
-    let norm = NormalizedPoses::<MAX_POSES>::new(&poses, cfg.gravity as f32).ok()?;
-    let frame = *norm.frame();
-    let p = norm.poses();
-    let truth = cfg.truth;
-    let err = |x: &Deviation| Some(rel_err_pct(&frame.to_params(x), &truth));
-    let zero = [0.0; PARAM_COUNT];
-    let nt = newton(zero, p, &config.newton).ok();
-    let lm = levenberg_marquardt(zero, p, &config.lm).ok();
-    let neutral = levenberg_marquardt(frame.to_deviation(&Params::IDENTITY), p, &config.lm).ok();
-    // TAGA as the paper runs it (alone, to convergence); TAGA+LM polishes the same run.
-    let ga_config = CalibrationConfig::TAGA_ALONE.ga;
-    let mut ga = ga_solver::<_, POPULATION>(
-        p,
-        &[0.0; PARAM_COUNT],
-        &SearchWidths::DEFAULT,
-        ga_config,
-        Xoshiro128PlusPlus::seed_from_u64(ga_seed),
-    )
-    .ok()?;
-    let ga_report = ga.run(&|x: &Deviation| objective(x, p));
-    let polished = levenberg_marquardt(ga_report.best, p, &config.lm).ok();
-    let errors = [
-        nt.as_ref().and_then(|r| err(&r.x)),
-        err(&ga_report.best),
-        lm.as_ref().and_then(|r| err(&r.x)),
-        polished.as_ref().and_then(|r| err(&r.x)),
-        neutral.as_ref().and_then(|r| err(&r.x)),
-    ];
-    let it = |r: &Option<accelcal::solve::SolveReport>| r.as_ref().map_or(0, |r| r.iterations);
-    Some(RunOutcome {
-        errors,
-        generations: ga_report.generations,
-        evaluations: ga_report.evaluations,
-        iterations: [it(&nt), 0, it(&lm), it(&polished), it(&neutral)],
-    })
+/// LM from the neutral model (`Params::IDENTITY`) instead of an initial estimate: not a pipeline
+/// `calibrate` offers, the experiment that shows LM needs no initial estimate on this problem.
+/// The parameters and the LM iterations.
+fn lm_from_neutral(poses: &[Pose], gravity: f32) -> Option<(Params, u32)> {
+    let norm = NormalizedPoses::<MAX_POSES>::new(poses, gravity).ok()?;
+    let frame = norm.frame();
+    let start = frame.to_deviation(&Params::IDENTITY);
+    let report = levenberg_marquardt(start, norm.poses(), &CalibrationConfig::DEFAULT.lm).ok()?;
+    Some((frame.to_params(&report.x), report.iterations))
 }
 
-/// Runs the whole reproduction. `progress` is called once per finished Monte Carlo run.
-pub fn run(options: &PaperOptions, mut progress: impl FnMut()) -> PaperReport {
-    let mut sq = [[0.0f64; PARAM_COUNT]; 5];
-    let mut counts = [0usize; 5];
-    let mut failures = [0usize; 5];
-    let (mut generations, mut evaluations) = (0u64, 0u64);
-    let mut iterations = [0u64; 5];
-    let mut ga_runs = 0u64;
-    for run in 0..options.runs {
-        let seed = options.seed + run as u64;
-        let cfg = sim_config(options.plan, seed, options.noise_mg);
-        match one_run(&cfg, seed) {
-            Some(outcome) => {
-                for (m, r) in outcome.errors.iter().enumerate() {
-                    match r {
-                        Some(errs) => {
-                            for i in 0..PARAM_COUNT {
-                                sq[m][i] += errs[i] * errs[i];
-                            }
-                            counts[m] += 1;
-                        }
-                        None => failures[m] += 1,
-                    }
-                }
-                generations += u64::from(outcome.generations);
-                evaluations += u64::from(outcome.evaluations);
-                for (total, it) in iterations.iter_mut().zip(outcome.iterations) {
-                    *total += u64::from(it);
-                }
-                ga_runs += 1;
-            }
-            None => failures.iter_mut().for_each(|f| *f += 1),
-        }
-        progress();
+/// One Monte Carlo experiment: every method of [`METHODS`] through the calibration pipeline (the
+/// paper's set-up), TAGA and TAGA+LM from the same GA seed (the same GA run).
+fn one_run(cfg: &SimConfig, ga_seed: u64) -> RunOutcome {
+    let poses = simulate_pose_means(cfg);
+    let gravity = cfg.gravity as f32;
+    let run = |method| calib::run(&poses, &paper_config(method, gravity), ga_seed).ok();
+    let [newton, taga, lm, taga_lm] = [Method::Newton, Method::Taga, Method::Lm, Method::TagaLm].map(run);
+    let neutral = lm_from_neutral(&poses, gravity);
+    let err = |p: &Params| rel_err_pct(p, &cfg.truth);
+    let pipeline = |c: &Option<Calibration>| c.as_ref().map(|c| (err(&c.params), c.iterations));
+    let outcomes =
+        [pipeline(&newton), pipeline(&taga), pipeline(&lm), pipeline(&taga_lm), neutral.map(|(p, i)| (err(&p), i))];
+    RunOutcome {
+        errors: outcomes.map(|o| o.map(|(e, _)| e)),
+        generations: taga.as_ref().map_or(0, |c| c.generations),
+        evaluations: taga.as_ref().map_or(0, |c| c.evaluations),
+        iterations: outcomes.map(|o| o.map_or(0, |(_, i)| i)),
     }
-    let per_run = |v: u64| v as f64 / ga_runs.max(1) as f64;
-    let methods = METHODS
-        .iter()
-        .enumerate()
-        .map(|(m, name)| {
-            let rel_err_pct = sq[m].map(|s| (s / counts[m].max(1) as f64).sqrt());
+}
+
+/// The Monte Carlo's sums over the runs, per method of [`METHODS`].
+#[derive(Default)]
+struct Tally {
+    runs: usize,
+    /// Sums of squared relative errors.
+    squares: [[f64; PARAM_COUNT]; 5],
+    /// Runs whose solve succeeded.
+    counts: [usize; 5],
+    iterations: [u64; 5],
+    /// GA generations and cost evaluations of the TAGA runs that succeeded.
+    generations: u64,
+    evaluations: u64,
+}
+
+impl Tally {
+    fn add(&mut self, outcome: &RunOutcome) {
+        self.runs += 1;
+        for (m, errors) in outcome.errors.iter().enumerate() {
+            let Some(errors) = errors else { continue };
+            for i in 0..PARAM_COUNT {
+                self.squares[m][i] += errors[i] * errors[i];
+            }
+            self.counts[m] += 1;
+            self.iterations[m] += u64::from(outcome.iterations[m]);
+        }
+        self.generations += u64::from(outcome.generations);
+        self.evaluations += u64::from(outcome.evaluations);
+    }
+
+    /// RMS errors and mean effort per method (the GA's effort for TAGA and TAGA+LM).
+    fn methods(&self) -> Vec<(&'static str, MethodResult)> {
+        let taga_runs = self.counts[1].max(1) as f64;
+        let per_taga_run = |v: u64| v as f64 / taga_runs;
+        let results = METHODS.iter().enumerate().map(|(m, name)| {
+            let n = self.counts[m].max(1) as f64;
             let is_ga = *name == "taga" || *name == "taga+lm";
             let result = MethodResult {
-                rel_err_pct,
-                mean_generations: if is_ga { per_run(generations) } else { 0.0 },
-                mean_evaluations: if is_ga { per_run(evaluations) } else { 0.0 },
-                mean_iterations: per_run(iterations[m]),
-                failures: failures[m],
+                rel_err_pct: self.squares[m].map(|s| (s / n).sqrt()),
+                mean_generations: if is_ga { per_taga_run(self.generations) } else { 0.0 },
+                mean_evaluations: if is_ga { per_taga_run(self.evaluations) } else { 0.0 },
+                mean_iterations: self.iterations[m] as f64 / n,
+                failures: self.runs - self.counts[m],
             };
             (*name, result)
-        })
-        .collect::<Vec<_>>();
+        });
+        results.collect()
+    }
+}
+
+/// Steps of [`run`] reported to its `progress`: each Monte Carlo run, and each run of each of the
+/// three convergence set-ups.
+pub fn progress_steps(options: &PaperOptions) -> u64 {
+    4 * options.runs as u64
+}
+
+/// Runs the whole reproduction. `progress` is called after each of its [`progress_steps`].
+pub fn run(options: &PaperOptions, mut progress: impl FnMut()) -> PaperReport {
+    let mut tally = Tally::default();
+    for run in 0..options.runs {
+        let seed = options.seed + run as u64;
+        tally.add(&one_run(&sim_config(options.plan, seed, options.noise_mg), seed));
+        progress();
+    }
+    let methods = tally.methods();
     let crlb_runs = options.runs.clamp(1, 200);
     let crlb = crlb_rel_pct(options.plan, options.seed, crlb_runs, options.noise_mg);
     let crlb_paper24 = crlb_rel_pct(Plan::Paper24, options.seed, crlb_runs, options.noise_mg);
@@ -258,7 +279,7 @@ pub fn run(options: &PaperOptions, mut progress: impl FnMut()) -> PaperReport {
         noise_to_match_paper_mg,
         operators: operator_comparison(options.operator_seeds),
         trace: taga_trace(options.plan, options.seed, options.noise_mg),
-        convergence: crate::convergence::compare(options.plan, options.seed, options.runs, options.noise_mg),
+        convergence: crate::convergence::compare(options.plan, options.seed, options.runs, options.noise_mg, progress),
     }
 }
 
@@ -293,79 +314,185 @@ pub fn operator_comparison(seeds: u64) -> Vec<OperatorResult> {
 }
 
 /// Fig. 6/7: best and mean cost (`fE`, (m/s^2)^4) and the best parameters per generation of one TAGA
-/// run on one simulated experiment.
+/// run (the calibration pipeline, the paper's set-up, all 200 generations) on one simulated experiment.
 pub fn taga_trace(plan: Plan, seed: u64, noise_mg: f64) -> Vec<(f64, f64, Params)> {
     let cfg = sim_config(plan, seed, noise_mg);
     let poses = simulate_pose_means(&cfg);
-    let Ok(norm) = NormalizedPoses::<MAX_POSES>::new(&poses, cfg.gravity as f32) else { return Vec::new() };
-    let frame = *norm.frame();
-    let p = norm.poses();
-    let ga_config = GaConfig { stall_generations: 0, ..CalibrationConfig::TAGA_ALONE.ga };
-    let Ok(mut ga) = ga_solver::<_, POPULATION>(
-        p,
-        &[0.0; PARAM_COUNT],
-        &SearchWidths::DEFAULT,
-        ga_config,
-        Xoshiro128PlusPlus::seed_from_u64(seed),
-    ) else {
-        return Vec::new();
-    };
+    let gravity = cfg.gravity as f32;
+    let base = paper_config(Method::Taga, gravity);
+    let config = CalibrationConfig { ga: GaConfig { stall_generations: 0, ..base.ga }, ..base };
     let g4 = cfg.gravity.powi(4);
-    let cost = |x: &Deviation| objective(x, p);
-    let mut out = vec![(f64::from(ga.best_cost()) * g4, f64::from(ga.mean_cost()) * g4, frame.to_params(ga.best()))];
-    while ga.generation() < ga_config.max_generations {
-        ga.step(&cost);
+    let mut out = Vec::new();
+    let traced = calib::run_observed(&poses, &config, seed, |ga, frame| {
         out.push((f64::from(ga.best_cost()) * g4, f64::from(ga.mean_cost()) * g4, frame.to_params(ga.best())));
+        ControlFlow::Continue(())
+    });
+    if traced.is_err() {
+        out.clear();
     }
     out
 }
 
-/// The report as JSON (keys as documented in the README).
-pub fn to_json(r: &PaperReport) -> serde_json::Value {
-    use serde_json::json;
-    let mut rel = serde_json::Map::new();
-    let mut ratio = serde_json::Map::new();
-    let mut effort = serde_json::Map::new();
-    for (name, m) in &r.methods {
-        rel.insert((*name).into(), json!(m.rel_err_pct));
-        let rt: Vec<f64> = (0..PARAM_COUNT).map(|i| m.rel_err_pct[i] / r.crlb_rel_pct[i]).collect();
-        ratio.insert((*name).into(), json!(rt));
-        effort.insert(
-            (*name).into(),
-            json!({"generations": m.mean_generations, "evaluations": m.mean_evaluations,
-                   "iterations": m.mean_iterations, "failures": m.failures}),
-        );
+/// The `paper --json` document (keys as documented in the README).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct PaperDocument {
+    /// Monte Carlo runs.
+    pub runs: usize,
+    /// White noise per sample and axis, mg.
+    pub noise_mg: f64,
+    /// Pose plan.
+    pub plan: String,
+    /// First seed.
+    pub seed: u64,
+    /// Parameter names, in the order of every array.
+    pub params: [&'static str; PARAM_COUNT],
+    /// Per method: RMS relative error (%) per parameter.
+    pub rel_err_pct: BTreeMap<&'static str, [f64; PARAM_COUNT]>,
+    /// The Cramer-Rao bound (%) per parameter.
+    pub crlb_rel_pct: [f64; PARAM_COUNT],
+    /// Per method: the RMS error over the bound.
+    pub ratio_to_crlb: BTreeMap<&'static str, [f64; PARAM_COUNT]>,
+    /// Per method: its mean effort.
+    pub effort: BTreeMap<&'static str, Effort>,
+    /// The paper's Table 2 (%): `newton` and `taga`.
+    pub paper_table2_pct: BTreeMap<&'static str, [f64; PARAM_COUNT]>,
+    /// See [`PaperReport::noise_to_match_paper_mg`].
+    pub noise_to_match_paper_mg: [f64; PARAM_COUNT],
+    /// The bound (%) of `paper24`, `cube26` and their `ratio`.
+    pub crlb_plans_pct: BTreeMap<&'static str, [f64; PARAM_COUNT]>,
+    /// Fig. 3, per operator.
+    pub operators: BTreeMap<&'static str, OperatorCurve>,
+    /// Generations to within 1 % of the LM optimum, per set-up.
+    pub generations_to_1pct: Vec<GenerationsTo1Pct>,
+    /// Fig. 6/7, per generation.
+    pub trace: Vec<TracePoint>,
+}
+
+/// Mean effort of one method over the runs.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Effort {
+    /// GA generations.
+    pub generations: f64,
+    /// Cost evaluations by the GA.
+    pub evaluations: f64,
+    /// Newton/LM iterations.
+    pub iterations: f64,
+    /// Runs whose solve failed.
+    pub failures: usize,
+}
+
+/// One operator of Fig. 3.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct OperatorCurve {
+    /// Seeds whose best cost went below 1e-3.
+    pub successes: u64,
+    /// Seeds run.
+    pub seeds: u64,
+    /// Mean best cost per generation.
+    pub mean_best: Vec<f64>,
+}
+
+/// Generations to within 1 % of the LM optimum from one set-up.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct GenerationsTo1Pct {
+    /// The set-up.
+    pub init: &'static str,
+    /// Median generations.
+    pub median: u32,
+    /// 95th percentile.
+    pub p95: u32,
+    /// Share of runs within 1 % by generation 40.
+    pub share_by_40: f64,
+    /// Runs.
+    pub runs: usize,
+}
+
+/// One generation of Fig. 6/7: best and mean `fE` ((m/s^2)^4), the best parameters.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct TracePoint {
+    /// Best cost.
+    pub best: f64,
+    /// Mean cost.
+    pub mean: f64,
+    /// Best parameters ([`PARAM_NAMES`] order).
+    pub params: [f32; PARAM_COUNT],
+}
+
+/// Element-wise `a / b`.
+fn ratio(a: &[f64; PARAM_COUNT], b: &[f64; PARAM_COUNT]) -> [f64; PARAM_COUNT] {
+    std::array::from_fn(|i| a[i] / b[i])
+}
+
+/// The report as the `paper --json` document.
+pub fn to_document(r: &PaperReport) -> PaperDocument {
+    let per_method =
+        |f: &dyn Fn(&MethodResult) -> [f64; PARAM_COUNT]| r.methods.iter().map(|(n, m)| (*n, f(m))).collect();
+    let effort = |m: &MethodResult| Effort {
+        generations: m.mean_generations,
+        evaluations: m.mean_evaluations,
+        iterations: m.mean_iterations,
+        failures: m.failures,
+    };
+    let operator = |o: &OperatorResult| {
+        (o.name, OperatorCurve { successes: o.successes, seeds: o.seeds, mean_best: o.mean_best.clone() })
+    };
+    let convergence = |c: &crate::convergence::Convergence| GenerationsTo1Pct {
+        init: c.init,
+        median: c.median,
+        p95: c.p95,
+        share_by_40: c.by_40,
+        runs: c.runs,
+    };
+    let (p24, c26) = (r.crlb_paper24, r.crlb_cube26);
+    PaperDocument {
+        runs: r.options.runs,
+        noise_mg: r.options.noise_mg,
+        plan: r.options.plan.to_string(),
+        seed: r.options.seed,
+        params: PARAM_NAMES,
+        rel_err_pct: per_method(&|m| m.rel_err_pct),
+        crlb_rel_pct: r.crlb_rel_pct,
+        ratio_to_crlb: per_method(&|m| ratio(&m.rel_err_pct, &r.crlb_rel_pct)),
+        effort: r.methods.iter().map(|(n, m)| (*n, effort(m))).collect(),
+        paper_table2_pct: [("newton", PAPER_TABLE2.map(|p| p.0)), ("taga", PAPER_TABLE2.map(|p| p.1))].into(),
+        noise_to_match_paper_mg: r.noise_to_match_paper_mg,
+        crlb_plans_pct: [("paper24", p24), ("cube26", c26), ("ratio", ratio(&p24, &c26))].into(),
+        operators: r.operators.iter().map(operator).collect(),
+        generations_to_1pct: r.convergence.iter().map(convergence).collect(),
+        trace: r
+            .trace
+            .iter()
+            .map(|(best, mean, p)| TracePoint { best: *best, mean: *mean, params: p.to_array() })
+            .collect(),
     }
-    let operators: serde_json::Map<String, serde_json::Value> = r
-        .operators
-        .iter()
-        .map(|o| (o.name.to_string(), json!({"successes": o.successes, "seeds": o.seeds, "mean_best": o.mean_best})))
-        .collect();
-    json!({
-        "runs": r.options.runs,
-        "noise_mg": r.options.noise_mg,
-        "plan": r.options.plan.to_string(),
-        "seed": r.options.seed,
-        "params": PARAM_NAMES,
-        "rel_err_pct": rel,
-        "crlb_rel_pct": r.crlb_rel_pct,
-        "ratio_to_crlb": ratio,
-        "effort": effort,
-        "paper_table2_pct": {"newton": PAPER_TABLE2.map(|p| p.0), "taga": PAPER_TABLE2.map(|p| p.1)},
-        "noise_to_match_paper_mg": r.noise_to_match_paper_mg,
-        "crlb_plans_pct": {"paper24": r.crlb_paper24, "cube26": r.crlb_cube26,
-            "ratio": (0..PARAM_COUNT).map(|i| r.crlb_paper24[i] / r.crlb_cube26[i]).collect::<Vec<_>>()},
-        "operators": operators,
-        "generations_to_1pct": r.convergence.iter().map(|c| json!({"init": c.init, "median": c.median,
-            "p95": c.p95, "share_by_40": c.by_40, "runs": c.runs})).collect::<Vec<_>>(),
-        "trace": r.trace.iter().map(|(b, m, p)| json!({"best": b, "mean": m, "params": p.to_array()})).collect::<Vec<_>>(),
-    })
+}
+
+/// The report as JSON ([`PaperDocument`], keys sorted).
+pub fn to_json(r: &PaperReport) -> serde_json::Value {
+    serde_json::to_value(to_document(r)).unwrap_or_default()
 }
 
 /// The report as text tables.
 pub fn to_text(r: &PaperReport) -> String {
-    use std::fmt::Write;
     let mut s = String::new();
+    table2_text(&mut s, r);
+    effort_text(&mut s, r);
+    crlb_plans_text(&mut s, r);
+    figures_text(&mut s, r);
+    s
+}
+
+/// One row of a text table: a label and nine numbers.
+fn text_row(s: &mut String, label: &str, v: &[f64]) {
+    let _ = write!(s, "{label:<12}");
+    for x in v {
+        let _ = write!(s, "{:>10}", format_sig(*x));
+    }
+    let _ = writeln!(s);
+}
+
+/// Table 2: our RMS errors and their ratio to the bound, the paper's values, the noise to match them.
+fn table2_text(s: &mut String, r: &PaperReport) {
     let o = &r.options;
     let _ = writeln!(
         s,
@@ -382,28 +509,24 @@ pub fn to_text(r: &PaperReport) -> String {
         let _ = write!(s, "{n:>10}");
     }
     let _ = writeln!(s);
-    let row = |s: &mut String, label: &str, v: &[f64]| {
-        let _ = write!(s, "{label:<12}");
-        for x in v {
-            let _ = write!(s, "{:>10}", format_sig(*x));
-        }
-        let _ = writeln!(s);
-    };
-    row(&mut s, "CRLB", &r.crlb_rel_pct);
+    text_row(s, "CRLB", &r.crlb_rel_pct);
     for (name, m) in &r.methods {
-        row(&mut s, name, &m.rel_err_pct);
-        let ratio: Vec<f64> = (0..PARAM_COUNT).map(|i| m.rel_err_pct[i] / r.crlb_rel_pct[i]).collect();
-        row(&mut s, "  /CRLB", &ratio);
+        text_row(s, name, &m.rel_err_pct);
+        text_row(s, "  /CRLB", &ratio(&m.rel_err_pct, &r.crlb_rel_pct));
     }
-    row(&mut s, "paper newton", &PAPER_TABLE2.map(|p| p.0));
-    row(&mut s, "paper TAGA", &PAPER_TABLE2.map(|p| p.1));
-    row(&mut s, "noise->paper", &r.noise_to_match_paper_mg);
+    text_row(s, "paper newton", &PAPER_TABLE2.map(|p| p.0));
+    text_row(s, "paper TAGA", &PAPER_TABLE2.map(|p| p.1));
+    text_row(s, "noise->paper", &r.noise_to_match_paper_mg);
     let _ = writeln!(
         s,
         "(noise->paper: the per-sample noise in mg at which our Newton RMS error equals the paper's Table 2"
     );
     let _ =
         writeln!(s, " magnitude; the paper's single run is one draw, so only the order of magnitude means anything)");
+}
+
+/// The mean effort of each method.
+fn effort_text(s: &mut String, r: &PaperReport) {
     for (name, m) in &r.methods {
         if m.mean_generations > 0.0 {
             let _ = writeln!(
@@ -415,24 +538,31 @@ pub fn to_text(r: &PaperReport) -> String {
             let _ = writeln!(s, "{name}: {:.1} iterations on average; {} failed runs", m.mean_iterations, m.failures);
         }
     }
+}
+
+/// The bound of the paper's plan against a 26-direction cube.
+fn crlb_plans_text(s: &mut String, r: &PaperReport) {
     let _ = writeln!(s, "\nCramer-Rao bound (%) of the paper's 24 positions vs a 26-direction cube, same noise:");
-    row(&mut s, "paper24", &r.crlb_paper24);
-    row(&mut s, "cube26", &r.crlb_cube26);
-    let ratio: Vec<f64> = (0..PARAM_COUNT).map(|i| r.crlb_paper24[i] / r.crlb_cube26[i]).collect();
-    row(&mut s, "ratio", &ratio);
+    text_row(s, "paper24", &r.crlb_paper24);
+    text_row(s, "cube26", &r.crlb_cube26);
+    text_row(s, "ratio", &ratio(&r.crlb_paper24, &r.crlb_cube26));
+}
+
+/// Fig. 3, Fig. 6 and the generations to within 1 % of the optimum.
+fn figures_text(s: &mut String, r: &PaperReport) {
     let _ = writeln!(s, "\nFig. 3: operators on 2-D Rastrigin (population 40, 100 generations, same seeds):");
     for op in &r.operators {
-        let at = |g: usize| op.mean_best.get(g).copied().unwrap_or(f64::NAN);
+        let at = |g: usize| format_sig(op.mean_best.get(g).copied().unwrap_or(f64::NAN));
         let _ = writeln!(
             s,
             "{:<5} success (best < 1e-3) {:>3}/{}; mean best cost at generation 10: {}, 25: {}, 50: {}, 100: {}",
             op.name,
             op.successes,
             op.seeds,
-            format_sig(at(10)),
-            format_sig(at(25)),
-            format_sig(at(50)),
-            format_sig(at(100))
+            at(10),
+            at(25),
+            at(50),
+            at(100)
         );
     }
     if let (Some(first), Some(last)) = (r.trace.first(), r.trace.last()) {
@@ -444,8 +574,8 @@ pub fn to_text(r: &PaperReport) -> String {
             format_sig(last.0)
         );
     }
-    let _ =
-        writeln!(s, "\nTAGA (population {POPULATION}) generations to within 1 % of the LM optimum, {} runs:", o.runs);
+    let runs = r.options.runs;
+    let _ = writeln!(s, "\nTAGA (population {POPULATION}) generations to within 1 % of the LM optimum, {runs} runs:");
     for c in &r.convergence {
         let _ = writeln!(
             s,
@@ -456,7 +586,6 @@ pub fn to_text(r: &PaperReport) -> String {
             100.0 * c.by_40
         );
     }
-    s
 }
 
 /// Four significant digits, scientific when small or large.
@@ -468,5 +597,51 @@ pub fn format_sig(v: f64) -> String {
         format!("{v:.decimals$}")
     } else {
         format!("{v:.3e}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn trace_runs_every_generation_of_the_paper_setup_and_never_worsens() {
+        let trace = taga_trace(Plan::Paper24, 2, 1.0);
+        let generations = paper_config(Method::Taga, 9.8).ga.max_generations as usize;
+        assert_eq!(trace.len(), generations + 1, "the first population and each generation");
+        assert!(trace.windows(2).all(|w| w[1].0 <= w[0].0), "the best objective never rises");
+        assert!(trace.iter().all(|t| t.1 >= t.0), "the mean is never below the best");
+    }
+
+    #[test]
+    fn document_keeps_the_documented_keys_and_the_papers_table() {
+        let options = PaperOptions { runs: 2, noise_mg: 1.0, plan: Plan::Paper24, seed: 1, operator_seeds: 2 };
+        let mut steps = 0;
+        let report = run(&options, || steps += 1);
+        assert_eq!(steps, progress_steps(&options));
+        let json = to_json(&report);
+        let keys: Vec<&str> = json.as_object().unwrap().keys().map(String::as_str).collect();
+        let documented = [
+            "crlb_plans_pct",
+            "crlb_rel_pct",
+            "effort",
+            "generations_to_1pct",
+            "noise_mg",
+            "noise_to_match_paper_mg",
+            "operators",
+            "paper_table2_pct",
+            "params",
+            "plan",
+            "ratio_to_crlb",
+            "rel_err_pct",
+            "runs",
+            "seed",
+            "trace",
+        ];
+        assert_eq!(keys, documented);
+        assert_eq!(json["paper_table2_pct"]["newton"][6], -61.43882);
+        assert_eq!(json["rel_err_pct"].as_object().unwrap().len(), METHODS.len());
+        assert_eq!(json["effort"]["taga"]["failures"], 0);
+        assert_eq!(json["operators"]["taga"]["mean_best"].as_array().unwrap().len(), 101);
     }
 }

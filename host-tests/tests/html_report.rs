@@ -1,6 +1,7 @@
-//! `calibrate --report DIR` on a real recording: the page exists, is self-contained (no script to
-//! run, nothing fetched), carries the same JSON document as `--json` of the same run, every figure
-//! draws data, and every number shown equals the JSON value it is tagged with (to the digits shown).
+//! `calibrate --report DIR` and `diagnose --report DIR` on a real recording, `paper --report DIR` on a
+//! small run: the page exists, is self-contained (no script to run, nothing fetched), carries the same
+//! JSON document as `--json` of the same run, every figure draws data, and every number shown equals
+//! the JSON value it is tagged with (to the digits shown).
 //!
 //! Needs `../shared/data/real` beside the workspace: without it the tests fail, naming the folder.
 //! The headless-browser test needs `chromium` (the OS package): it is `#[ignore]`d in a plain
@@ -32,20 +33,36 @@ fn calibrate_with_report(name: &str, file: &Path, extra: &[&str]) -> (Value, Str
 
 /// Runs `COMMAND FILE EXTRA --json --report DIR`; returns the stdout document and the page.
 fn run_with_report(command: &str, name: &str, file: &Path, extra: &[&str]) -> (Value, String) {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("html_report").join(name);
-    let _ = std::fs::remove_dir_all(&dir);
+    let mut args = vec![command.as_ref(), file.as_os_str()];
+    args.extend(extra.iter().map(std::ffi::OsStr::new));
+    report_of(name, &args)
+}
+
+/// The page `report_of(name, ..)` wrote.
+fn page_path(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("html_report").join(name).join("index.html")
+}
+
+/// Runs `paper` small (3 runs, 4 Rastrigin seeds) with `--json --report DIR`.
+fn paper_with_report(name: &str) -> (Value, String) {
+    let args = ["paper", "--runs", "3", "--operator-seeds", "4"];
+    report_of(name, &args.map(std::ffi::OsStr::new))
+}
+
+/// Runs `ARGS --json --report DIR`; returns the stdout document and the page.
+fn report_of(name: &str, args: &[&std::ffi::OsStr]) -> (Value, String) {
+    let page_path = page_path(name);
+    let dir = page_path.parent().unwrap();
+    let _ = std::fs::remove_dir_all(dir);
     let out = Command::new(env!("CARGO_BIN_EXE_accelcal"))
-        .arg(command)
-        .arg(file)
-        .args(extra)
+        .args(args)
         .arg("--json")
         .arg("--report")
-        .arg(&dir)
+        .arg(dir)
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(matches!(out.status.code(), Some(0 | 1)), "exit {:?}: {stderr}", out.status.code());
-    let page_path = dir.join("index.html");
     assert!(page_path.is_file(), "{} not written: {stderr}", page_path.display());
     let document: Value = serde_json::from_slice(&out.stdout).expect("stdout is the JSON document");
     (document, std::fs::read_to_string(page_path).unwrap())
@@ -231,6 +248,35 @@ fn xsens_report_matches_its_json() {
     assert!(numbers >= 18 + 5 * poses, "{numbers} numbers tagged");
 }
 
+#[test]
+fn paper_report_shows_table2_beside_the_papers_values_and_draws_fig3_and_fig6() {
+    let (document, page) = paper_with_report("paper");
+    let marks = check_common(&document, &page);
+    assert_eq!(marks.len(), 3, "Table 2, Fig. 3, Fig. 6: {marks:?}");
+    let series_in_table2 = 1 + 3 + 2; // the bound, newton, taga, taga+lm, the paper's two columns
+    assert_eq!(marks[0], 9 * series_in_table2, "a dot per parameter and series: {marks:?}");
+    assert_eq!(marks[1], 3, "AGA, LAGA and TAGA curves: {marks:?}");
+    assert_eq!(marks[2], 2, "best and mean objective per generation: {marks:?}");
+    let tagged = tagged_numbers(&page);
+    let shown = |key: &str| tagged.iter().find(|(k, _)| *k == key).map(|(_, v)| *v);
+    for (i, (newton, taga)) in accelcal_host::paper::PAPER_TABLE2.iter().enumerate() {
+        for (column, printed) in [("newton", newton), ("taga", taga)] {
+            let key = format!("/paper_table2_pct/{column}/{i}");
+            let text = shown(&key).unwrap_or_else(|| panic!("{key} not shown"));
+            assert_shown_equals(&key, text, *printed);
+        }
+        for method in ["newton", "taga", "taga+lm"] {
+            assert!(shown(&format!("/rel_err_pct/{method}/{i}")).is_some(), "{method} parameter {i} not shown");
+        }
+        assert!(shown(&format!("/crlb_rel_pct/{i}")).is_some(), "bound of parameter {i} not shown");
+    }
+    assert_eq!(shown("/paper_table2_pct/newton/6"), Some("-61.4388"), "the paper's Mxx for Newton as printed");
+    let trace = document["trace"].as_array().unwrap().len();
+    let fig6 = between(&page, "<svg", "</svg>")[2];
+    let points = between(fig6, "points=\"", "\"")[0].split(' ').count();
+    assert_eq!(points, trace, "Fig. 6 draws every generation of the trace");
+}
+
 /// `chromium --headless --dump-dom` of `page`: the DOM as the browser built it, and its log.
 fn browser_dom(page: &Path) -> (String, String) {
     let out = Command::new("chromium")
@@ -248,12 +294,17 @@ fn browser_dom(page: &Path) -> (String, String) {
 #[ignore = "needs chromium (apt-get install chromium); .ci/run runs it"]
 fn reports_open_in_a_headless_browser_with_every_figure_drawn() {
     let file = real_file("imu_tk_xsens_mti/xsens_acc.csv");
-    for (command, heading) in [("calibrate", "accelcal calibration report"), ("diagnose", "accelcal diagnosis report")]
-    {
+    for (command, heading) in [
+        ("calibrate", "accelcal calibration report"),
+        ("diagnose", "accelcal diagnosis report"),
+        ("paper", "accelcal paper reproduction"),
+    ] {
         let name = format!("browser_{command}");
-        let (document, page) = run_with_report(command, &name, &file, &[]);
-        let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("html_report").join(&name).join("index.html");
-        let (dom, log) = browser_dom(&path.canonicalize().unwrap());
+        let (document, page) = match command {
+            "paper" => paper_with_report(&name),
+            _ => run_with_report(command, &name, &file, &[]),
+        };
+        let (dom, log) = browser_dom(&page_path(&name).canonicalize().unwrap());
         let console: Vec<&str> = log.lines().filter(|l| l.contains(":CONSOLE")).collect();
         assert!(console.is_empty(), "{command}: console messages: {console:?}");
         let start = &dom[..dom.len().min(400)];

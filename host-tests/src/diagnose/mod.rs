@@ -150,7 +150,10 @@ pub fn diagnose(table: &Table, opts: &DiagnoseOptions) -> Result<Diagnosis, Diag
     // answered (`none` or `unexplained`), with no catalogue candidate tested.
     let ctx = family::Context::new(table, &m, opts);
     let evaluations: Vec<family::Evaluation> = match &ctx {
-        Some(ctx) => family::all().iter().map(|f| f.evaluate(ctx)).collect(),
+        Some(ctx) => family::all()
+            .iter()
+            .map(|f| family::Evaluation { predicts_values: f.predicts_values(), ..f.evaluate(ctx) })
+            .collect(),
         None => Vec::new(),
     };
     let probes = ctx.as_ref().map(probe::run).unwrap_or_default();

@@ -8,7 +8,7 @@ use serde_json::{Value, json};
 
 use super::locate::orientation_label;
 use crate::calib;
-use crate::plots::{Series, line_chart};
+use crate::plots::{Scale, Series, line_chart};
 
 /// Step 1 and 4: the gap before and after the winning effect.
 #[derive(Debug, Clone, PartialEq)]
@@ -372,7 +372,7 @@ impl Diagnosis {
             "pose",
             "residual (mg)",
             &[Series { name: "nominal", points: before }, Series { name: &after_name, points: after }],
-            false,
+            Scale::Linear,
         )?;
         let mut by_time: Vec<(f64, f64)> = self.poses.iter().map(|p| (p.t_mid_s, p.residual_mg)).collect();
         by_time.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -382,7 +382,7 @@ impl Diagnosis {
             "time (s)",
             "residual (mg)",
             &[Series { name: "nominal", points: by_time }],
-            false,
+            Scale::Linear,
         )?;
         let mut by_temp: Vec<(f64, f64)> =
             self.poses.iter().filter_map(|p| p.temp_c.map(|t| (t, p.residual_mg))).collect();
@@ -394,21 +394,20 @@ impl Diagnosis {
                 "temperature (C)",
                 "residual (mg)",
                 &[Series { name: "nominal", points: by_temp }],
-                false,
+                Scale::Linear,
             )?;
         }
-        let tau =
-            |v: &[f64]| -> Vec<(f64, f64)> { self.allan.tau_s.iter().zip(v).map(|(t, a)| (t.log10(), *a)).collect() };
+        let tau = |v: &[f64]| -> Vec<(f64, f64)> { self.allan.tau_s.iter().copied().zip(v.iter().copied()).collect() };
         line_chart(
             &dir.join("allan_deviation.svg"),
             "Allan deviation of the longest rest",
-            "log10 tau (s)",
+            "tau (s)",
             "mg",
             &[
                 Series { name: "measured", points: tau(&self.allan.adev_mg) },
                 Series { name: "white noise", points: tau(&self.allan.white_mg) },
             ],
-            true,
+            Scale::LogLog,
         )
     }
 }

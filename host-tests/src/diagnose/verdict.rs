@@ -4,8 +4,6 @@
 
 use super::MIN_GAIN;
 
-/// The noise family (see [`decide`]).
-const NOISE_FAMILY: &str = "colored-noise";
 use super::family::Evaluation;
 use super::gap::Measured;
 use super::math::rms;
@@ -34,7 +32,7 @@ pub(crate) fn decide(m: &Measured, evaluations: &[Evaluation], probes: &[Probe])
         evaluations
             .iter()
             .enumerate()
-            .filter(|(_, e)| usable(e) && (e.candidate.effect == NOISE_FAMILY) == noise)
+            .filter(|(_, e)| usable(e) && e.predicts_values != noise)
             .max_by(|a, b| a.1.candidate.evidence().total_cmp(&b.1.candidate.evidence()))
     };
     // A family that predicts the withheld values is stronger evidence than a noise model, which
@@ -57,7 +55,7 @@ pub(crate) fn decide(m: &Measured, evaluations: &[Evaluation], probes: &[Probe])
         Some(i) => {
             let e = &evaluations[i];
             gap.ratio_after = e.candidate.ratio_after;
-            if e.candidate.effect != "colored-noise" {
+            if e.predicts_values {
                 gap.real_rmse_after_mg = m.to_mg(rms(&e.after.iter().flatten().copied().collect::<Vec<_>>()));
             }
             (e.candidate.effect, e.after.clone())

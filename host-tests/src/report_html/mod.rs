@@ -1,5 +1,6 @@
-//! One self-contained HTML page per run (`calibrate --report DIR` writes `DIR/index.html`): inline
-//! SVG figures, inline CSS, no script to run and nothing fetched from the network.
+//! One self-contained HTML page per run (`calibrate`, `diagnose` and `paper --report DIR` write
+//! `DIR/index.html`): inline SVG figures, inline CSS, no script to run and nothing fetched from the
+//! network.
 //!
 //! The page is drawn from the run's JSON document alone (the one `--json` prints), and carries that
 //! document in a `<script type="application/json" id="data">` block. Every number shown sits in an
@@ -15,6 +16,7 @@
 mod calibrate;
 pub mod data;
 mod diagnosis;
+mod paper;
 mod svg;
 
 use std::path::{Path, PathBuf};
@@ -39,6 +41,16 @@ pub fn write_calibrate_report(dir: &Path, document: &serde_json::Value) -> Resul
 /// A message naming the directory or file that could not be written.
 pub fn write_diagnose_report(dir: &Path, document: &serde_json::Value) -> Result<PathBuf, String> {
     let html = page("accelcal diagnosis report", &diagnosis::body(document), document);
+    write_page(dir, &html)
+}
+
+/// Writes `dir/index.html` for a `paper --json` document (Table 2, Fig. 3, Fig. 6); returns the
+/// page's path.
+///
+/// # Errors
+/// A message naming the directory or file that could not be written.
+pub fn write_paper_report(dir: &Path, document: &serde_json::Value) -> Result<PathBuf, String> {
+    let html = page("accelcal paper reproduction", &paper::body(document), document);
     write_page(dir, &html)
 }
 

@@ -24,40 +24,77 @@ pub const LEFT_OUT: &str = "#c62828";
 pub struct Axes {
     x_range: (f64, f64),
     y_range: (f64, f64),
-    /// Both axes logarithmic (ranges are then in log10 units).
-    log_log: bool,
+    /// The x axis logarithmic (its range is then in log10 units).
+    log_x: bool,
+    /// The y axis logarithmic, likewise.
+    log_y: bool,
+    /// Numeric ticks on the x axis (off for categories labelled with [`Axes::x_label`]).
+    x_ticks: bool,
 }
 
 impl Axes {
     /// Log-log axes spanning whole decades around the positive finite values of `xs` and `ys`.
     pub fn fit_log_log(xs: &[f64], ys: &[f64]) -> Self {
-        let decades = |v: &[f64]| {
-            let (lo, hi) = span(v.iter().filter(|x| **x > 0.0).map(|x| x.log10()));
-            (lo.floor(), hi.ceil().max(lo.floor() + 1.0))
-        };
-        Self { x_range: decades(xs), y_range: decades(ys), log_log: true }
+        Self { x_range: decades(xs), y_range: decades(ys), log_x: true, log_y: true, x_ticks: true }
     }
 
-    fn axis_value(&self, v: f64) -> f64 {
-        if self.log_log { v.log10() } else { v }
+    /// A linear x axis spanning the finite `xs` (padded by 5 %), a logarithmic y axis spanning whole
+    /// decades around the positive finite `ys`.
+    pub fn fit_log_y(xs: &[f64], ys: &[f64]) -> Self {
+        Self { x_range: pad(span(xs.iter().copied())), y_range: decades(ys), log_x: false, log_y: true, x_ticks: true }
     }
 
     /// Axes spanning the finite values of `xs` and `ys`, padded by 5 % (and `y` always including 0).
     pub fn fit(xs: &[f64], ys: &[f64]) -> Self {
         let y = span(ys.iter().copied().chain([0.0]));
-        Self { x_range: pad(span(xs.iter().copied())), y_range: pad(y), log_log: false }
+        Self { x_range: pad(span(xs.iter().copied())), y_range: pad(y), log_x: false, log_y: false, x_ticks: true }
+    }
+
+    /// The same axes without numeric x ticks: categories, labelled with [`Axes::x_label`].
+    pub fn categorical_x(self) -> Self {
+        Self { x_ticks: false, ..self }
+    }
+
+    /// A category label under the x axis at `x`.
+    pub fn x_label(&self, out: &mut String, x: f64, label: &str) {
+        let _ = writeln!(
+            out,
+            r#"<text x="{:.1}" y="{:.1}" text-anchor="middle" class="tick">{}</text>"#,
+            self.px(x),
+            HEIGHT_PX - MARGIN_PX.3 + 14.0,
+            escape(label)
+        );
+    }
+
+    /// A dashed vertical reference line at `x` (not data), labelled at its top.
+    pub fn reference_x(&self, out: &mut String, x: f64, label: &str) {
+        let (px, top, bottom) = (self.px(x), MARGIN_PX.2, HEIGHT_PX - MARGIN_PX.3);
+        let _ = writeln!(
+            out,
+            r##"<line x1="{px:.1}" y1="{top}" x2="{px:.1}" y2="{bottom}" stroke="#c62828" stroke-dasharray="3 3"/><text x="{tx:.1}" y="{ty}" class="tick">{}</text>"##,
+            escape(label),
+            tx = px + 4.0,
+            ty = top + 12.0,
+        );
+    }
+
+    /// `(x, y)` can be drawn: finite, and positive on a logarithmic axis.
+    pub fn shows(&self, x: f64, y: f64) -> bool {
+        x.is_finite() && y.is_finite() && (!self.log_x || x > 0.0) && (!self.log_y || y > 0.0)
     }
 
     /// Pixel x of `x`.
     pub fn px(&self, x: f64) -> f64 {
         let (l, r, ..) = MARGIN_PX;
-        l + (self.axis_value(x) - self.x_range.0) / (self.x_range.1 - self.x_range.0) * (WIDTH_PX - l - r)
+        let x = if self.log_x { x.log10() } else { x };
+        l + (x - self.x_range.0) / (self.x_range.1 - self.x_range.0) * (WIDTH_PX - l - r)
     }
 
     /// Pixel y of `y`.
     pub fn py(&self, y: f64) -> f64 {
         let (.., t, b) = MARGIN_PX;
-        HEIGHT_PX - b - (self.axis_value(y) - self.y_range.0) / (self.y_range.1 - self.y_range.0) * (HEIGHT_PX - t - b)
+        let y = if self.log_y { y.log10() } else { y };
+        HEIGHT_PX - b - (y - self.y_range.0) / (self.y_range.1 - self.y_range.0) * (HEIGHT_PX - t - b)
     }
 
     /// Opens an `<svg>` with the frame, ticks, grid, axis labels and title.
@@ -89,7 +126,8 @@ impl Axes {
 
     fn ticks(&self, out: &mut String) {
         let (l, r, t, b) = MARGIN_PX;
-        for x in self.tick_values(self.x_range) {
+        let x_ticks = if self.x_ticks { tick_values(self.x_range, self.log_x) } else { Vec::new() };
+        for x in x_ticks {
             let px = self.px(x);
             let _ = writeln!(
                 out,
@@ -99,7 +137,7 @@ impl Axes {
                 x = tick_label(x),
             );
         }
-        for y in self.tick_values(self.y_range) {
+        for y in tick_values(self.y_range, self.log_y) {
             let py = self.py(y);
             let _ = writeln!(
                 out,
@@ -113,20 +151,11 @@ impl Axes {
         }
     }
 
-    /// Tick values in data units: round values, or every decade on log axes.
-    fn tick_values(&self, range: (f64, f64)) -> Vec<f64> {
-        if self.log_log {
-            (range.0 as i32..=range.1 as i32).map(|k| 10f64.powi(k)).collect()
-        } else {
-            nice_ticks(range)
-        }
-    }
-
     /// A polyline through the points with positive coordinates (log axes) or finite ones.
     pub fn polyline(&self, out: &mut String, points: &[(f64, f64)], colour: &str, dashed: bool) {
         let coords: Vec<String> = points
             .iter()
-            .filter(|(x, y)| x.is_finite() && y.is_finite() && (!self.log_log || (*x > 0.0 && *y > 0.0)))
+            .filter(|(x, y)| self.shows(*x, *y))
             .map(|(x, y)| format!("{:.1},{:.1}", self.px(*x), self.py(*y)))
             .collect();
         let dash = if dashed { r#" stroke-dasharray="5 4""# } else { "" };
@@ -169,6 +198,17 @@ pub fn legend(out: &mut String, row: usize, colour: &str, label: &str) {
         cy = y - 4.0,
         tx = x + 8.0,
     );
+}
+
+/// Tick values in data units: round values, or every decade on a log axis.
+fn tick_values(range: (f64, f64), log: bool) -> Vec<f64> {
+    if log { (range.0 as i32..=range.1 as i32).map(|k| 10f64.powi(k)).collect() } else { nice_ticks(range) }
+}
+
+/// Whole decades (log10 units) around the positive finite values.
+fn decades(values: &[f64]) -> (f64, f64) {
+    let (lo, hi) = span(values.iter().filter(|x| **x > 0.0).map(|x| x.log10()));
+    (lo.floor(), hi.ceil().max(lo.floor() + 1.0))
 }
 
 /// The smallest and largest finite value, `(0, 1)` when there is none.
@@ -281,10 +321,23 @@ mod tests {
     }
 
     #[test]
+    fn log_y_axes_keep_x_linear_and_leave_out_non_positive_y() {
+        let a = Axes::fit_log_y(&[0.0, 100.0], &[1e-5, 0.02, 0.0]);
+        assert_eq!(a.y_range, (-5.0, -1.0));
+        assert!(!a.log_x && a.log_y);
+        assert!((a.px(50.0) - (a.px(0.0) + a.px(100.0)) / 2.0).abs() < 1e-9, "x is linear");
+        assert!(!a.shows(10.0, 0.0) && a.shows(10.0, 1e-3) && !a.shows(f64::NAN, 1.0));
+        let ticks = tick_values(a.y_range, a.log_y);
+        let expected = [1e-5, 1e-4, 1e-3, 1e-2, 1e-1];
+        assert_eq!(ticks.len(), expected.len());
+        assert!(ticks.iter().zip(expected).all(|(t, e)| (t / e - 1.0).abs() < 1e-12), "{ticks:?}");
+    }
+
+    #[test]
     fn log_log_axes_span_whole_decades_with_a_tick_each() {
         let a = Axes::fit_log_log(&[0.02, 30.0], &[0.003, 0.8, -1.0]);
         assert_eq!((a.x_range, a.y_range), ((-2.0, 2.0), (-3.0, 0.0)));
-        assert_eq!(a.tick_values(a.x_range), vec![0.01, 0.1, 1.0, 10.0, 100.0]);
+        assert_eq!(tick_values(a.x_range, a.log_x), vec![0.01, 0.1, 1.0, 10.0, 100.0]);
         let (p1, p10, p100) = (a.px(1.0), a.px(10.0), a.px(100.0));
         assert!(((p10 - p1) - (p100 - p10)).abs() < 1e-9, "a decade is the same width everywhere");
     }

@@ -52,6 +52,10 @@ impl Family for ColoredNoise {
         "colored-noise"
     }
 
+    fn predicts_values(&self) -> bool {
+        false
+    }
+
     fn variants(&self, _ctx: &Context<'_>) -> Vec<Variant> {
         Vec::new()
     }
@@ -110,7 +114,7 @@ impl Family for ColoredNoise {
             within_detail: String::new(),
             variants: Vec::new(),
         };
-        Evaluation { candidate, after: m.r.iter().map(|v| Some(*v)).collect() }
+        Evaluation { candidate, after: m.r.iter().map(|v| Some(*v)).collect(), predicts_values: false }
     }
 }
 

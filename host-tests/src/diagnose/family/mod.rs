@@ -46,6 +46,9 @@ pub(crate) struct Fitted {
 pub(crate) struct Evaluation {
     pub(crate) candidate: Candidate,
     pub(crate) after: Vec<Option<f64>>,
+    /// The family predicts the withheld values ([`Family::predicts_values`]; set by the caller of
+    /// [`Family::evaluate`]).
+    pub(crate) predicts_values: bool,
 }
 
 /// An effect family.
@@ -70,6 +73,13 @@ pub(crate) trait Family {
     /// The candidate line: held-out evidence on both channels and the gap with the family added.
     fn evaluate(&self, ctx: &Context<'_>) -> Evaluation {
         standard_evaluation(self, ctx)
+    }
+
+    /// The family predicts the withheld poses' values (a drift, a non-linearity...): stronger evidence
+    /// than a model of their spread only (a noise model), which the verdict names only when no
+    /// value-predicting family explains.
+    fn predicts_values(&self) -> bool {
+        true
     }
 }
 
@@ -259,7 +269,7 @@ impl<'a> Context<'a> {
             within_detail: String::new(),
             variants: f.tried,
         };
-        Evaluation { candidate, after }
+        Evaluation { candidate, after, predicts_values: true }
     }
 
     pub(crate) fn not_testable(&self, name: &'static str) -> Evaluation {
@@ -275,7 +285,7 @@ impl<'a> Context<'a> {
             within_detail: String::new(),
             variants: Vec::new(),
         };
-        Evaluation { candidate, after: self.m.r.iter().map(|v| Some(*v)).collect() }
+        Evaluation { candidate, after: self.m.r.iter().map(|v| Some(*v)).collect(), predicts_values: true }
     }
 
     /// Adds the within-pose evidence to a family's evaluation. When it is the stronger channel, the
