@@ -24,6 +24,7 @@ use crate::ellipsoid::OutlierRule;
 use crate::frame::{Deviation, Frame, NormPose, objective};
 use crate::ga::{Ga, GaConfig, GaError, SearchBox};
 pub use crate::init::{Init, InitError, Initial, NormalizedPoses};
+use crate::linalg::larger;
 use crate::model::{PARAM_COUNT, Params};
 use crate::solve::{LmConfig, NewtonConfig, SolveError, SolveTermination, levenberg_marquardt_holding, newton_holding};
 use crate::verdict::{PoseSet, Verdict, VerdictBounds, Warnings, information_matrix, judge, parameters_to_hold};
@@ -274,7 +275,7 @@ pub fn search_box(
     let mut upper = *start;
     for i in 0..PARAM_COUNT {
         // A floor keeps the box valid where a parameter is held or determined exactly.
-        let half = (sigmas * crate::linalg::sqrt_f32(cov[i][i].max(0.0))).max(MIN_HALF_WIDTH);
+        let half = larger(sigmas * crate::linalg::sqrt_f32(larger(cov[i][i], 0.0)), MIN_HALF_WIDTH);
         lower[i] -= half;
         upper[i] += half;
     }

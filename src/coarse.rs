@@ -168,13 +168,13 @@ impl CoarseCalibration {
         let mut hi = [f32::NEG_INFINITY; 3];
         for m in means {
             for a in 0..3 {
-                lo[a] = lo[a].min(m[a]);
-                hi[a] = hi[a].max(m[a]);
+                lo[a] = crate::linalg::smaller(lo[a], m[a]);
+                hi[a] = crate::linalg::larger(hi[a], m[a]);
             }
         }
         // An axis pointed up and down spans about twice gravity, like the widest one; one that spans
         // much less was never reversed, and its centre (hence its dominant poses) is unknown.
-        let widest = (0..3).map(|a| hi[a] - lo[a]).fold(0.0f32, f32::max);
+        let widest = (0..3).map(|a| hi[a] - lo[a]).fold(0.0f32, crate::linalg::larger);
         for a in 0..3 {
             let span = hi[a] - lo[a];
             if widest > 0.0 && span < MIN_SPAN_FRACTION * widest {

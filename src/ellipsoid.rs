@@ -31,15 +31,14 @@
 //! assert!((fit.params.nonorth[1] + 0.02).abs() < 1e-3);
 //! ```
 
-use crate::linalg::{DETERMINED_PIVOT, Matrix, solve_spd_holding_in_place, weak_pivots};
+use crate::linalg::{
+    DETERMINED_PIVOT, Matrix, add_outer_product, larger, smaller, solve_spd_holding_in_place, weak_pivots,
+};
 use crate::model::{PARAM_COUNT, Params};
 
-/// Quadric coefficients `[xx, yy, zz, xy, xz, yz, x, y, z]`.
+/// Quadric coefficients `[xx, yy, zz, x, y, z, xy, xz, yz]`: the cross terms last, so that in the
+/// factorisation that finds the undetermined ones they (not a scale or the centre) are held at 0.
 const COEFFS: usize = 9;
-
-/// Order in which the quadric coefficients enter the factorisation that finds the undetermined ones:
-/// the cross terms last, so that they (not a scale or the centre) are the ones held at 0.
-const COEFF_ORDER: [usize; COEFFS] = [0, 1, 2, 6, 7, 8, 3, 4, 5];
 
 /// Largest number of poses [`fit_ellipsoid`] leaves out.
 pub const MAX_EXCLUDED: usize = 8;
@@ -228,7 +227,7 @@ pub fn fit_ellipsoid(
         let (params, held) = fitted?;
         let errors = ModulusErrors { means, keep, params: &params, gravity };
         let (worst, worst_abs) = errors.worst();
-        let limit = rule.floor_g.max(rule.robust_sigmas * 1.4826 * errors.median_abs());
+        let limit = crate::linalg::larger(rule.floor_g, rule.robust_sigmas * 1.4826 * errors.median_abs());
         if !(worst_abs > limit) || !room {
             return Ok(EllipsoidFit { params, excluded, held, rmse_g: errors.rms() });
         }
@@ -281,9 +280,9 @@ fn check_spread(means: &[[f32; 3]], keep: &[bool]) -> Result<(), EllipsoidError>
     for (i, row) in cov.iter_mut().enumerate() {
         row[i] -= shift;
     }
-    match crate::linalg::cholesky(&cov) {
-        Ok(_) => Ok(()),
-        Err(_) => Err(EllipsoidError::Degenerate { missing: missing_directions(means, keep) }),
+    match lower_factor(&cov) {
+        Some(_) => Ok(()),
+        None => Err(EllipsoidError::Degenerate { missing: missing_directions(means, keep) }),
     }
 }
 
@@ -303,7 +302,7 @@ const PLAUSIBLE_NONORTH: f32 = 0.1;
 /// `true` for an ellipsoid an accelerometer can have.
 fn plausible(p: &Params) -> bool {
     let s = p.scale;
-    let (lo, hi) = (s[0].min(s[1]).min(s[2]), s[0].max(s[1]).max(s[2]));
+    let (lo, hi) = (smaller(smaller(s[0], s[1]), s[2]), larger(larger(s[0], s[1]), s[2]));
     let m = p.nonorth;
     hi <= PLAUSIBLE_SCALE_RATIO * lo
         && m[0].abs() <= PLAUSIBLE_NONORTH * s[0]
@@ -320,11 +319,16 @@ struct ModulusErrors<'a> {
 }
 
 impl ModulusErrors<'_> {
+    /// The error of pose `i`; `None` when it is not kept. Out of line: every statistic below calls it.
+    #[inline(never)]
+    fn of(&self, i: usize) -> Option<f32> {
+        let (m, &kept) = (self.means.get(i)?, self.keep.get(i)?);
+        let f = self.params.apply(*m);
+        kept.then(|| crate::linalg::sqrt_f32(crate::model::norm_squared(f)) / self.gravity - 1.0)
+    }
+
     fn iter(&self) -> impl Iterator<Item = (usize, f32)> + '_ {
-        self.means.iter().zip(self.keep).enumerate().filter(|(_, (_, k))| **k).map(|(i, (m, _))| {
-            let f = self.params.apply(*m);
-            (i, crate::linalg::sqrt_f32(crate::model::norm_squared(f)) / self.gravity - 1.0)
-        })
+        (0..self.means.len()).filter_map(|i| self.of(i).map(|e| (i, e)))
     }
 
     fn worst(&self) -> (usize, f32) {
@@ -388,54 +392,63 @@ fn fit_once(means: &[[f32; 3]], keep: &[bool], gravity: f32) -> Result<(Params, 
             v[0] * v[0],
             v[1] * v[1],
             v[2] * v[2],
-            2.0 * v[0] * v[1],
-            2.0 * v[0] * v[2],
-            2.0 * v[1] * v[2],
             v[0],
             v[1],
             v[2],
+            2.0 * v[0] * v[1],
+            2.0 * v[0] * v[2],
+            2.0 * v[1] * v[2],
         ];
         for i in 0..COEFFS {
             atb[i] += row[i];
-            for j in 0..=i {
-                ata[i][j] += row[i] * row[j];
-            }
         }
+        add_outer_product(&mut ata, &row, 1.0);
     }
-    let held = weak_pivots(&ata, &COEFF_ORDER, DETERMINED_PIVOT);
-    if held[..3].iter().chain(&held[6..]).any(|&h| h) {
+    let held = weak_pivots(&ata, DETERMINED_PIVOT);
+    if held[..6].iter().any(|&h| h) {
         return Err(degenerate());
     }
     // `atb` becomes the quadric coefficients.
     solve_spd_holding_in_place(&mut ata, &mut atb, &held).map_err(|_| degenerate())?;
     let params = factor(&atb, m0, s, gravity).ok_or_else(degenerate)?;
     // Quadric cross terms xy, xz, yz map to Mxx, Myy, Mzz.
-    Ok((params, [held[3], held[4], held[5]]))
+    Ok((params, [held[6], held[7], held[8]]))
 }
 
 /// `v^T A v + b^T v = 1` in `v = (m - m0) / s` to the paper's `Ka`, `B`; `None` unless an ellipsoid.
 fn factor(theta: &[f32; COEFFS], m0: [f32; 3], s: f32, gravity: f32) -> Option<Params> {
-    let a = [[theta[0], theta[3], theta[4]], [theta[3], theta[1], theta[5]], [theta[4], theta[5], theta[2]]];
-    let b = [theta[6], theta[7], theta[8]];
-    // Centre: A v0 = -b / 2.
-    let v0 = crate::linalg::solve_lu(a, b.map(|x| -0.5 * x)).ok()?;
+    let a = [[theta[0], theta[6], theta[7]], [theta[6], theta[1], theta[8]], [theta[7], theta[8], theta[2]]];
+    let b = [theta[3], theta[4], theta[5]];
+    // A = L^T L, L lower-triangular; the centre solves A v0 = -b / 2: L^T y = -b / 2, then L v0 = y.
+    let l = lower_factor(&a)?;
+    let (sx, sy, sz) = (l.scale[0], l.scale[1], l.scale[2]);
+    let (mx, my, mz) = (l.nonorth[0], l.nonorth[1], l.nonorth[2]);
+    let y2 = -0.5 * b[2] / sz;
+    let y1 = (-0.5 * b[1] - mz * y2) / sy;
+    let y0 = (-0.5 * b[0] - mx * y1 - my * y2) / sx;
+    let v0 = l.invert([y0, y1, y2])?;
     let k = 1.0 - 0.5 * (b[0] * v0[0] + b[1] * v0[1] + b[2] * v0[2]);
     if !(k > 0.0) {
         return None;
     }
-    // Ka^T Ka = g^2 A / (k s^2), factored with Ka lower-triangular (bottom row first).
-    let w = gravity * gravity / (k * s * s);
-    let n = |i: usize, j: usize| w * a[i][j];
-    let szz = sqrt_positive(n(2, 2))?;
-    let mzz = n(1, 2) / szz;
-    let myy = n(0, 2) / szz;
-    let syy = sqrt_positive(n(1, 1) - mzz * mzz)?;
-    let mxx = (n(0, 1) - myy * mzz) / syy;
-    let sxx = sqrt_positive(n(0, 0) - mxx * mxx - myy * myy)?;
+    // Ka^T Ka = g^2 A / (k s^2): Ka = L g / (s sqrt(k)).
+    let w = gravity / (s * crate::linalg::sqrt_f32(k));
+    let ka = Params { bias: [0.0; 3], scale: l.scale.map(|v| w * v), nonorth: l.nonorth.map(|v| w * v) };
     let center = [m0[0] + s * v0[0], m0[1] + s * v0[1], m0[2] + s * v0[2]];
-    let ka = Params { bias: [0.0; 3], scale: [sxx, syy, szz], nonorth: [mxx, myy, mzz] };
     let params = Params { bias: ka.ka_times(center), ..ka };
     params.is_finite().then_some(params)
+}
+
+/// The lower-triangular `L` with `L^T L = a` (a Cholesky factorisation in reversed order, bottom row
+/// first), as the `Ka` of a model without bias; `None` unless `a` is positive definite.
+fn lower_factor(a: &Matrix<3>) -> Option<Params> {
+    let szz = sqrt_positive(a[2][2])?;
+    let mzz = a[1][2] / szz;
+    let myy = a[0][2] / szz;
+    let syy = sqrt_positive(a[1][1] - mzz * mzz)?;
+    let mxx = (a[0][1] - myy * mzz) / syy;
+    let sxx = sqrt_positive(a[0][0] - mxx * mxx - myy * myy)?;
+    Some(Params { bias: [0.0; 3], scale: [sxx, syy, szz], nonorth: [mxx, myy, mzz] })
 }
 
 fn sqrt_positive(v: f32) -> Option<f32> {
@@ -456,7 +469,7 @@ pub fn missing_directions(means: &[[f32; 3]], keep: &[bool]) -> Directions {
     let half = (0..3).map(|a| 0.5 * (hi[a] - lo[a])).fold(0.0f32, |x, y| if y > x { y } else { x });
     let mut seen = 0u8;
     for (m, _) in means.iter().zip(keep).filter(|(_, k)| **k) {
-        let u: [f32; 3] = core::array::from_fn(|a| (m[a] - 0.5 * (hi[a] + lo[a])) / half.max(f32::MIN_POSITIVE));
+        let u: [f32; 3] = core::array::from_fn(|a| (m[a] - 0.5 * (hi[a] + lo[a])) / larger(half, f32::MIN_POSITIVE));
         let norm = crate::linalg::sqrt_f32(crate::model::norm_squared(u));
         for a in 0..3 {
             seen |= visited(u, norm, a);

@@ -205,12 +205,13 @@ impl Operators {
 
     /// Crossover probability for a pair whose better parent has fitness `f_better`.
     pub fn crossover_probability(&self, f_better: f32, stats: &FitnessStats) -> f32 {
+        let above = stats.above_average(f_better);
         let p = match *self {
-            Self::Aga { k1, k3, .. } => stats.above_average(f_better).map_or(k3, |t| k1 * (1.0 - t)),
-            Self::Laga { pc1, pc2, .. } => stats.above_average(f_better).map_or(pc1, |t| pc1 - (pc1 - pc2) * t),
+            Self::Aga { k1, k3, .. } => above.map_or(k3, |t| k1 * (1.0 - t)),
+            Self::Laga { pc1, pc2, .. } => above.map_or(pc1, |t| pc1 - (pc1 - pc2) * t),
             Self::Taga { phi, pc2, .. } => {
                 let pc1 = 1.0 / (2.0 + stats.lg_generation) + phi;
-                stats.above_average(f_better).map_or(pc1, |t| sine_blend(pc1, pc2, t))
+                above.map_or(pc1, |t| sine_blend(pc1, pc2, t))
             }
         };
         unit_interval(p)
@@ -218,12 +219,13 @@ impl Operators {
 
     /// Per-gene mutation probability for an individual of fitness `f`.
     pub fn mutation_probability(&self, f: f32, stats: &FitnessStats) -> f32 {
+        let above = stats.above_average(f);
         let p = match *self {
-            Self::Aga { k2, k4, .. } => stats.above_average(f).map_or(k4, |t| k2 * (1.0 - t)),
-            Self::Laga { pm1, pm2, .. } => stats.above_average(f).map_or(pm1, |t| pm1 - (pm1 - pm2) * t),
+            Self::Aga { k2, k4, .. } => above.map_or(k4, |t| k2 * (1.0 - t)),
+            Self::Laga { pm1, pm2, .. } => above.map_or(pm1, |t| pm1 - (pm1 - pm2) * t),
             Self::Taga { varphi, pm2, .. } => {
                 let pm1 = -0.1 / (2.0 + 0.8 * stats.lg_generation) + varphi;
-                stats.above_average(f).map_or(pm1, |t| sine_blend(pm1, pm2, t))
+                above.map_or(pm1, |t| sine_blend(pm1, pm2, t))
             }
         };
         unit_interval(p)

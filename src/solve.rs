@@ -17,7 +17,7 @@
 //! ```
 
 use crate::frame::{Deviation, NormPose, modulus_error_gradient, objective, residual_jacobian};
-use crate::linalg::{Matrix, ldlt_solve_in_place, solve_lu};
+use crate::linalg::{Matrix, add_outer_product, ldlt_solve_in_place, solve_lu};
 use crate::model::PARAM_COUNT;
 
 /// Why a solve could not produce parameters.
@@ -136,36 +136,15 @@ fn check_input(x: &Deviation, poses: &[NormPose], held: &[bool; PARAM_COUNT]) ->
 
 /// Gauss-Newton normal equations of the per-pose errors, `(J^T J, J^T e)`, built in place; only the lower
 /// triangle of `J^T J` is written (one row of `J` per pose: the gradient of its modulus error).
-/// `packed[k] += g[i] g[j]` for every `(k, i, j)` listed: straight-line code, one load, multiply-add and
-/// store per entry (a loop over the triangle costs twice as many cycles on a Cortex-M4F).
-macro_rules! add_outer_product {
-    ($packed:ident, $g:ident; $(($k:literal, $i:literal, $j:literal)),* $(,)?) => {
-        $( $packed[$k] += $g[$i] * $g[$j]; )*
-    };
-}
-
 fn normal_equations(x: &Deviation, poses: &[NormPose], jtj: &mut Matrix<PARAM_COUNT>, jte: &mut Deviation) {
-    // The lower triangle, packed row by row.
-    let mut packed = [0.0f32; PARAM_COUNT * (PARAM_COUNT + 1) / 2];
+    *jtj = [[0.0; PARAM_COUNT]; PARAM_COUNT];
     *jte = [0.0; PARAM_COUNT];
     for pose in poses {
         let (e, g) = modulus_error_gradient(x, pose);
         for (sum, gi) in jte.iter_mut().zip(g) {
             *sum += gi * e;
         }
-        add_outer_product!(packed, g;
-        (0, 0, 0), (1, 1, 0), (2, 1, 1), (3, 2, 0), (4, 2, 1), (5, 2, 2), (6, 3, 0), (7, 3, 1), (8, 3, 2), (9, 3, 3),
-        (10, 4, 0), (11, 4, 1), (12, 4, 2), (13, 4, 3), (14, 4, 4), (15, 5, 0), (16, 5, 1), (17, 5, 2), (18, 5, 3),
-        (19, 5, 4), (20, 5, 5), (21, 6, 0), (22, 6, 1), (23, 6, 2), (24, 6, 3), (25, 6, 4), (26, 6, 5), (27, 6, 6),
-        (28, 7, 0), (29, 7, 1), (30, 7, 2), (31, 7, 3), (32, 7, 4), (33, 7, 5), (34, 7, 6), (35, 7, 7), (36, 8, 0),
-        (37, 8, 1), (38, 8, 2), (39, 8, 3), (40, 8, 4), (41, 8, 5), (42, 8, 6), (43, 8, 7), (44, 8, 8)
-        );
-    }
-    let mut sums = packed.iter();
-    for (i, row) in jtj.iter_mut().enumerate() {
-        for (entry, &sum) in row.iter_mut().take(i + 1).zip(sums.by_ref()) {
-            *entry = sum;
-        }
+        add_outer_product(jtj, &g, 1.0);
     }
 }
 
@@ -191,8 +170,8 @@ fn add(x: &Deviation, step: &Deviation) -> Deviation {
 
 /// Levenberg-Marquardt on the per-pose modulus errors, from `x0`.
 ///
-/// Damped Gauss-Newton with Marquardt's diagonal scaling; the 9x9 system is solved by Cholesky on the
-/// stack. Stops on a small step, on no further decrease, or at `max_iterations`.
+/// Damped Gauss-Newton with Marquardt's diagonal scaling; the 9x9 system is solved by an `L D L^T`
+/// factorisation on the stack (no square roots). Stops on a small step, on no further decrease, or at `max_iterations`.
 pub fn levenberg_marquardt(x0: Deviation, poses: &[NormPose], config: &LmConfig) -> Result<SolveReport, SolveError> {
     levenberg_marquardt_holding(x0, poses, config, &[false; PARAM_COUNT])
 }

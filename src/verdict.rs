@@ -10,7 +10,7 @@
 use crate::accumulator::Pose;
 use crate::ellipsoid::PoseList;
 use crate::frame::{Deviation, Frame, NormPose, modulus_error_gradient};
-use crate::linalg::{Matrix, spd_inverse_in_place};
+use crate::linalg::{Matrix, add_outer_product, larger, spd_inverse_holding_in_place};
 use crate::model::{PARAM_COUNT, Params};
 
 /// The poses of a calibration: the captured poses, the normalised poses the optimisers use, and for
@@ -191,22 +191,24 @@ pub fn information_matrix(
     if n < free || n == 0 {
         return None;
     }
-    let all_noisy = set.pairs().all(|(p, m)| error_variance(x, frame, p, m).is_some());
+    // One pass for the residual variance, the chi-square and whether every pose carries its noise.
+    let (mut sum, mut chi2, mut all_noisy) = (0.0f32, 0.0f32, true);
+    for (p, m) in set.pairs() {
+        let e2 = crate::model::square(crate::frame::modulus_error(x, m));
+        sum += e2;
+        match error_variance(x, frame, p, m) {
+            Some(var) => chi2 += e2 / var,
+            None => all_noisy = false,
+        }
+    }
     let dof = n.saturating_sub(free).max(1) as f32;
     let scale = if !all_noisy {
         if n == free {
             return None;
         }
-        let sum: f32 = set.norm.iter().map(|m| crate::model::square(crate::frame::modulus_error(x, m))).sum();
-        (sum / dof).max(f32::MIN_POSITIVE)
+        larger(sum / dof, f32::MIN_POSITIVE)
     } else if inflate && n > free {
-        let chi2: f32 = set
-            .pairs()
-            .filter_map(|(p, m)| {
-                Some(crate::model::square(crate::frame::modulus_error(x, m)) / error_variance(x, frame, p, m)?)
-            })
-            .sum();
-        (chi2 / dof).max(1.0)
+        larger(chi2 / dof, 1.0)
     } else {
         1.0
     };
@@ -214,10 +216,11 @@ pub fn information_matrix(
     for (pose, m) in set.pairs() {
         let var = if all_noisy { scale * error_variance(x, frame, pose, m)? } else { scale };
         let (_, g) = modulus_error_gradient(x, m);
-        for i in 0..PARAM_COUNT {
-            for j in 0..PARAM_COUNT {
-                info[i][j] += g[i] * g[j] / var;
-            }
+        add_outer_product(&mut info, &g, 1.0 / var);
+    }
+    for i in 0..PARAM_COUNT {
+        for j in 0..i {
+            info[j][i] = info[i][j];
         }
     }
     Some(info)
@@ -244,24 +247,7 @@ pub fn covariance_holding(mut info: Matrix<PARAM_COUNT>, held: &[bool; PARAM_COU
 /// [`covariance_holding`] in place: `info` becomes the covariance; `false` (and `info` unusable)
 /// when it cannot be inverted.
 pub fn covariance_holding_in_place(info: &mut Matrix<PARAM_COUNT>, held: &[bool; PARAM_COUNT]) -> bool {
-    for i in 0..PARAM_COUNT {
-        for j in 0..PARAM_COUNT {
-            if held[i] || held[j] {
-                info[i][j] = if i == j { 1.0 } else { 0.0 };
-            }
-        }
-    }
-    if spd_inverse_in_place(info).is_err() {
-        return false;
-    }
-    for i in 0..PARAM_COUNT {
-        for j in 0..PARAM_COUNT {
-            if held[i] || held[j] {
-                info[i][j] = 0.0;
-            }
-        }
-    }
-    true
+    spd_inverse_holding_in_place(info, held).is_ok()
 }
 
 /// The largest standard deviation each parameter may have under `bounds` (paper convention,
@@ -301,7 +287,7 @@ pub fn parameters_to_hold(
         }
         let worst = (0..PARAM_COUNT)
             .filter(|&i| !held[i])
-            .map(|i| (i, crate::linalg::sqrt_f32(cov[i][i].max(0.0)) / HOLD_STD[i]))
+            .map(|i| (i, crate::linalg::sqrt_f32(larger(cov[i][i], 0.0)) / HOLD_STD[i]))
             .fold(None, |a: Option<(usize, f32)>, b| if a.is_none_or(|a| !(b.1 <= a.1)) { Some(b) } else { a });
         match worst {
             // (`i < PARAM_COUNT` always; said so the bounds check goes.)
@@ -321,13 +307,9 @@ pub fn undetermined_parameters(x: &Deviation, norm: &[NormPose]) -> [bool; PARAM
     let mut info = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
     for n in norm {
         let (_, g) = modulus_error_gradient(x, n);
-        for i in 0..PARAM_COUNT {
-            for j in 0..=i {
-                info[i][j] += g[i] * g[j];
-            }
-        }
+        add_outer_product(&mut info, &g, 1.0);
     }
-    crate::linalg::weak_pivots(&info, &[0, 1, 2, 3, 4, 5, 6, 7, 8], crate::linalg::DETERMINED_PIVOT)
+    crate::linalg::weak_pivots(&info, crate::linalg::DETERMINED_PIVOT)
 }
 
 /// Standard deviations of the paper-convention parameters from a deviation covariance.
@@ -341,7 +323,7 @@ pub fn param_std(frame: &Frame, covariance: &Matrix<PARAM_COUNT>) -> [f32; PARAM
                 v += t[i][a] * covariance[a][b] * t[i][b];
             }
         }
-        *o = crate::linalg::sqrt_f32(v.max(0.0));
+        *o = crate::linalg::sqrt_f32(larger(v, 0.0));
     }
     out
 }
@@ -365,7 +347,7 @@ pub fn noise_floor_mg(x: &Deviation, frame: &Frame, set: &PoseSet<'_>, fitted: u
 fn rmse_normalised_mg(x: &Deviation, norm: &[NormPose]) -> f32 {
     let mut sum = 0.0;
     for n in norm {
-        let m = crate::linalg::sqrt_f32((1.0 + crate::frame::modulus_error(x, n)).max(0.0));
+        let m = crate::linalg::sqrt_f32(larger(1.0 + crate::frame::modulus_error(x, n), 0.0));
         sum += crate::model::square(m - 1.0);
     }
     if norm.is_empty() { f32::NAN } else { crate::linalg::sqrt_f32(sum / norm.len() as f32) * 1000.0 }
