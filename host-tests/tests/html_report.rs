@@ -12,8 +12,8 @@ use std::process::Command;
 
 use serde_json::Value;
 
-/// Significant digits the page shows (`accelcal_host::report_html::SIGNIFICANT_DIGITS`).
-const DIGITS: i32 = accelcal_host::report_html::SIGNIFICANT_DIGITS as i32;
+/// Significant digits the page shows (`accelcal_host::report::html::SIGNIFICANT_DIGITS`).
+const DIGITS: i32 = accelcal_host::report::html::SIGNIFICANT_DIGITS as i32;
 
 fn real_file(relative: &str) -> PathBuf {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/real");

@@ -6,7 +6,7 @@ use accelcal::calibrate::Method;
 use accelcal::model::Params;
 use accelcal_host::calib::{self, RowsDropped, VerdictSummary};
 use accelcal_host::paper::format_sig;
-use accelcal_host::report_html;
+use accelcal_host::report::html;
 use serde::Serialize;
 
 use super::input::{InputArgs, Loaded, MethodArg, load_and_calibrate};
@@ -105,7 +105,7 @@ pub(super) fn run(args: &CalibrateArgs) -> Result<(), Failure> {
         let document =
             serde_json::to_value(document(&args.input, &loaded, bench)).map_err(|e| format!("JSON output: {e}"))?;
         if let Some(dir) = &args.report {
-            let page = report_html::write_calibrate_report(dir, &document)?;
+            let page = html::write_calibrate_report(dir, &document)?;
             eprintln!("accelcal: report written to {}", page.display());
         }
         if args.json {
@@ -165,8 +165,8 @@ fn document<'a>(input: &InputArgs, loaded: &'a Loaded, bench: Option<Bench>) -> 
 fn pose_rows(loaded: &Loaded) -> Vec<PoseRow> {
     let Loaded { table, poses, spans, host, config, .. } = loaded;
     let params = &host.calibration.params;
-    let residuals = report_html::pose_residuals_mg(poses, config, params);
-    let temps = report_html::pose_temperatures_c(table, spans.as_deref(), poses.len());
+    let residuals = html::pose_residuals_mg(poses, config, params);
+    let temps = html::pose_temperatures_c(table, spans.as_deref(), poses.len());
     let rows = poses.iter().enumerate().map(|(i, p)| {
         let span = spans.as_ref().and_then(|s| s.get(i));
         PoseRow {
@@ -176,7 +176,7 @@ fn pose_rows(loaded: &Loaded) -> Vec<PoseRow> {
             mean: p.mean,
             std: p.variance.map(f32::sqrt),
             temp_c: temps.get(i).copied().flatten(),
-            direction: report_html::calibrated_direction(params, p.mean),
+            direction: html::calibrated_direction(params, p.mean),
             residual_before_mg: residuals.get(i).map(|r| r.before_mg),
             residual_after_mg: residuals.get(i).map(|r| r.after_mg),
         }

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use accelcal_host::calib::{self, RowsDropped};
 use accelcal_host::csvio;
 use accelcal_host::diagnose;
-use accelcal_host::report_html;
+use accelcal_host::report::html;
 
 use super::Failure;
 use super::input::{InputArgs, accumulate_all};
@@ -26,6 +26,14 @@ pub(super) struct DiagnoseArgs {
     /// Seed of the GA and of the simulations.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+}
+
+/// The `diagnose --json` document: the diagnosis's and the rows the reading dropped.
+#[derive(serde::Serialize)]
+struct DiagnoseOutput<'a> {
+    #[serde(flatten)]
+    diagnosis: diagnose::DiagnosisDocument<'a>,
+    rows_dropped: RowsDropped,
 }
 
 /// Runs `diagnose`.
@@ -49,13 +57,11 @@ pub(super) fn run(args: &DiagnoseArgs) -> Result<(), Failure> {
     if let Some(dir) = &args.plots {
         report.write_plots(dir)?;
     }
-    let mut json = report.to_json();
-    if let Some(object) = json.as_object_mut() {
-        let rows_dropped = RowsDropped::new(&table.dropped, stale_repeats);
-        object.insert("rows_dropped".into(), serde_json::to_value(rows_dropped).unwrap_or_default());
-    }
+    let document =
+        DiagnoseOutput { diagnosis: report.document(), rows_dropped: RowsDropped::new(&table.dropped, stale_repeats) };
+    let json = serde_json::to_value(document).map_err(|e| format!("JSON output: {e}"))?;
     if let Some(dir) = &args.report {
-        let page = report_html::write_diagnose_report(dir, &json)?;
+        let page = html::write_diagnose_report(dir, &json)?;
         eprintln!("accelcal: report written to {}", page.display());
     }
     if args.json {

@@ -10,7 +10,7 @@ macro_rules! outln {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
         if let Err(e) = writeln!(std::io::stdout(), $($arg)*) {
-            accelcal_host::output::stdout_failed(e)
+            accelcal_host::report::output::stdout_failed(e)
         }
     }};
 }
@@ -20,7 +20,7 @@ macro_rules! out {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
         if let Err(e) = write!(std::io::stdout(), $($arg)*) {
-            accelcal_host::output::stdout_failed(e)
+            accelcal_host::report::output::stdout_failed(e)
         }
     }};
 }

@@ -5,8 +5,8 @@ use std::path::{Path, PathBuf};
 
 use accelcal::model::{PARAM_NAMES, Params};
 use accelcal_host::paper::{self, PaperOptions};
-use accelcal_host::plots::{Scale, Series, line_chart};
-use accelcal_host::report_html;
+use accelcal_host::report::html;
+use accelcal_host::report::plots::{Scale, Series, line_chart};
 use accelcal_host::sim::Plan;
 
 use super::{Failure, print_json, progress_bar};
@@ -64,7 +64,7 @@ pub(super) fn run(args: &PaperArgs) -> Result<(), Failure> {
         }
     }
     if let Some(dir) = &args.report {
-        let page = report_html::write_paper_report(dir, &paper::to_json(&report))?;
+        let page = html::write_paper_report(dir, &paper::to_json(&report))?;
         eprintln!("accelcal: report written to {}", page.display());
     }
     if args.json {

@@ -61,7 +61,8 @@ mod within;
 
 use std::fmt;
 
-pub use report::{Allan, Candidate, Diagnosis, Gap, PoseReport, Probe};
+pub(crate) use locate::orientation_label;
+pub use report::{Allan, Candidate, Diagnosis, DiagnosisDocument, Gap, PoseReport, Probe};
 
 use crate::csvio::Table;
 

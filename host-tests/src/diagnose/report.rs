@@ -1,17 +1,17 @@
-//! The report: the result types, the JSON (every candidate with its held-out evidence, ranked),
-//! the text and the plots.
-
-use std::path::Path;
+//! The diagnosis's result types and its JSON document (`diagnose --json`: every candidate with its
+//! held-out evidence, ranked), a `#[derive(Serialize)]` view of the result. The text and the figure
+//! files are presentation: `crate::report::diagnosis`.
+//!
+//! Non-finite numbers serialise as `null` (serde_json's rule for `f64`); the keys come out sorted
+//! because the CLI prints through [`serde_json::Value`].
 
 use accelcal::model::Params;
-use serde_json::{Value, json};
+use serde::{Serialize, Serializer};
 
 use super::locate::orientation_label;
-use crate::calib;
-use crate::plots::{Scale, Series, line_chart};
 
 /// Step 1 and 4: the gap before and after the winning effect.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Gap {
     /// Real modulus RMSE of the nominal fit, mg.
     pub real_rmse_mg: f64,
@@ -34,7 +34,7 @@ pub struct Gap {
 }
 
 /// One pose in the report.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PoseReport {
     /// Mid time, s.
     pub t_mid_s: f64,
@@ -70,7 +70,7 @@ pub struct Allan {
 }
 
 /// One candidate's result.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Candidate {
     /// Effect name (see [`EFFECT_NAMES`](super::EFFECT_NAMES)).
     pub effect: &'static str,
@@ -94,6 +94,7 @@ pub struct Candidate {
     pub within_detail: String,
     /// Every pose-level parametrisation tried, with its penalised held-out ratio (smaller is
     /// better; the chosen one is the smallest).
+    #[serde(serialize_with = "variants_json")]
     pub variants: Vec<(String, f64)>,
 }
 
@@ -105,7 +106,7 @@ impl Candidate {
 }
 
 /// An out-of-catalogue probe (never a verdict; see `unexplained`).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Probe {
     /// The shape probed.
     pub shape: &'static str,
@@ -157,10 +158,6 @@ pub struct Diagnosis {
     pub shrink: f64,
 }
 
-fn finite(v: f64) -> Value {
-    if v.is_finite() { json!(v) } else { Value::Null }
-}
-
 impl Diagnosis {
     /// The applicable candidates, best held-out gain first.
     pub fn ranked(&self) -> Vec<&Candidate> {
@@ -170,244 +167,200 @@ impl Diagnosis {
     }
 }
 
+/// `variants` as `[{"detail", "heldout_ratio"}]`.
+fn variants_json<S: Serializer>(variants: &[(String, f64)], s: S) -> Result<S::Ok, S::Error> {
+    #[derive(Serialize)]
+    struct Variant<'a> {
+        detail: &'a str,
+        heldout_ratio: f64,
+    }
+    s.collect_seq(variants.iter().map(|(detail, heldout_ratio)| Variant { detail, heldout_ratio: *heldout_ratio }))
+}
+
+/// The `diagnose --json` document (see the module doc for numbers and key order).
+#[derive(Debug, Serialize)]
+pub struct DiagnosisDocument<'a> {
+    file: &'a str,
+    samples: usize,
+    units: &'a str,
+    gravity: f64,
+    seed: u64,
+    repeats: usize,
+    /// The number of poses (their details are under `where.per_pose`).
+    poses: usize,
+    params: &'a Params,
+    noise: NoiseSummary,
+    gap: &'a Gap,
+    #[serde(rename = "where")]
+    located: Where<'a>,
+    heldout_ratio_nominal: f64,
+    candidates: &'a [Candidate],
+    candidates_ranked: Vec<RankedCandidate<'a>>,
+    probes: &'a [Probe],
+    verdict: VerdictSummary<'a>,
+}
+
+/// `noise`: white noise per axis and the longest rest.
+#[derive(Debug, Serialize)]
+struct NoiseSummary {
+    white_mg: [f64; 3],
+    longest_rest_s: f64,
+}
+
+/// `where`: step 2, where the gap lies.
+#[derive(Debug, Serialize)]
+struct Where<'a> {
+    per_pose: Vec<PoseRow<'a>>,
+    by_orientation: Vec<OrientationRow>,
+    time: TimeSummary,
+    temperature: Option<TemperatureSummary>,
+    within_pose: WithinPose,
+    noise: AllanSummary<'a>,
+}
+
+/// One pose of `where.per_pose`.
+#[derive(Debug, Serialize)]
+struct PoseRow<'a> {
+    index: usize,
+    orientation: String,
+    #[serde(flatten)]
+    pose: &'a PoseReport,
+}
+
+/// One row of `where.by_orientation`.
+#[derive(Debug, Serialize)]
+struct OrientationRow {
+    orientation: String,
+    poses: usize,
+    rms_mg: f64,
+}
+
+/// `where.time`.
+#[derive(Debug, Serialize)]
+struct TimeSummary {
+    correlation: Option<f64>,
+    rms_first_half_mg: f64,
+    rms_second_half_mg: f64,
+}
+
+/// `where.temperature` (absent without a temperature column).
+#[derive(Debug, Serialize)]
+struct TemperatureSummary {
+    correlation: Option<f64>,
+    min_c: f64,
+    max_c: f64,
+}
+
+/// `where.within_pose`.
+#[derive(Debug, Serialize)]
+struct WithinPose {
+    early_late_rms_mg: f64,
+    white_expected_mg: f64,
+    ratio: f64,
+}
+
+/// `where.noise`: the Allan deviation of the longest rest.
+#[derive(Debug, Serialize)]
+struct AllanSummary<'a> {
+    allan_tau_s: &'a [f64],
+    allan_adev_mg: &'a [f64],
+    allan_white_mg: &'a [f64],
+    ratio_at_longest_tau: Option<f64>,
+}
+
+/// One entry of `candidates_ranked`.
+#[derive(Debug, Serialize)]
+struct RankedCandidate<'a> {
+    effect: &'a str,
+    heldout_gain: f64,
+    within_gain: f64,
+    evidence: f64,
+}
+
+/// `verdict`: step 3 and 4.
+#[derive(Debug, Serialize)]
+struct VerdictSummary<'a> {
+    effect: &'a str,
+    #[serde(rename = "where")]
+    located: Option<&'a str>,
+    explained: bool,
+    heldout_gain: Option<f64>,
+    shrink: f64,
+}
+
 impl Diagnosis {
-    /// The JSON report.
-    pub fn to_json(&self) -> Value {
-        let (corr_t, first_half, second_half) = self.time_stats();
-        let (within, within_expected) = self.within_stats();
-        let allan_ratio = self.allan.adev_mg.last().zip(self.allan.white_mg.last()).map(|(a, w)| a / w);
+    /// The JSON document (`diagnose --json`).
+    pub fn document(&self) -> DiagnosisDocument<'_> {
+        DiagnosisDocument {
+            file: &self.file,
+            samples: self.samples,
+            units: &self.units,
+            gravity: self.gravity,
+            seed: self.seed,
+            repeats: self.repeats,
+            poses: self.poses.len(),
+            params: &self.params,
+            noise: NoiseSummary { white_mg: self.white_mg, longest_rest_s: self.allan.rest_s },
+            gap: &self.gap,
+            located: self.where_document(),
+            heldout_ratio_nominal: self.heldout_ratio_nominal,
+            candidates: &self.candidates,
+            candidates_ranked: self.ranked().into_iter().map(RankedCandidate::from).collect(),
+            probes: &self.probes,
+            verdict: self.verdict_document(),
+        }
+    }
+
+    /// The JSON document as a [`serde_json::Value`] (keys sorted).
+    pub fn to_json(&self) -> serde_json::Value {
+        serde_json::to_value(self.document()).unwrap_or_default()
+    }
+
+    fn where_document(&self) -> Where<'_> {
+        let (correlation, rms_first_half_mg, rms_second_half_mg) = self.time_stats();
+        let (early_late_rms_mg, white_expected_mg) = self.within_stats();
+        let by_orientation = self.by_orientation().into_iter();
+        Where {
+            per_pose: (self.poses.iter().enumerate())
+                .map(|(index, pose)| PoseRow { index, orientation: orientation_label(pose.direction), pose })
+                .collect(),
+            by_orientation: by_orientation
+                .map(|(orientation, poses, rms_mg)| OrientationRow { orientation, poses, rms_mg })
+                .collect(),
+            time: TimeSummary { correlation, rms_first_half_mg, rms_second_half_mg },
+            temperature: self.temperature_stats().map(|(correlation, min_c, max_c)| TemperatureSummary {
+                correlation,
+                min_c,
+                max_c,
+            }),
+            within_pose: WithinPose {
+                early_late_rms_mg,
+                white_expected_mg,
+                ratio: early_late_rms_mg / white_expected_mg,
+            },
+            noise: AllanSummary {
+                allan_tau_s: &self.allan.tau_s,
+                allan_adev_mg: &self.allan.adev_mg,
+                allan_white_mg: &self.allan.white_mg,
+                ratio_at_longest_tau: self.allan.adev_mg.last().zip(self.allan.white_mg.last()).map(|(a, w)| a / w),
+            },
+        }
+    }
+
+    fn verdict_document(&self) -> VerdictSummary<'_> {
         let best = self.candidates.iter().find(|c| c.effect == self.verdict);
-        json!({
-            "file": self.file,
-            "samples": self.samples,
-            "units": self.units,
-            "gravity": self.gravity,
-            "seed": self.seed,
-            "repeats": self.repeats,
-            "poses": self.poses.len(),
-            "params": calib::params_json(&self.params),
-            "noise": {"white_mg": self.white_mg.map(finite), "longest_rest_s": finite(self.allan.rest_s)},
-            "gap": {
-                "real_rmse_mg": finite(self.gap.real_rmse_mg),
-                "sim_rmse_mg": finite(self.gap.sim_rmse_mg),
-                "sim_spread_mg": finite(self.gap.sim_spread_mg),
-                "z": finite(self.gap.z),
-                "significant": self.gap.significant,
-                "ratio_before": finite(self.gap.ratio_before),
-                "real_rmse_after_mg": finite(self.gap.real_rmse_after_mg),
-                "sim_rmse_after_mg": finite(self.gap.sim_rmse_after_mg),
-                "ratio_after": finite(self.gap.ratio_after),
-            },
-            "where": {
-                "per_pose": self.poses.iter().enumerate().map(|(i, p)| json!({
-                    "index": i,
-                    "t_mid_s": finite(p.t_mid_s),
-                    "duration_s": finite(p.duration_s),
-                    "temp_c": p.temp_c.map(finite),
-                    "orientation": orientation_label(p.direction),
-                    "direction": p.direction.map(finite),
-                    "residual_mg": finite(p.residual_mg),
-                    "expected_mg": finite(p.expected_mg),
-                    "residual_after_mg": p.residual_after_mg.map(finite),
-                    "early_late_mg": finite(p.early_late_mg),
-                    "within_chi2": finite(p.within_chi2),
-                })).collect::<Vec<_>>(),
-                "by_orientation": self.by_orientation().into_iter().map(|(l, n, r)| json!({"orientation": l, "poses": n, "rms_mg": finite(r)})).collect::<Vec<_>>(),
-                "time": {"correlation": corr_t.map(finite), "rms_first_half_mg": finite(first_half), "rms_second_half_mg": finite(second_half)},
-                "temperature": self.temperature_stats().map(|(c, lo, hi)| json!({"correlation": c.map(finite), "min_c": finite(lo), "max_c": finite(hi)})),
-                "within_pose": {"early_late_rms_mg": finite(within), "white_expected_mg": finite(within_expected), "ratio": finite(within / within_expected)},
-                "noise": {
-                    "allan_tau_s": self.allan.tau_s,
-                    "allan_adev_mg": self.allan.adev_mg.iter().map(|v| finite(*v)).collect::<Vec<_>>(),
-                    "allan_white_mg": self.allan.white_mg.iter().map(|v| finite(*v)).collect::<Vec<_>>(),
-                    "ratio_at_longest_tau": allan_ratio.map(finite),
-                },
-            },
-            "heldout_ratio_nominal": finite(self.heldout_ratio_nominal),
-            "candidates": self.candidates.iter().map(|c| json!({
-                "effect": c.effect,
-                "applicable": c.applicable,
-                "heldout_gain": finite(c.heldout_gain),
-                "heldout_ratio": finite(c.heldout_ratio),
-                "ratio_after": finite(c.ratio_after),
-                "extra_params": c.extra_params,
-                "detail": c.detail,
-                "within_gain": finite(c.within_gain),
-                "within_detail": c.within_detail,
-                "variants": c.variants.iter().map(|(d, r)| json!({"detail": d, "heldout_ratio": finite(*r)})).collect::<Vec<_>>(),
-            })).collect::<Vec<_>>(),
-            "candidates_ranked": self.ranked().iter().map(|c| json!({"effect": c.effect, "heldout_gain": finite(c.heldout_gain), "within_gain": finite(c.within_gain), "evidence": finite(c.evidence())})).collect::<Vec<_>>(),
-            "probes": self.probes.iter().map(|p| json!({"shape": p.shape, "heldout_gain": finite(p.heldout_gain), "detail": p.detail})).collect::<Vec<_>>(),
-            "verdict": {
-                "effect": self.verdict,
-                "where": self.unexplained_where,
-                "explained": self.explained,
-                "heldout_gain": best.map(|c| finite(c.heldout_gain)),
-                "shrink": finite(self.shrink),
-            },
-        })
-    }
-
-    /// Step 2 of the text report.
-    fn write_where(&self, s: &mut String) {
-        use std::fmt::Write as _;
-        let _ = writeln!(s, "2. where:");
-        let mut worst: Vec<(usize, &PoseReport)> = self.poses.iter().enumerate().collect();
-        worst.sort_by(|a, b| b.1.residual_mg.abs().total_cmp(&a.1.residual_mg.abs()));
-        let list: Vec<String> = worst
-            .iter()
-            .take(5)
-            .map(|(i, p)| {
-                format!("#{i} {} {:+.3} mg (noise {:.3})", orientation_label(p.direction), p.residual_mg, p.expected_mg)
-            })
-            .collect();
-        let _ = writeln!(s, "   largest residuals: {}", list.join(", "));
-        let orient: Vec<String> = self
-            .by_orientation()
-            .into_iter()
-            .filter(|(_, n, _)| *n > 0)
-            .map(|(l, n, r)| format!("{l} {r:.3} mg ({n})"))
-            .collect();
-        let _ = writeln!(s, "   by orientation (RMS): {}", orient.join(", "));
-        let (corr_t, first_half, second_half) = self.time_stats();
-        let _ = writeln!(
-            s,
-            "   vs time: correlation {}, RMS first half {first_half:.3} mg, second half {second_half:.3} mg",
-            corr_t.map_or("n/a".into(), |c| format!("{c:+.2}"))
-        );
-        match self.temperature_stats() {
-            Some((c, lo, hi)) => {
-                let _ = writeln!(
-                    s,
-                    "   vs temperature ({lo:.2}..{hi:.2} C): correlation {}",
-                    c.map_or("n/a".into(), |c| format!("{c:+.2}"))
-                );
-            }
-            None => {
-                let _ = writeln!(s, "   vs temperature: no temperature column");
-            }
-        }
-        let (within, expected) = self.within_stats();
-        let _ =
-            writeln!(s, "   within poses (last third - first third): RMS {within:.3} mg, white noise {expected:.3} mg");
-        if let (Some(a), Some(w), Some(t)) =
-            (self.allan.adev_mg.last(), self.allan.white_mg.last(), self.allan.tau_s.last())
-        {
-            let _ = writeln!(
-                s,
-                "   noise: longest rest {:.1} s, Allan deviation at {t:.2} s {a:.4} mg vs white {w:.4} mg ({:.1}x)",
-                self.allan.rest_s,
-                a / w
-            );
+        VerdictSummary {
+            effect: self.verdict,
+            located: self.unexplained_where.as_deref(),
+            explained: self.explained,
+            heldout_gain: best.map(|c| c.heldout_gain),
+            shrink: self.shrink,
         }
     }
+}
 
-    /// The human-readable report, one block per step.
-    pub fn to_text(&self) -> String {
-        use std::fmt::Write as _;
-        let mut s = String::new();
-        let g = &self.gap;
-        let _ = writeln!(
-            s,
-            "{}: {} rows ({}), {} poses, seed {}",
-            self.file,
-            self.samples,
-            self.units,
-            self.poses.len(),
-            self.seed
-        );
-        let _ = writeln!(
-            s,
-            "1. gap: real modulus RMSE {:.4} mg, simulated {:.4} +- {:.4} mg ({} repeats, white noise {:.3}/{:.3}/{:.3} mg): ratio {:.2}, z {:.1} -> {}",
-            g.real_rmse_mg,
-            g.sim_rmse_mg,
-            g.sim_spread_mg,
-            self.repeats,
-            self.white_mg[0],
-            self.white_mg[1],
-            self.white_mg[2],
-            g.ratio_before,
-            g.z,
-            if g.significant { "significant" } else { "not significant" }
-        );
-        self.write_where(&mut s);
-        let _ = writeln!(s, "3. candidates (held-out ratio of the nominal model {:.2}):", self.heldout_ratio_nominal);
-        for c in &self.candidates {
-            let _ = writeln!(
-                s,
-                "   {:<19} gain {:>6.2}  held-out ratio {:>7.2}  ratio after {:>7.2}  +{} params  {}",
-                c.effect, c.heldout_gain, c.heldout_ratio, c.ratio_after, c.extra_params, c.detail
-            );
-            if c.within_gain.is_finite() {
-                let _ = writeln!(s, "   {:<19} within-pose gain {:>6.2}  {}", "", c.within_gain, c.within_detail);
-            }
-        }
-        let _ = writeln!(
-            s,
-            "   verdict: {}{}",
-            self.verdict,
-            self.unexplained_where
-                .as_ref()
-                .map_or(String::new(), |w| format!(" (significant gap, no family explains it; it lies in: {w})"))
-        );
-        let _ = writeln!(
-            s,
-            "4. ratio {:.2} -> {:.2} (real {:.4} mg, simulated {:.4} mg): shrink {:.2}",
-            g.ratio_before, g.ratio_after, g.real_rmse_after_mg, g.sim_rmse_after_mg, self.shrink
-        );
-        s
-    }
-
-    /// Writes the SVG plots into `dir` (created if needed): residual per pose before/after, against
-    /// time, against temperature (with a temperature column) and the Allan deviation.
-    pub fn write_plots(&self, dir: &Path) -> Result<(), String> {
-        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-        let before: Vec<(f64, f64)> = self.poses.iter().enumerate().map(|(i, p)| (i as f64, p.residual_mg)).collect();
-        let after: Vec<(f64, f64)> =
-            self.poses.iter().enumerate().map(|(i, p)| (i as f64, p.residual_after_mg.unwrap_or(f64::NAN))).collect();
-        let after_name = format!("after ({})", self.verdict);
-        line_chart(
-            &dir.join("residual_per_pose.svg"),
-            "Modulus residual per pose",
-            "pose",
-            "residual (mg)",
-            &[Series { name: "nominal", points: before }, Series { name: &after_name, points: after }],
-            Scale::Linear,
-        )?;
-        let mut by_time: Vec<(f64, f64)> = self.poses.iter().map(|p| (p.t_mid_s, p.residual_mg)).collect();
-        by_time.sort_by(|a, b| a.0.total_cmp(&b.0));
-        line_chart(
-            &dir.join("residual_vs_time.svg"),
-            "Modulus residual against time",
-            "time (s)",
-            "residual (mg)",
-            &[Series { name: "nominal", points: by_time }],
-            Scale::Linear,
-        )?;
-        let mut by_temp: Vec<(f64, f64)> =
-            self.poses.iter().filter_map(|p| p.temp_c.map(|t| (t, p.residual_mg))).collect();
-        if by_temp.len() == self.poses.len() && !by_temp.is_empty() {
-            by_temp.sort_by(|a, b| a.0.total_cmp(&b.0));
-            line_chart(
-                &dir.join("residual_vs_temperature.svg"),
-                "Modulus residual against temperature",
-                "temperature (C)",
-                "residual (mg)",
-                &[Series { name: "nominal", points: by_temp }],
-                Scale::Linear,
-            )?;
-        }
-        let tau = |v: &[f64]| -> Vec<(f64, f64)> { self.allan.tau_s.iter().copied().zip(v.iter().copied()).collect() };
-        line_chart(
-            &dir.join("allan_deviation.svg"),
-            "Allan deviation of the longest rest",
-            "tau (s)",
-            "mg",
-            &[
-                Series { name: "measured", points: tau(&self.allan.adev_mg) },
-                Series { name: "white noise", points: tau(&self.allan.white_mg) },
-            ],
-            Scale::LogLog,
-        )
+impl<'a> From<&'a Candidate> for RankedCandidate<'a> {
+    fn from(c: &'a Candidate) -> Self {
+        Self { effect: c.effect, heldout_gain: c.heldout_gain, within_gain: c.within_gain, evidence: c.evidence() }
     }
 }

@@ -9,7 +9,7 @@
 //!
 //! ```
 //! let doc = serde_json::json!({"a": 0.123456789});
-//! let cell = accelcal_host::report_html::number_cell("/a", &doc);
+//! let cell = accelcal_host::report::html::number_cell("/a", &doc);
 //! assert_eq!(cell, r#"<td data-key="/a">0.123457</td>"#);
 //! ```
 

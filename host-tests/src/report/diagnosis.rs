@@ -1,0 +1,172 @@
+//! The diagnosis's text report and its SVG figure files (`diagnose --plots DIR`); its JSON is
+//! [`DiagnosisDocument`](crate::diagnose::DiagnosisDocument), beside the result types.
+
+use std::path::Path;
+
+use crate::diagnose::{Diagnosis, PoseReport, orientation_label};
+use crate::report::plots::{Scale, Series, line_chart};
+
+impl Diagnosis {
+    /// Step 2 of the text report.
+    fn write_where(&self, s: &mut String) {
+        use std::fmt::Write as _;
+        let _ = writeln!(s, "2. where:");
+        let mut worst: Vec<(usize, &PoseReport)> = self.poses.iter().enumerate().collect();
+        worst.sort_by(|a, b| b.1.residual_mg.abs().total_cmp(&a.1.residual_mg.abs()));
+        let list: Vec<String> = worst
+            .iter()
+            .take(5)
+            .map(|(i, p)| {
+                format!("#{i} {} {:+.3} mg (noise {:.3})", orientation_label(p.direction), p.residual_mg, p.expected_mg)
+            })
+            .collect();
+        let _ = writeln!(s, "   largest residuals: {}", list.join(", "));
+        let orient: Vec<String> = self
+            .by_orientation()
+            .into_iter()
+            .filter(|(_, n, _)| *n > 0)
+            .map(|(l, n, r)| format!("{l} {r:.3} mg ({n})"))
+            .collect();
+        let _ = writeln!(s, "   by orientation (RMS): {}", orient.join(", "));
+        let (corr_t, first_half, second_half) = self.time_stats();
+        let _ = writeln!(
+            s,
+            "   vs time: correlation {}, RMS first half {first_half:.3} mg, second half {second_half:.3} mg",
+            corr_t.map_or("n/a".into(), |c| format!("{c:+.2}"))
+        );
+        match self.temperature_stats() {
+            Some((c, lo, hi)) => {
+                let _ = writeln!(
+                    s,
+                    "   vs temperature ({lo:.2}..{hi:.2} C): correlation {}",
+                    c.map_or("n/a".into(), |c| format!("{c:+.2}"))
+                );
+            }
+            None => {
+                let _ = writeln!(s, "   vs temperature: no temperature column");
+            }
+        }
+        let (within, expected) = self.within_stats();
+        let _ =
+            writeln!(s, "   within poses (last third - first third): RMS {within:.3} mg, white noise {expected:.3} mg");
+        if let (Some(a), Some(w), Some(t)) =
+            (self.allan.adev_mg.last(), self.allan.white_mg.last(), self.allan.tau_s.last())
+        {
+            let _ = writeln!(
+                s,
+                "   noise: longest rest {:.1} s, Allan deviation at {t:.2} s {a:.4} mg vs white {w:.4} mg ({:.1}x)",
+                self.allan.rest_s,
+                a / w
+            );
+        }
+    }
+
+    /// The human-readable report, one block per step.
+    pub fn to_text(&self) -> String {
+        use std::fmt::Write as _;
+        let mut s = String::new();
+        let g = &self.gap;
+        let _ = writeln!(
+            s,
+            "{}: {} rows ({}), {} poses, seed {}",
+            self.file,
+            self.samples,
+            self.units,
+            self.poses.len(),
+            self.seed
+        );
+        let _ = writeln!(
+            s,
+            "1. gap: real modulus RMSE {:.4} mg, simulated {:.4} +- {:.4} mg ({} repeats, white noise {:.3}/{:.3}/{:.3} mg): ratio {:.2}, z {:.1} -> {}",
+            g.real_rmse_mg,
+            g.sim_rmse_mg,
+            g.sim_spread_mg,
+            self.repeats,
+            self.white_mg[0],
+            self.white_mg[1],
+            self.white_mg[2],
+            g.ratio_before,
+            g.z,
+            if g.significant { "significant" } else { "not significant" }
+        );
+        self.write_where(&mut s);
+        let _ = writeln!(s, "3. candidates (held-out ratio of the nominal model {:.2}):", self.heldout_ratio_nominal);
+        for c in &self.candidates {
+            let _ = writeln!(
+                s,
+                "   {:<19} gain {:>6.2}  held-out ratio {:>7.2}  ratio after {:>7.2}  +{} params  {}",
+                c.effect, c.heldout_gain, c.heldout_ratio, c.ratio_after, c.extra_params, c.detail
+            );
+            if c.within_gain.is_finite() {
+                let _ = writeln!(s, "   {:<19} within-pose gain {:>6.2}  {}", "", c.within_gain, c.within_detail);
+            }
+        }
+        let _ = writeln!(
+            s,
+            "   verdict: {}{}",
+            self.verdict,
+            self.unexplained_where
+                .as_ref()
+                .map_or(String::new(), |w| format!(" (significant gap, no family explains it; it lies in: {w})"))
+        );
+        let _ = writeln!(
+            s,
+            "4. ratio {:.2} -> {:.2} (real {:.4} mg, simulated {:.4} mg): shrink {:.2}",
+            g.ratio_before, g.ratio_after, g.real_rmse_after_mg, g.sim_rmse_after_mg, self.shrink
+        );
+        s
+    }
+
+    /// Writes the SVG plots into `dir` (created if needed): residual per pose before/after, against
+    /// time, against temperature (with a temperature column) and the Allan deviation.
+    pub fn write_plots(&self, dir: &Path) -> Result<(), String> {
+        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        let before: Vec<(f64, f64)> = self.poses.iter().enumerate().map(|(i, p)| (i as f64, p.residual_mg)).collect();
+        let after: Vec<(f64, f64)> =
+            self.poses.iter().enumerate().map(|(i, p)| (i as f64, p.residual_after_mg.unwrap_or(f64::NAN))).collect();
+        let after_name = format!("after ({})", self.verdict);
+        line_chart(
+            &dir.join("residual_per_pose.svg"),
+            "Modulus residual per pose",
+            "pose",
+            "residual (mg)",
+            &[Series { name: "nominal", points: before }, Series { name: &after_name, points: after }],
+            Scale::Linear,
+        )?;
+        let mut by_time: Vec<(f64, f64)> = self.poses.iter().map(|p| (p.t_mid_s, p.residual_mg)).collect();
+        by_time.sort_by(|a, b| a.0.total_cmp(&b.0));
+        line_chart(
+            &dir.join("residual_vs_time.svg"),
+            "Modulus residual against time",
+            "time (s)",
+            "residual (mg)",
+            &[Series { name: "nominal", points: by_time }],
+            Scale::Linear,
+        )?;
+        let mut by_temp: Vec<(f64, f64)> =
+            self.poses.iter().filter_map(|p| p.temp_c.map(|t| (t, p.residual_mg))).collect();
+        if by_temp.len() == self.poses.len() && !by_temp.is_empty() {
+            by_temp.sort_by(|a, b| a.0.total_cmp(&b.0));
+            line_chart(
+                &dir.join("residual_vs_temperature.svg"),
+                "Modulus residual against temperature",
+                "temperature (C)",
+                "residual (mg)",
+                &[Series { name: "nominal", points: by_temp }],
+                Scale::Linear,
+            )?;
+        }
+        let tau = |v: &[f64]| -> Vec<(f64, f64)> { self.allan.tau_s.iter().copied().zip(v.iter().copied()).collect() };
+        line_chart(
+            &dir.join("allan_deviation.svg"),
+            "Allan deviation of the longest rest",
+            "tau (s)",
+            "mg",
+            &[
+                Series { name: "measured", points: tau(&self.allan.adev_mg) },
+                Series { name: "white noise", points: tau(&self.allan.white_mg) },
+            ],
+            Scale::LogLog,
+        )
+    }
+}
