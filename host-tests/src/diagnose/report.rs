@@ -364,3 +364,100 @@ impl<'a> From<&'a Candidate> for RankedCandidate<'a> {
         Self { effect: c.effect, heldout_gain: c.heldout_gain, within_gain: c.within_gain, evidence: c.evidence() }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pose(t_mid_s: f64, direction: [f64; 3]) -> PoseReport {
+        PoseReport {
+            t_mid_s,
+            duration_s: 5.0,
+            temp_c: None,
+            direction,
+            residual_mg: 0.5,
+            expected_mg: 0.1,
+            residual_after_mg: None,
+            early_late_mg: 0.0,
+            within_chi2: 12.0,
+        }
+    }
+
+    fn diagnosis() -> Diagnosis {
+        let gap = Gap {
+            real_rmse_mg: 2.0,
+            sim_rmse_mg: 1.0,
+            sim_spread_mg: 0.1,
+            z: 10.0,
+            significant: true,
+            ratio_before: 2.0,
+            real_rmse_after_mg: f64::NAN,
+            sim_rmse_after_mg: 1.0,
+            ratio_after: 2.0,
+        };
+        let candidate = Candidate {
+            effect: "drift",
+            applicable: true,
+            heldout_ratio: 1.5,
+            heldout_gain: 0.25,
+            ratio_after: 1.2,
+            extra_params: 3,
+            detail: "tau 5 s".into(),
+            within_gain: f64::NAN,
+            within_detail: String::new(),
+            variants: vec![("tau 5 s".into(), 1.5)],
+        };
+        Diagnosis {
+            file: "f.csv".into(),
+            samples: 10,
+            units: "g".into(),
+            gravity: 9.81,
+            seed: 1,
+            repeats: 2,
+            params: Params::default(),
+            white_mg: [0.1; 3],
+            gap,
+            poses: vec![pose(1.0, [0.0, 0.0, 1.0]), pose(9.0, [1.0, 0.0, 0.0])],
+            allan: Allan { rest_s: 5.0, tau_s: vec![0.1], adev_mg: vec![0.2], white_mg: vec![0.1] },
+            candidates: vec![candidate],
+            probes: vec![],
+            heldout_ratio_nominal: 3.0,
+            verdict: "unexplained",
+            unexplained_where: Some("one orientation: +z".into()),
+            explained: false,
+            shrink: 0.0,
+        }
+    }
+
+    #[test]
+    fn the_document_has_the_documented_shape_and_non_finite_numbers_are_null() {
+        let json = diagnosis().to_json();
+        let text = json.to_string();
+        assert!(text.contains(r#""variants":[{"detail":"tau 5 s","heldout_ratio":1.5}]"#), "{text}");
+        assert!(json["candidates"][0]["within_gain"].is_null());
+        assert!(json["gap"]["real_rmse_after_mg"].is_null());
+        assert_eq!(json["candidates_ranked"][0]["evidence"], 0.25);
+        let row = json["where"]["per_pose"][1].as_object().unwrap();
+        let keys: Vec<&str> = row.keys().map(String::as_str).collect();
+        let expected = [
+            "direction",
+            "duration_s",
+            "early_late_mg",
+            "expected_mg",
+            "index",
+            "orientation",
+            "residual_after_mg",
+            "residual_mg",
+            "t_mid_s",
+            "temp_c",
+            "within_chi2",
+        ];
+        assert_eq!(keys, expected);
+        assert_eq!(row["index"], 1);
+        assert!(json["where"]["temperature"].is_null());
+        assert_eq!(json["where"]["noise"]["ratio_at_longest_tau"], 2.0);
+        assert_eq!(json["verdict"]["where"], "one orientation: +z");
+        assert!(json["verdict"]["heldout_gain"].is_null());
+        assert_eq!(json["poses"], 2);
+    }
+}
