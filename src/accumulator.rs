@@ -88,19 +88,70 @@ fn i64_to_f32(v: i64) -> f32 {
     (high as i32) as f32 * TWO_POW_32 + low as f32
 }
 
+/// `x / d` and `x % d` without the compiler's 64-bit division (`__udivmoddi4`, ~1 KB of flash on a
+/// Cortex-M): for `d < 2^16` four hardware 32-bit divisions on 16-bit digits, else 64 shift-and-subtract
+/// steps. Called once per pose.
+fn div_rem_u64(x: u64, d: u32) -> (u64, u32) {
+    let d = d.max(1);
+    let mut q = 0u64;
+    if d <= 0xFFFF {
+        let mut r = 0u32;
+        for digit in (0..4).rev() {
+            // r < d < 2^16: the partial dividend fits in 32 bits.
+            let part = (r << 16) | ((x >> (16 * digit)) & 0xFFFF) as u32;
+            q |= u64::from(part / d) << (16 * digit);
+            r = part % d;
+        }
+        return (q, r);
+    }
+    let (d, mut r) = (u64::from(d), 0u64);
+    for bit in (0..64).rev() {
+        // r < d <= 2^32 before the shift: r stays below 2^33.
+        r = (r << 1) | ((x >> bit) & 1);
+        if r >= d {
+            r -= d;
+            q |= 1 << bit;
+        }
+    }
+    (q, r as u32)
+}
+
+/// Floor division of `x` by `d`: `x = q d + r` with `0 <= r < d`.
+fn div_rem_euclid_i64(x: i64, d: u32) -> (i64, u32) {
+    let (q, r) = div_rem_u64(x.unsigned_abs(), d);
+    match (x < 0, r) {
+        (false, _) => (q as i64, r),
+        (true, 0) => (-(q as i64), 0),
+        (true, r) => (-(q as i64) - 1, d.max(1) - r),
+    }
+}
+
+/// `v` rounded once to the nearest `f32` (ties to even), from its top 24 bits and a sticky rest: the
+/// compiler's `__aeabi_ul2f` without linking it.
+fn u64_to_f32(v: u64) -> f32 {
+    let bits = 64 - v.leading_zeros();
+    if bits <= 24 {
+        return (v as u32) as f32;
+    }
+    let shift = bits - 24;
+    let (mantissa, rest, half) = (v >> shift, v & ((1 << shift) - 1), 1u64 << (shift - 1));
+    let up = rest > half || (rest == half && mantissa & 1 == 1);
+    // At most 2^24 (exact in f32) times an exact power of two.
+    ((mantissa + u64::from(up)) as u32) as f32 * f32::from_bits((127 + shift) << 23)
+}
+
 /// `total / n` rounded once to the nearest `f32` (integer division of the total scaled to at least 26
 /// quotient bits, the remainder kept as a sticky bit, one correctly rounded conversion, an exact
-/// power-of-two scaling): the exact mean of integer samples without `f64`.
+/// power-of-two scaling): the exact mean of integer samples without `f64` nor 64-bit library calls.
 fn ratio_to_f32(total: i64, n: u32) -> f32 {
-    let n = u64::from(n.max(1));
+    let n = n.max(1);
     let magnitude = total.unsigned_abs();
     let bits = |x: u64| 64 - x.leading_zeros();
     // magnitude << shift has at most max(bits(magnitude), 27 + bits(n)) <= 63 bits; the quotient has >= 26.
-    let shift = (27 + bits(n)).saturating_sub(bits(magnitude));
-    let scaled = magnitude << shift;
-    let (q, r) = (scaled / n, scaled % n);
+    let shift = (27 + bits(u64::from(n))).saturating_sub(bits(magnitude));
+    let (q, r) = div_rem_u64(magnitude << shift, n);
     let unscale = f32::from_bits((127 - shift) << 23);
-    let v = (q | u64::from(r != 0)) as f32 * unscale;
+    let v = u64_to_f32(q | u64::from(r != 0)) * unscale;
     if total < 0 { -v } else { v }
 }
 
@@ -170,12 +221,12 @@ impl Reading for i16 {
         let n = i64::from(count);
         let mean = ratio_to_f32(n * i64::from(reference) + sum, count);
         // sum = q n + rem with 0 <= rem < n.
-        let (q, rem) = (sum.div_euclid(n), sum.rem_euclid(n));
+        let (q, rem) = div_rem_euclid_i64(sum, count);
         // Squares about reference + q, exactly: sum (d - q)^2 = sum_sq - 2 q sum + n q^2 is below 2^63
         // and is computed modulo 2^64, so the wrapped intermediate terms cancel exactly.
         let about_q = sum_sq.wrapping_sub(q.wrapping_mul(sum).wrapping_mul(2)).wrapping_add(n.wrapping_mul(q * q));
-        let fraction = rem as f32 / n as f32;
-        let variance = i64_to_f32(about_q) / n as f32 - fraction * fraction;
+        let fraction = rem as f32 / count as f32;
+        let variance = i64_to_f32(about_q) / count as f32 - fraction * fraction;
         (mean, if variance > 0.0 { variance } else { 0.0 })
     }
     #[inline]
@@ -814,6 +865,28 @@ mod tests {
         for total in -2000i64..2000 {
             let n = 997;
             assert_eq!(ratio_to_f32(total * 16_384 + 5, n), ((total * 16_384 + 5) as f64 / 997.0) as f32);
+        }
+    }
+
+    #[test]
+    fn long_division_and_rounding_match_the_compiler() {
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        for d in [1u32, 2, 3, 7, 997, 65_535, 65_537, 1 << 31, u32::MAX] {
+            for _ in 0..200 {
+                x = x.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+                for v in [x, x >> 17, x >> 40, u64::MAX, 0] {
+                    let (q, r) = div_rem_u64(v, d);
+                    assert_eq!((q, u64::from(r)), (v / u64::from(d), v % u64::from(d)), "{v} / {d}");
+                    let signed = v as i64 >> 3;
+                    let euclid = (signed.div_euclid(i64::from(d)), signed.rem_euclid(i64::from(d)) as u32);
+                    assert_eq!(div_rem_euclid_i64(signed, d), euclid, "{signed} / {d}");
+                    assert_eq!(u64_to_f32(v).to_bits(), (v as f32).to_bits(), "{v}");
+                }
+            }
+        }
+        // Ties round to even.
+        for v in [(1u64 << 25) + 1, (1 << 25) + 3, (1 << 40) + (1 << 16), (1 << 40) + (3 << 16)] {
+            assert_eq!(u64_to_f32(v).to_bits(), (v as f32).to_bits(), "{v}");
         }
     }
 
