@@ -129,7 +129,7 @@ pub fn toolchain() -> Result<String, String> {
 }
 
 /// The executable of example `name` in cargo's `--message-format=json` output.
-fn example_executable(messages: &[u8], name: &str) -> Option<PathBuf> {
+pub fn example_executable(messages: &[u8], name: &str) -> Option<PathBuf> {
     String::from_utf8_lossy(messages).lines().find_map(|line| {
         let v: serde_json::Value = serde_json::from_str(line).ok()?;
         let is_example = v["target"]["kind"].as_array()?.iter().any(|k| k == "example");

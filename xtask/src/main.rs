@@ -1,9 +1,11 @@
 //! `cargo xtask`: project tasks that build firmware and run tools, kept out of the library and the host CLI.
 //!
 //! - `cargo xtask report [--json] [--check] [--target TRIPLE]...`: the firmware size and cycle report (see
-//!   [`report`]), Cortex-M4F against its budgets, Cortex-M0+ and RISC-V beside it.
+//!   [`report`]), Cortex-M4F against its budgets, Cortex-M0+ and RISC-V beside it, and the feature costs.
+//! - `cargo xtask feature-costs [--json]`: the flash cost of each opt-in feature alone (see [`features`]).
 
 mod elf;
+mod features;
 mod firmware;
 mod report;
 
@@ -32,6 +34,12 @@ enum Task {
         #[arg(long = "target", value_name = "TRIPLE")]
         targets: Vec<String>,
     },
+    /// The flash cost of each opt-in feature on the Cortex-M4F (also part of `report`), without the bench.
+    FeatureCosts {
+        /// Machine-readable output on stdout.
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 fn main() -> ExitCode {
@@ -41,6 +49,13 @@ fn main() -> ExitCode {
             Ok(false) => ExitCode::from(1),
             Err(e) => {
                 eprintln!("xtask report: {e}");
+                ExitCode::from(2)
+            }
+        },
+        Task::FeatureCosts { json } => match features::run(json) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("xtask feature-costs: {e}");
                 ExitCode::from(2)
             }
         },

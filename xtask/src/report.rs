@@ -13,6 +13,9 @@
 //!    ceiling; the others are goals, reported with how far they are missed. The Cortex-M0+ and RISC-V
 //!    figures have no budget: a failure to build or emulate them is reported, and does not fail `--check`.
 //!
+//! 5. for the Cortex-M4F, also the flash cost of each opt-in feature ([`crate::features`]): a table and
+//!    `feature_costs` in the JSON, never a `--check` failure.
+//!
 //! Needs `python3` with `unicorn`, `capstone` and `pyelftools` (`python3 -m pip install unicorn capstone
 //! pyelftools`; `PYTHON` selects the interpreter) and the targets (`rustup target add thumbv7em-none-eabihf
 //! thumbv6m-none-eabi riscv32imc-unknown-none-elf`).
@@ -23,6 +26,7 @@ use std::fmt::Write;
 use serde::Serialize;
 
 use crate::elf::ImageSizes;
+use crate::features::{self, FeatureCost};
 use crate::firmware::{self, CodeFunction, Emulation, FUNCTIONS, Measured, PROFILE, TARGETS, Target, stdout_field};
 
 /// One budget (a goal of the "Firmware" issue): a figure of the Cortex-M4F report and its upper limit.
@@ -173,6 +177,10 @@ pub struct Report {
     pub targets: Vec<TargetReport>,
     /// Targets that could not be built or emulated, with why.
     pub not_measured: BTreeMap<&'static str, String>,
+    /// The flash cost of each opt-in feature on the Cortex-M4F (empty when not measured).
+    pub feature_costs: Vec<FeatureCost>,
+    /// Why the feature costs were not measured (not a `--check` failure).
+    pub feature_costs_not_measured: Option<String>,
 }
 
 /// Runs the report on `triples` (all [`TARGETS`] when empty); prints it (Markdown, or JSON when `json`).
@@ -220,6 +228,12 @@ fn measure(targets: &[Target]) -> Result<Report, String> {
             Err(e) => drop(not_measured.insert(target.triple, e)),
         }
     }
+    // Built while the emulators run.
+    let (feature_costs, feature_costs_not_measured) = if targets.iter().any(|t| t.triple == features::TRIPLE) {
+        features::measure().map_or_else(|e| (Vec::new(), Some(e)), |c| (c, None))
+    } else {
+        (Vec::new(), Some(format!("{} not selected", features::TRIPLE)))
+    };
     let mut reports = Vec::new();
     for (target, child, bench_elf, qemu_elf) in running {
         let measured = firmware::finish_emulator(child).map(|emulation| Measured { bench_elf, qemu_elf, emulation });
@@ -229,7 +243,15 @@ fn measure(targets: &[Target]) -> Result<Report, String> {
         }
     }
     let budgets = budget_statuses(reports.iter().find(|r| r.target == TARGETS[0].triple));
-    Ok(Report { toolchain: firmware::toolchain()?, profile: PROFILE, budgets, targets: reports, not_measured })
+    Ok(Report {
+        toolchain: firmware::toolchain()?,
+        profile: PROFILE,
+        budgets,
+        targets: reports,
+        not_measured,
+        feature_costs,
+        feature_costs_not_measured,
+    })
 }
 
 fn function_figures(emulation: &Emulation) -> Result<BTreeMap<&'static str, FunctionFigures>, String> {
@@ -487,6 +509,7 @@ fn markdown(report: &Report) -> String {
     for r in &report.targets {
         top_functions_table(&mut s, r);
     }
+    features::table(&mut s, &report.feature_costs, report.feature_costs_not_measured.as_deref());
     for (target, why) in &report.not_measured {
         let _ = writeln!(s, "\n{target}: not measured: {}", why.lines().next().unwrap_or(""));
     }
