@@ -202,11 +202,8 @@ mod firmware {
         /// A blob with every v2 field present, opaque to the optimiser.
         fn full_blob() -> Blob {
             let mut blob = Blob::new(black_box(Params::IDENTITY), black_box(9.806_65));
-            blob.sensor = black_box(Some(accelcal::blob::SensorSetup {
-                full_scale_g: 2.0,
-                lsb_per_g: 16384.0,
-                sensor_id: 0x68,
-            }));
+            blob.sensor =
+                black_box(Some(accelcal::blob::SensorSetup { full_scale_g: 2.0, lsb_per_g: 16384.0, sensor_id: 0x68 }));
             blob.temperature_c = black_box(Some(25.0));
             blob.effects = black_box(Some(accelcal::blob::Effects::default()));
             blob

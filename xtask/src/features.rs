@@ -45,9 +45,17 @@ pub struct Row {
 /// The rows of the table, in order.
 pub const ROWS: [Row; 6] = [
     Row { what: "blob v2 encode + decode", with: image("blob", false), without: image("none", false) },
-    Row { what: "storage new + store + load (with the blob)", with: image("storage", false), without: image("none", false) },
+    Row {
+        what: "storage new + store + load (with the blob)",
+        with: image("storage", false),
+        without: image("none", false),
+    },
     Row { what: "storage beyond the blob", with: image("storage", false), without: image("blob", false) },
-    Row { what: "accelerometer adapter (one read)", with: image("accelerometer", false), without: image("none", false) },
+    Row {
+        what: "accelerometer adapter (one read)",
+        with: image("accelerometer", false),
+        without: image("none", false),
+    },
     Row { what: "MPU-6050 driver (init + one read)", with: image("mpu6050", false), without: image("none", false) },
     Row {
         what: "default features on the calibration path",
