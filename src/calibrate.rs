@@ -245,10 +245,20 @@ fn seed_population<R: Rng, const POP: usize>(
     norm: &[NormPose],
     start: &Deviation,
 ) -> Result<(), GaError> {
-    let cost = |x: &Deviation| objective(x, norm);
-    ga.initialize(&cost)?;
-    ga.inject(start, &cost);
+    ga.initialize(&PoseCost(norm))?;
+    ga.inject(start, &PoseCost(norm));
     Ok(())
+}
+
+/// The calibration GA's cost: the normalised objective over the poses. One type for every GA call of
+/// a calibration, so that the GA's code is instantiated once.
+#[derive(Clone, Copy)]
+struct PoseCost<'a>(&'a [NormPose]);
+
+impl crate::ga::CostFunction<PARAM_COUNT> for PoseCost<'_> {
+    fn cost(&self, x: &Deviation) -> f32 {
+        objective(x, self.0)
+    }
 }
 
 /// The GA's search box for `intervals` around `start` (held parameters pinned to a zero-width-like box).
@@ -260,26 +270,29 @@ pub fn search_box(
     set: &PoseSet<'_>,
     held: &[bool; PARAM_COUNT],
 ) -> Result<SearchBox<PARAM_COUNT>, GaError> {
-    let sigmas = match intervals {
-        Intervals::Fixed(widths) => return widths.search_box(start),
-        Intervals::Uncertainty { sigmas } => *sigmas,
+    let half = match intervals {
+        Intervals::Fixed(widths) => widths.half_widths(),
+        Intervals::Uncertainty { sigmas } => uncertainty_half_widths(*sigmas, start, frame, set, held)
+            .unwrap_or_else(|| SearchWidths::DEFAULT.half_widths()),
     };
-    let mut cov = match information_matrix(start, frame, set, held, true) {
-        Some(info) => info,
-        None => return SearchWidths::DEFAULT.search_box(start),
-    };
+    SearchBox::around(start, &half)
+}
+
+/// `sigmas` standard deviations of each parameter at `start` ([`Intervals::Uncertainty`]); `None` when
+/// the covariance cannot be formed.
+fn uncertainty_half_widths(
+    sigmas: f32,
+    start: &Deviation,
+    frame: &Frame,
+    set: &PoseSet<'_>,
+    held: &[bool; PARAM_COUNT],
+) -> Option<[f32; PARAM_COUNT]> {
+    let mut cov = information_matrix(start, frame, set, held, true)?;
     if !crate::verdict::covariance_holding_in_place(&mut cov, held) {
-        return SearchWidths::DEFAULT.search_box(start);
+        return None;
     }
-    let mut lower = *start;
-    let mut upper = *start;
-    for i in 0..PARAM_COUNT {
-        // A floor keeps the box valid where a parameter is held or determined exactly.
-        let half = larger(sigmas * crate::linalg::sqrt_f32(larger(cov[i][i], 0.0)), MIN_HALF_WIDTH);
-        lower[i] -= half;
-        upper[i] += half;
-    }
-    SearchBox::new(lower, upper)
+    // A floor keeps the box valid where a parameter is held or determined exactly.
+    Some(core::array::from_fn(|i| larger(sigmas * crate::linalg::sqrt_f32(larger(cov[i][i], 0.0)), MIN_HALF_WIDTH)))
 }
 
 /// Smallest half-width of a GA interval, deviation units.
@@ -298,7 +311,7 @@ fn run_ga<R: Rng, const POP: usize>(
 ) -> Result<crate::ga::GaReport<PARAM_COUNT>, GaError> {
     let mut ga = Ga::<R, POP, PARAM_COUNT>::empty(config, bounds, rng);
     seed_population(&mut ga, norm, start)?;
-    Ok(ga.run(&|x: &Deviation| objective(x, norm)))
+    Ok(ga.run(&PoseCost(norm)))
 }
 
 /// What the optimiser did.
@@ -533,7 +546,7 @@ impl<R: Rng, const POP: usize, const MAX_POSES: usize> Calibrator<R, POP, MAX_PO
         let mut run = Optimised::at(self.prepared.start);
         if let Some(ga) = self.ga.as_mut() {
             let Some(termination) = ga.termination() else {
-                ga.step(&|x: &Deviation| objective(x, norm));
+                ga.step(&PoseCost(norm));
                 return Ok(Step::Running { generation: ga.generation() });
             };
             run = Optimised {

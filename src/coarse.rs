@@ -108,26 +108,15 @@ impl SearchWidths {
     /// The documented defaults.
     pub const DEFAULT: Self = Self { bias_g: 0.01, scale_rel: 0.01, nonorth: 0.03 };
 
+    /// The half-widths per parameter, in the deviation coordinates of [`crate::frame`].
+    pub fn half_widths(&self) -> [f32; PARAM_COUNT] {
+        let [b, s, n] = [self.bias_g, self.scale_rel, self.nonorth];
+        [b, b, b, s, s, s, n, n, n]
+    }
+
     /// The box in the deviation coordinates of [`crate::frame`], centred on `center`.
     pub fn search_box(&self, center: &Deviation) -> Result<SearchBox<PARAM_COUNT>, GaError> {
-        let half = [
-            self.bias_g,
-            self.bias_g,
-            self.bias_g,
-            self.scale_rel,
-            self.scale_rel,
-            self.scale_rel,
-            self.nonorth,
-            self.nonorth,
-            self.nonorth,
-        ];
-        let mut lower = [0.0; PARAM_COUNT];
-        let mut upper = [0.0; PARAM_COUNT];
-        for i in 0..PARAM_COUNT {
-            lower[i] = center[i] - half[i];
-            upper[i] = center[i] + half[i];
-        }
-        SearchBox::new(lower, upper)
+        SearchBox::around(center, &self.half_widths())
     }
 }
 

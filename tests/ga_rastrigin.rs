@@ -1,6 +1,6 @@
 //! The GA on the paper's test function (Fig. 3): success rates and mean best cost per generation.
 
-use accelcal::ga::{Ga, GaConfig, Operators, SearchBox, rastrigin};
+use accelcal::ga::{Aga, Ga, GaConfig, Laga, Operators, SearchBox, Taga, rastrigin};
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro128PlusPlus;
 
@@ -10,10 +10,11 @@ const SEEDS: u64 = 200;
 const TARGET: f32 = 1e-3;
 
 /// Best cost per generation (index 0 = initial population) of one seeded run.
-fn trace(operators: Operators, seed: u64) -> [f32; GENERATIONS as usize + 1] {
+fn trace<O: Operators>(operators: O, seed: u64) -> [f32; GENERATIONS as usize + 1] {
     let bounds = SearchBox::new([-5.12; 2], [5.12; 2]).unwrap();
     let config = GaConfig { operators, max_generations: GENERATIONS, ..GaConfig::DEFAULT };
-    let mut ga: Ga<_, POP, 2> = Ga::new(config, bounds, Xoshiro128PlusPlus::seed_from_u64(seed), &rastrigin).unwrap();
+    let mut ga: Ga<_, POP, 2, O> =
+        Ga::new(config, bounds, Xoshiro128PlusPlus::seed_from_u64(seed), &rastrigin).unwrap();
     let mut out = [0.0; GENERATIONS as usize + 1];
     out[0] = ga.best_cost();
     for g in 1..=GENERATIONS as usize {
@@ -23,7 +24,7 @@ fn trace(operators: Operators, seed: u64) -> [f32; GENERATIONS as usize + 1] {
     out
 }
 
-fn success_and_mean(operators: Operators) -> (usize, [f32; GENERATIONS as usize + 1]) {
+fn success_and_mean<O: Operators>(operators: O) -> (usize, [f32; GENERATIONS as usize + 1]) {
     let mut successes = 0;
     let mut mean = [0.0; GENERATIONS as usize + 1];
     for seed in 0..SEEDS {
@@ -38,7 +39,7 @@ fn success_and_mean(operators: Operators) -> (usize, [f32; GENERATIONS as usize 
 
 #[test]
 fn taga_reaches_rastrigin_target_in_95_percent_of_200_seeds() {
-    let (successes, _) = success_and_mean(Operators::TAGA_PAPER);
+    let (successes, _) = success_and_mean(Taga::PAPER);
     println!("TAGA: {successes}/{SEEDS} seeds below {TARGET} within {GENERATIONS} generations");
     assert!(successes * 100 >= 95 * SEEDS as usize, "{successes}/{SEEDS}");
 }
@@ -46,9 +47,12 @@ fn taga_reaches_rastrigin_target_in_95_percent_of_200_seeds() {
 #[test]
 fn fig3_ranks_taga_before_laga_before_aga() {
     let mut results = Vec::new();
-    for (name, op) in [("AGA", Operators::AGA_PAPER), ("LAGA", Operators::LAGA_PAPER), ("TAGA", Operators::TAGA_PAPER)]
-    {
-        let (successes, mean) = success_and_mean(op);
+    let runs = [
+        ("AGA", success_and_mean(Aga::PAPER)),
+        ("LAGA", success_and_mean(Laga::PAPER)),
+        ("TAGA", success_and_mean(Taga::PAPER)),
+    ];
+    for (name, (successes, mean)) in runs {
         println!(
             "{name}: success {successes}/{SEEDS}; mean best cost at gen 10 {:.3e}, 25 {:.3e}, 50 {:.3e}, 100 {:.3e}",
             mean[10], mean[25], mean[50], mean[100]
@@ -77,7 +81,10 @@ fn run_terminates_with_the_reason() {
     let r = ga.run(&rastrigin);
     assert_eq!(r.termination, Termination::TargetReached);
     assert!(r.cost <= 0.5);
-    assert_eq!(r.evaluations, POP as u32 * (1 + r.generations) - GaConfig::DEFAULT.elites as u32 * r.generations);
+    assert_eq!(
+        r.evaluations,
+        POP as u32 * (1 + r.generations) - GaConfig::<Taga>::DEFAULT.elites as u32 * r.generations
+    );
 
     let flat = |_: &[f32; 2]| 1.0f32;
     let cfg = GaConfig { stall_generations: 5, ..GaConfig::DEFAULT };

@@ -10,7 +10,7 @@ use accelcal::accumulator::Pose;
 use accelcal::calibrate::{Calibration, CalibrationConfig, Init, Intervals, Method, NormalizedPoses};
 use accelcal::coarse::SearchWidths;
 use accelcal::ellipsoid::OutlierRule;
-use accelcal::ga::{Ga, GaConfig, Operators, SearchBox, rastrigin};
+use accelcal::ga::{Aga, Ga, GaConfig, Laga, Operators, SearchBox, Taga, rastrigin};
 use accelcal::model::{PARAM_COUNT, PARAM_NAMES, Params};
 use accelcal::solve::levenberg_marquardt;
 use accelcal::verdict::{deviation_covariance, param_std};
@@ -286,31 +286,33 @@ pub fn run(options: &PaperOptions, mut progress: impl FnMut()) -> PaperReport {
 /// Fig. 3: AGA, LAGA and TAGA (the paper's constants) on 2-D Rastrigin, population 40, 100
 /// generations, the same seeds for each.
 pub fn operator_comparison(seeds: u64) -> Vec<OperatorResult> {
+    vec![
+        operator_result("aga", Aga::PAPER, seeds),
+        operator_result("laga", Laga::PAPER, seeds),
+        operator_result("taga", Taga::PAPER, seeds),
+    ]
+}
+
+/// One policy of [`operator_comparison`].
+fn operator_result<O: Operators>(name: &'static str, operators: O, seeds: u64) -> OperatorResult {
     const GENERATIONS: usize = 100;
-    let bounds = match SearchBox::new([-5.12; 2], [5.12; 2]) {
-        Ok(b) => b,
-        Err(_) => return Vec::new(),
-    };
-    [("aga", Operators::AGA_PAPER), ("laga", Operators::LAGA_PAPER), ("taga", Operators::TAGA_PAPER)]
-        .into_iter()
-        .map(|(name, operators)| {
-            let mut mean_best = vec![0.0; GENERATIONS + 1];
-            let mut successes = 0;
-            for seed in 0..seeds {
-                let config = GaConfig { operators, max_generations: GENERATIONS as u32, ..GaConfig::DEFAULT };
-                let rng = Xoshiro128PlusPlus::seed_from_u64(seed);
-                let Ok(mut ga) = Ga::<_, POPULATION, 2>::new(config, bounds, rng, &rastrigin) else { continue };
-                mean_best[0] += f64::from(ga.best_cost());
-                for g in 1..=GENERATIONS {
-                    ga.step(&rastrigin);
-                    mean_best[g] += f64::from(ga.best_cost());
-                }
-                successes += u64::from(ga.best_cost() < 1e-3);
+    let mut mean_best = vec![0.0; GENERATIONS + 1];
+    let mut successes = 0;
+    if let Ok(bounds) = SearchBox::new([-5.12; 2], [5.12; 2]) {
+        for seed in 0..seeds {
+            let config = GaConfig { operators, max_generations: GENERATIONS as u32, ..GaConfig::DEFAULT };
+            let rng = Xoshiro128PlusPlus::seed_from_u64(seed);
+            let Ok(mut ga) = Ga::<_, POPULATION, 2, O>::new(config, bounds, rng, &rastrigin) else { continue };
+            mean_best[0] += f64::from(ga.best_cost());
+            for g in 1..=GENERATIONS {
+                ga.step(&rastrigin);
+                mean_best[g] += f64::from(ga.best_cost());
             }
-            mean_best.iter_mut().for_each(|v| *v /= seeds.max(1) as f64);
-            OperatorResult { name, successes, seeds, mean_best }
-        })
-        .collect()
+            successes += u64::from(ga.best_cost() < 1e-3);
+        }
+    }
+    mean_best.iter_mut().for_each(|v| *v /= seeds.max(1) as f64);
+    OperatorResult { name, successes, seeds, mean_best }
 }
 
 /// Fig. 6/7: best and mean cost (`fE`, (m/s^2)^4) and the best parameters per generation of one TAGA

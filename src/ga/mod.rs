@@ -2,6 +2,8 @@
 //!
 //! - **Problem**: any [`CostFunction`] (smaller is better) over a [`SearchBox`].
 //! - **Solver**: [`GaConfig`] (operator policy, elitism, termination) and [`Ga`] (the state).
+//! - **Operator policy**: a type ([`Taga`], the default; [`Aga`], [`Laga`]: [`Operators`]), so a firmware
+//!   links the one it runs.
 //! - **Fitness transform**: `f = -cost`. The adaptive formulas use `(f - f_avg) / (f_max - f_avg)`, which
 //!   is invariant to affine transforms of `f` but not to e.g. `1 / (1 + cost)`; with `-cost` the policies
 //!   see the cost differences as they are.
@@ -21,17 +23,23 @@
 //! 2, 3, 5 and 8 it converged fastest there and kept 200/200 on Rastrigin.
 //!
 //! ```
-//! use accelcal::ga::{Ga, GaConfig, SearchBox, rastrigin};
+//! use accelcal::ga::{Aga, Ga, GaConfig, Operators, SearchBox, rastrigin};
 //! use rand_xoshiro::Xoshiro128PlusPlus;
 //! use rand_core::SeedableRng;
 //! let bounds = SearchBox::new([-5.12; 2], [5.12; 2]).unwrap();
-//! let config = GaConfig { max_generations: 150, ..GaConfig::DEFAULT };
+//! let config = GaConfig { max_generations: 150, ..GaConfig::DEFAULT }; // TAGA
 //! let mut ga: Ga<_, 40, 2> = Ga::new(config, bounds, Xoshiro128PlusPlus::seed_from_u64(1), &rastrigin).unwrap();
-//! let report = ga.run(&rastrigin);
-//! assert!(report.cost < 1e-2);
+//! assert!(ga.run(&rastrigin).cost < 1e-2);
+//! let aga = GaConfig { operators: Aga::PAPER, ..GaConfig::DEFAULT };
+//! let mut ga = Ga::<_, 40, 2, Aga>::new(aga, bounds, Xoshiro128PlusPlus::seed_from_u64(1), &rastrigin).unwrap();
+//! assert!(ga.run(&rastrigin).cost.is_finite());
 //! ```
 
+mod operators;
+
 use rand_core::Rng;
+
+pub use operators::{Aga, Curve, FitnessStats, Laga, Operators, Taga};
 
 /// Something to minimise over `DIM` real genes.
 pub trait CostFunction<const DIM: usize> {
@@ -66,7 +74,7 @@ const LOCAL_STEP: f32 = 8.0;
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum GaError {
-    /// Interval `dim` is empty, inverted or not finite (`lower >= upper`).
+    /// Interval `dim` is empty, inverted or not finite (`lower >= upper`, or an infinite or NaN width).
     InvalidInterval {
         /// The gene index.
         dim: u8,
@@ -98,14 +106,30 @@ pub struct SearchBox<const DIM: usize> {
 }
 
 impl<const DIM: usize> SearchBox<DIM> {
-    /// A box; every interval must be finite with `lower < upper`.
+    /// A box; every interval must have `lower < upper` and a finite width.
     pub fn new(lower: [f32; DIM], upper: [f32; DIM]) -> Result<Self, GaError> {
+        Self { lower, upper }.checked()
+    }
+
+    /// The box `center - half ..= center + half`, gene by gene (checked as by [`SearchBox::new`]).
+    pub fn around(center: &[f32; DIM], half: &[f32; DIM]) -> Result<Self, GaError> {
+        let mut out = Self { lower: *center, upper: *center };
         for i in 0..DIM {
-            if !(lower[i].is_finite() && upper[i].is_finite() && lower[i] < upper[i]) {
+            out.lower[i] -= half[i];
+            out.upper[i] += half[i];
+        }
+        out.checked()
+    }
+
+    /// `self` if every width `upper - lower` is positive and finite (so no bound is infinite or NaN).
+    fn checked(self) -> Result<Self, GaError> {
+        for i in 0..DIM {
+            let width = self.upper[i] - self.lower[i];
+            if !(width > 0.0 && width < f32::INFINITY) {
                 return Err(GaError::InvalidInterval { dim: i as u8 });
             }
         }
-        Ok(Self { lower, upper })
+        Ok(self)
     }
 
     /// Lower bounds.
@@ -129,169 +153,31 @@ impl<const DIM: usize> SearchBox<DIM> {
         } else {
             v
         };
-        // Comparisons, not `clamp` (which asserts `lo <= hi` and drags in a panic path) nor `min`/`max`
-        // (library calls on a Cortex-M4).
-        if r < lo {
+        self.clamp(i, r)
+    }
+
+    /// `v` clamped into the interval of gene `i`. Comparisons, not `f32::clamp` (which asserts `lo <= hi`
+    /// and drags in a panic path) nor `min`/`max` (library calls on a Cortex-M4).
+    #[inline(always)]
+    fn clamp(&self, i: usize, v: f32) -> f32 {
+        let (lo, hi) = (self.lower[i], self.upper[i]);
+        if v < lo {
             lo
-        } else if r > hi {
+        } else if v > hi {
             hi
         } else {
-            r
+            v
         }
-    }
-}
-
-/// The adaptive crossover / mutation policy (fitness `f = -cost`, larger is better).
-///
-/// All probabilities are clamped to `[0, 1]`: TAGA's `Pc1 = 1/(2 + lg N) + phi` exceeds 1 for
-/// `N < 1000` with the paper's `phi = 0.8`, so its crossover is certain early on.
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Operators {
-    /// Srinivas & Patnaik: `Pc = k1 (f_max - f') / (f_max - f_avg)` if `f' >= f_avg` else `k3`;
-    /// `Pm = k2 (f_max - f) / (f_max - f_avg)` if `f >= f_avg` else `k4`. As printed, the best
-    /// individual gets `Pc = Pm = 0`: once clones of it fill the population the search freezes.
-    Aga {
-        /// Crossover factor for above-average pairs (paper: 0.8).
-        k1: f32,
-        /// Mutation factor for above-average individuals (paper: 0.8).
-        k2: f32,
-        /// Crossover probability below average (paper: 0.05).
-        k3: f32,
-        /// Mutation probability below average (paper: 0.03).
-        k4: f32,
-    },
-    /// Linear adaptive: `Pc = Pc1 - (Pc1 - Pc2)(f' - f_avg)/(f_max - f_avg)` if `f' >= f_avg` else `Pc1`,
-    /// the same form for `Pm`. The paper prints `Pc1 = Pc2 = 0.8`, so its crossover is not adaptive.
-    Laga {
-        /// Crossover probability at and below average (paper: 0.8).
-        pc1: f32,
-        /// Crossover probability of the best (paper: 0.8).
-        pc2: f32,
-        /// Mutation probability at and below average (paper: 0.05).
-        pm1: f32,
-        /// Mutation probability of the best (paper: 0.03).
-        pm2: f32,
-    },
-    /// The paper's TAGA, eqs. (8)-(9): sinusoidal between `Pc1(N)` and `Pc2`, with
-    /// `Pc1 = 1/(2 + lg N) + phi` and `Pm1 = -0.1/(2 + 0.8 lg N) + varphi`, `N` the generation (from 1).
-    Taga {
-        /// Limit of `Pc1` (paper: 0.8).
-        phi: f32,
-        /// Crossover probability of the best (paper: 0.8).
-        pc2: f32,
-        /// Limit of `Pm1` (paper: 0.13).
-        varphi: f32,
-        /// Mutation probability of the best (paper: 0.01).
-        pm2: f32,
-    },
-}
-
-impl Operators {
-    /// AGA with the paper's constants.
-    pub const AGA_PAPER: Self = Self::Aga { k1: 0.8, k2: 0.8, k3: 0.05, k4: 0.03 };
-    /// LAGA ("IAGA" in the paper) with the paper's constants.
-    pub const LAGA_PAPER: Self = Self::Laga { pc1: 0.8, pc2: 0.8, pm1: 0.05, pm2: 0.03 };
-    /// TAGA with the paper's constants.
-    pub const TAGA_PAPER: Self = Self::Taga { phi: 0.8, pc2: 0.8, varphi: 0.13, pm2: 0.01 };
-
-    fn constants(&self) -> [f32; 4] {
-        match *self {
-            Self::Aga { k1, k2, k3, k4 } => [k1, k2, k3, k4],
-            Self::Laga { pc1, pc2, pm1, pm2 } => [pc1, pc2, pm1, pm2],
-            Self::Taga { phi, pc2, varphi, pm2 } => [phi, pc2, varphi, pm2],
-        }
-    }
-
-    /// Crossover probability for a pair whose better parent has fitness `f_better`.
-    pub fn crossover_probability(&self, f_better: f32, stats: &FitnessStats) -> f32 {
-        let above = stats.above_average(f_better);
-        let p = match *self {
-            Self::Aga { k1, k3, .. } => above.map_or(k3, |t| k1 * (1.0 - t)),
-            Self::Laga { pc1, pc2, .. } => above.map_or(pc1, |t| pc1 - (pc1 - pc2) * t),
-            Self::Taga { phi, pc2, .. } => {
-                let pc1 = 1.0 / (2.0 + stats.lg_generation) + phi;
-                above.map_or(pc1, |t| sine_blend(pc1, pc2, t))
-            }
-        };
-        unit_interval(p)
-    }
-
-    /// Per-gene mutation probability for an individual of fitness `f`.
-    pub fn mutation_probability(&self, f: f32, stats: &FitnessStats) -> f32 {
-        let above = stats.above_average(f);
-        let p = match *self {
-            Self::Aga { k2, k4, .. } => above.map_or(k4, |t| k2 * (1.0 - t)),
-            Self::Laga { pm1, pm2, .. } => above.map_or(pm1, |t| pm1 - (pm1 - pm2) * t),
-            Self::Taga { varphi, pm2, .. } => {
-                let pm1 = -0.1 / (2.0 + 0.8 * stats.lg_generation) + varphi;
-                above.map_or(pm1, |t| sine_blend(pm1, pm2, t))
-            }
-        };
-        unit_interval(p)
-    }
-}
-
-impl Default for Operators {
-    fn default() -> Self {
-        Self::TAGA_PAPER
-    }
-}
-
-/// `p` clamped to `[0, 1]`; NaN gives 0.
-fn unit_interval(p: f32) -> f32 {
-    if !(p > 0.0) {
-        0.0
-    } else if p > 1.0 {
-        1.0
-    } else {
-        p
-    }
-}
-
-/// `(p1 + p2)/2 - (p1 - p2)/2 sin(pi/2 t)`.
-fn sine_blend(p1: f32, p2: f32, t: f32) -> f32 {
-    0.5 * (p1 + p2) - 0.5 * (p1 - p2) * sin_half_pi(t)
-}
-
-/// `sin(pi/2 t)` for `t` in `[0, 1]`: its Taylor series to `t^9`, in `f32` (error below 7e-6;
-/// `libm::sinf` works in `f64`, which a Cortex-M4F computes in software).
-fn sin_half_pi(t: f32) -> f32 {
-    const C: [f32; 5] = [core::f32::consts::FRAC_PI_2, -0.645_964_1, 0.079_692_63, -0.004_681_754, 0.000_160_441_2];
-    let t2 = t * t;
-    t * (C[0] + t2 * (C[1] + t2 * (C[2] + t2 * (C[3] + t2 * C[4]))))
-}
-
-/// Population fitness statistics the adaptive policies need (`f = -cost`).
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct FitnessStats {
-    /// Largest fitness.
-    pub max: f32,
-    /// Mean fitness.
-    pub avg: f32,
-    /// `lg N` (base 10) of the generation `N` (from 1) being produced: TAGA's `Pc1` and `Pm1` use it.
-    pub lg_generation: f32,
-}
-
-impl FitnessStats {
-    /// `Some(t)` with `t = (f - f_avg) / (f_max - f_avg)` in `[0, 1]` when `f >= f_avg`, else `None`.
-    /// A population of equal fitness gives `t = 1` (everyone is the best).
-    pub fn above_average(&self, f: f32) -> Option<f32> {
-        if f < self.avg {
-            return None;
-        }
-        let spread = self.max - self.avg;
-        if spread > 0.0 { Some(unit_interval((f - self.avg) / spread)) } else { Some(1.0) }
     }
 }
 
 /// Solver settings. Every field is documented with its default ([`GaConfig::DEFAULT`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct GaConfig {
-    /// Operator policy. Defaults to [`Operators::TAGA_PAPER`].
-    pub operators: Operators,
+pub struct GaConfig<O = Taga> {
+    /// Operator policy. Defaults to the policy's paper constants ([`Operators::PAPER`]; [`Taga`] unless
+    /// another policy type is named).
+    pub operators: O,
     /// Best individuals copied unchanged into the next generation. Defaults to 2.
     pub elites: usize,
     /// Stop after this many generations. Defaults to 100.
@@ -310,10 +196,10 @@ pub struct GaConfig {
     pub global_mutation: f32,
 }
 
-impl GaConfig {
+impl<O: Operators> GaConfig<O> {
     /// The documented defaults.
     pub const DEFAULT: Self = Self {
-        operators: Operators::TAGA_PAPER,
+        operators: O::PAPER,
         elites: 2,
         max_generations: 100,
         target_cost: f32::NEG_INFINITY,
@@ -322,9 +208,22 @@ impl GaConfig {
         mutation_floor: 1e-6,
         global_mutation: 0.5,
     };
+
+    /// Checks the settings for a population of `population`.
+    pub fn validate(&self, population: usize) -> Result<(), GaError> {
+        if self.elites + 2 > population {
+            return Err(GaError::TooManyElites);
+        }
+        let [a, b, c, d] = self.operators.constants();
+        let finite = [a, b, c, d, self.blend_alpha, self.mutation_floor].iter().all(|v| v.is_finite());
+        if !finite || !(0.0..=1.0).contains(&self.global_mutation) {
+            return Err(GaError::InvalidOperators);
+        }
+        Ok(())
+    }
 }
 
-impl Default for GaConfig {
+impl<O: Operators> Default for GaConfig<O> {
     fn default() -> Self {
         Self::DEFAULT
     }
@@ -358,9 +257,10 @@ pub struct GaReport<const DIM: usize> {
     pub termination: Termination,
 }
 
-/// The GA state: a population of `POP` individuals of `DIM` genes, and the caller's seeded RNG `R`.
-pub struct Ga<R, const POP: usize, const DIM: usize> {
-    config: GaConfig,
+/// The GA state: a population of `POP` individuals of `DIM` genes, the caller's seeded RNG `R` and the
+/// operator policy `O` ([`Taga`] unless named).
+pub struct Ga<R, const POP: usize, const DIM: usize, O = Taga> {
+    config: GaConfig<O>,
     bounds: SearchBox<DIM>,
     rng: R,
     population: [[f32; DIM]; POP],
@@ -372,7 +272,7 @@ pub struct Ga<R, const POP: usize, const DIM: usize> {
     stall: u32,
 }
 
-impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
+impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O> {
     const VALID: () = {
         assert!(POP >= 4, "a GA population needs at least 4 individuals");
         assert!(POP <= 1 << 16, "a GA population has at most 65536 individuals (parents are indexed in 16 bits)");
@@ -381,7 +281,7 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
 
     /// A population drawn uniformly from `bounds` and evaluated (generation 0).
     pub fn new(
-        config: GaConfig,
+        config: GaConfig<O>,
         bounds: SearchBox<DIM>,
         rng: R,
         cost: &impl CostFunction<DIM>,
@@ -393,7 +293,7 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
 
     /// A GA whose population is not drawn yet: call [`Ga::initialize`] before [`Ga::step`]. Built in
     /// place by its caller (or in a `static`), so the `2 POP DIM` floats of state are never moved.
-    pub const fn empty(config: GaConfig, bounds: SearchBox<DIM>, rng: R) -> Self {
+    pub const fn empty(config: GaConfig<O>, bounds: SearchBox<DIM>, rng: R) -> Self {
         let () = Self::VALID;
         Self {
             config,
@@ -409,26 +309,16 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
         }
     }
 
-    /// Checks the configuration, draws the population uniformly from the box and evaluates it
-    /// (generation 0). On an error nothing is drawn.
+    /// Checks the configuration ([`GaConfig::validate`]), draws the population uniformly from the box
+    /// and evaluates it (generation 0). On an error nothing is drawn.
     pub fn initialize(&mut self, cost: &impl CostFunction<DIM>) -> Result<(), GaError> {
-        let config = &self.config;
-        if config.elites + 2 > POP {
-            return Err(GaError::TooManyElites);
-        }
-        if config.operators.constants().iter().any(|c| !c.is_finite())
-            || !config.blend_alpha.is_finite()
-            || !config.mutation_floor.is_finite()
-            || !(0.0..=1.0).contains(&config.global_mutation)
-        {
-            return Err(GaError::InvalidOperators);
-        }
+        self.config.validate(POP)?;
         self.generation = 0;
         self.evaluations = 0;
         self.stall = 0;
         for i in 0..POP {
             for d in 0..DIM {
-                let u = self.uniform();
+                let u = uniform(&mut self.rng);
                 self.population[i][d] = self.bounds.lower[d] + u * (self.bounds.upper[d] - self.bounds.lower[d]);
             }
             self.costs[i] = self.evaluate(cost, i);
@@ -446,7 +336,7 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
             return;
         }
         for d in 0..DIM {
-            self.population[worst][d] = self.bounds.reflect(d, x[d]);
+            self.population[worst][d] = self.bounds.clamp(d, x[d]);
         }
         self.costs[worst] = self.evaluate(cost, worst);
         self.best_index = argmin(&self.costs);
@@ -458,24 +348,11 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
         if c.is_finite() && c < WORST_COST { c } else { WORST_COST }
     }
 
-    /// Uniform in `[0, 1)`.
-    fn uniform(&mut self) -> f32 {
-        (self.rng.next_u32() >> 8) as f32 * (1.0 / 16_777_216.0)
-    }
-
-    /// Two uniform draws in `[0, 1)` of 16-bit resolution from one 32-bit output (the hot loops need
-    /// many; 1/65536 of a crossover interval or of the population is resolution enough).
-    fn two_uniforms(&mut self) -> (f32, f32) {
-        let r = self.rng.next_u32();
-        let scale = 1.0 / 65_536.0;
-        ((r & 0xFFFF) as f32 * scale, (r >> 16) as f32 * scale)
-    }
-
     /// Binary tournament: the better of two individuals drawn at random. Inlined: the caller then sees
     /// that the index is below `POP` and indexes without bounds checks.
     #[inline(always)]
     fn tournament(&mut self) -> usize {
-        let r = self.rng.next_u32();
+        let r = draw(&mut self.rng);
         let a = (((r & 0xFFFF) as usize) * POP) >> 16;
         let b = (((r >> 16) as usize) * POP) >> 16;
         match (self.costs.get(a), self.costs.get(b)) {
@@ -494,16 +371,37 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
     /// Runs one generation: elitism, selection, crossover, mutation, evaluation.
     pub fn step(&mut self, cost: &impl CostFunction<DIM>) {
         let stats = self.fitness_stats();
-        let generation = self.generation + 1;
+        let [crossover, mutation] = self.config.operators.curves(stats.lg_generation);
         let spread = self.gene_spread();
         let previous_best = self.best_cost();
-
-        // Elites: repeatedly take the best not yet taken (POP is small; no sort, no allocation).
-        let mut taken = [false; POP];
         // Per slot: the parent's fitness for a child, the cost for an elite (kept across the evaluation).
         let mut parent_fitness = [0.0f32; POP];
-        let elites = self.config.elites;
-        for e in 0..elites {
+        let mut parent_index = [0u16; POP];
+        self.keep_elites(&mut parent_fitness);
+        self.breed(&crossover, &stats, &mut parent_fitness, &mut parent_index);
+        for i in self.config.elites..POP {
+            let pm = O::probability(&mutation, parent_fitness[i], &stats);
+            self.mutate_child(i, pm, usize::from(parent_index[i]), &spread);
+        }
+        // A copy, not a swap: every offspring slot is rewritten before it is read in the next generation,
+        // and a swap of two large arrays links a 1.5 KB `memmove`.
+        self.population = self.offspring;
+        // Elites keep their costs; only offspring are evaluated.
+        for i in 0..POP {
+            self.costs[i] = if i < self.config.elites { parent_fitness[i] } else { self.evaluate(cost, i) };
+        }
+        self.best_index = argmin(&self.costs);
+        self.generation += 1;
+        let best = self.best_cost();
+        self.stall = if best < previous_best - 1e-6 * previous_best.abs() { 0 } else { self.stall.saturating_add(1) };
+    }
+
+    /// Copies the `elites` best into the first offspring slots (repeatedly the best not yet taken: POP
+    /// is small; no sort, no allocation) and their costs into `costs`.
+    #[inline(always)]
+    fn keep_elites(&mut self, costs: &mut [f32; POP]) {
+        let mut taken = [false; POP];
+        for e in 0..self.config.elites {
             let mut best = usize::MAX;
             for i in 0..POP {
                 if !taken[i] && (best == usize::MAX || self.costs[i] < self.costs[best]) {
@@ -511,7 +409,7 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
                 }
             }
             if let (Some(flag), Some(slot), Some(cost), Some(genes)) =
-                (taken.get_mut(best), self.offspring.get_mut(e), parent_fitness.get_mut(e), self.population.get(best))
+                (taken.get_mut(best), self.offspring.get_mut(e), costs.get_mut(e), self.population.get(best))
             {
                 *flag = true;
                 // `copy_from_slice` is a non-overlapping copy; an assignment here linked `memmove` (1.5 KB).
@@ -519,71 +417,52 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
                 *cost = self.costs[best];
             }
         }
+    }
 
-        let mut parent_index = [0u16; POP];
-        let mut slot = elites;
+    /// Fills the offspring slots after the elites with tournament-selected pairs, crossed with the
+    /// probability of `crossover`; records each child's parent and its fitness. The first child is
+    /// bred in its slot; the second beside it, or nowhere when the last slot is taken.
+    #[inline(always)]
+    fn breed(&mut self, crossover: &Curve, stats: &FitnessStats, fitness: &mut [f32; POP], parent: &mut [u16; POP]) {
+        let mut slot = self.config.elites;
         while slot < POP {
             let (a, b) = (self.tournament(), self.tournament());
             let (fa, fb) = (-self.costs[a], -self.costs[b]);
-            let pc = self.config.operators.crossover_probability(if fa >= fb { fa } else { fb }, &stats);
-            let (mut c1, mut c2) = (self.population[a], self.population[b]);
-            if self.uniform() < pc {
-                self.blend(&mut c1, &mut c2);
+            let pc = O::probability(crossover, if fa >= fb { fa } else { fb }, stats);
+            let mut second = self.population[b];
+            let first = &mut self.offspring[slot];
+            first.copy_from_slice(&self.population[a]);
+            if uniform(&mut self.rng) < pc {
+                blend(&mut self.rng, &self.bounds, self.config.blend_alpha, first, &mut second);
             }
-            for (child, f, p) in [(c1, fa, a), (c2, fb, b)] {
-                if slot < POP {
-                    self.offspring[slot] = child;
-                    parent_fitness[slot] = f;
-                    parent_index[slot] = p as u16;
-                    slot += 1;
-                }
+            (fitness[slot], parent[slot]) = (fa, a as u16);
+            slot += 1;
+            if slot < POP {
+                self.offspring[slot] = second;
+                (fitness[slot], parent[slot]) = (fb, b as u16);
+                slot += 1;
             }
-        }
-        for i in elites..POP {
-            let pm = self.config.operators.mutation_probability(parent_fitness[i], &stats);
-            let mut mutated = false;
-            for d in 0..DIM {
-                if self.uniform() < pm {
-                    self.mutate(i, d, &spread);
-                    mutated = true;
-                }
-            }
-            if !mutated && self.population.get(usize::from(parent_index[i])) == Some(&self.offspring[i]) {
-                let d = ((self.rng.next_u32() as u64 * DIM as u64) >> 32) as usize;
-                self.mutate(i, d, &spread);
-            }
-        }
-
-        // A copy, not a swap: every offspring slot is rewritten before it is read in the next generation,
-        // and a swap of two large arrays links a 1.5 KB `memmove`.
-        self.population = self.offspring;
-        // Elites keep their costs; only offspring are evaluated.
-        for i in 0..POP {
-            self.costs[i] = if i < elites { parent_fitness[i] } else { self.evaluate(cost, i) };
-        }
-        self.best_index = argmin(&self.costs);
-        self.generation = generation;
-        let best = self.best_cost();
-        if best < previous_best - 1e-6 * previous_best.abs() {
-            self.stall = 0;
-        } else {
-            self.stall = self.stall.saturating_add(1);
         }
     }
 
-    /// BLX-alpha: each child gene uniform in the parents' interval extended by alpha on both sides.
-    fn blend(&mut self, c1: &mut [f32; DIM], c2: &mut [f32; DIM]) {
-        let alpha = self.config.blend_alpha;
+    /// Mutates each gene of child `i` with probability `pm`; a child left equal to its parent gets one
+    /// gene mutated.
+    #[inline(always)]
+    fn mutate_child(&mut self, i: usize, pm: f32, parent: usize, spread: &[f32; DIM]) {
+        let mut mutated = false;
         for d in 0..DIM {
-            let (lo, hi) = if c1[d] <= c2[d] { (c1[d], c2[d]) } else { (c2[d], c1[d]) };
-            let ext = alpha * (hi - lo);
-            let (a, b) = (lo - ext, hi + ext);
-            let (u1, u2) = self.two_uniforms();
-            c1[d] = self.bounds.reflect(d, a + u1 * (b - a));
-            c2[d] = self.bounds.reflect(d, a + u2 * (b - a));
+            if hot_uniform(&mut self.rng) < pm {
+                self.mutate(i, d, spread);
+                mutated = true;
+            }
+        }
+        if !mutated && self.population.get(parent) == self.offspring.get(i) {
+            let d = ((draw(&mut self.rng) as u64 * DIM as u64) >> 32) as usize;
+            self.mutate(i, d, spread);
         }
     }
 
+    /// Gene `d` of offspring `i` takes a Cauchy (global) or triangular (local, `spread[d]` wide) step.
     fn mutate(&mut self, i: usize, d: usize, spread: &[f32; DIM]) {
         let (Some(&gene), Some(&lo), Some(&hi), Some(&width)) = (
             self.offspring.get(i).and_then(|x| x.get(d)),
@@ -593,32 +472,16 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
         ) else {
             return;
         };
-        let step = if self.uniform() < self.config.global_mutation {
-            CAUCHY_SCALE * (hi - lo) * self.cauchy()
+        let rng = &mut self.rng;
+        let step = if uniform(rng) < self.config.global_mutation {
+            CAUCHY_SCALE * (hi - lo) * cauchy(rng)
         } else {
-            self.triangular() * width
+            (uniform(rng) + uniform(rng) - 1.0) * width
         };
         let mutated = self.bounds.reflect(d, gene + step);
         if let Some(g) = self.offspring.get_mut(i).and_then(|x| x.get_mut(d)) {
             *g = mutated;
         }
-    }
-
-    /// Standard Cauchy: the ratio of the coordinates of a point uniform in the unit disc (no
-    /// trigonometry; a few tries at most, 0 if all eight fall outside the disc).
-    fn cauchy(&mut self) -> f32 {
-        for _ in 0..8 {
-            let (a, b) = (2.0 * self.uniform() - 1.0, 2.0 * self.uniform() - 1.0);
-            if a * a + b * b <= 1.0 && b != 0.0 {
-                return a / b;
-            }
-        }
-        0.0
-    }
-
-    /// Triangular on `[-1, 1]`.
-    fn triangular(&mut self) -> f32 {
-        self.uniform() + self.uniform() - 1.0
     }
 
     /// Per-gene local mutation width: `LOCAL_STEP` population standard deviations of that gene, at least
@@ -639,7 +502,13 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
     pub fn run(&mut self, cost: &impl CostFunction<DIM>) -> GaReport<DIM> {
         loop {
             if let Some(termination) = self.termination() {
-                return self.report(termination);
+                return GaReport {
+                    best: *self.best(),
+                    cost: self.best_cost(),
+                    generations: self.generation,
+                    evaluations: self.evaluations,
+                    termination,
+                };
             }
             self.step(cost);
         }
@@ -655,16 +524,6 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
             Some(Termination::MaxGenerations)
         } else {
             None
-        }
-    }
-
-    fn report(&self, termination: Termination) -> GaReport<DIM> {
-        GaReport {
-            best: *self.best(),
-            cost: self.best_cost(),
-            generations: self.generation,
-            evaluations: self.evaluations,
-            termination,
         }
     }
 
@@ -705,7 +564,73 @@ impl<R: Rng, const POP: usize, const DIM: usize> Ga<R, POP, DIM> {
     }
 }
 
-/// Index of the first smallest value (0 for an empty slice); NaN never wins.
+/// BLX-alpha: each child gene uniform in the parents' interval extended by `alpha` on both sides,
+/// reflected into `bounds`.
+fn blend<R: Rng, const DIM: usize>(
+    rng: &mut R,
+    bounds: &SearchBox<DIM>,
+    alpha: f32,
+    c1: &mut [f32; DIM],
+    c2: &mut [f32; DIM],
+) {
+    for d in 0..DIM {
+        let (lo, hi) = if c1[d] <= c2[d] { (c1[d], c2[d]) } else { (c2[d], c1[d]) };
+        let ext = alpha * (hi - lo);
+        let (a, b) = (lo - ext, hi + ext);
+        let (u1, u2) = two_uniforms(rng);
+        c1[d] = bounds.reflect(d, a + u1 * (b - a));
+        c2[d] = bounds.reflect(d, a + u2 * (b - a));
+    }
+}
+
+/// One 32-bit draw. Out of line: the GA draws in a dozen places, and an inlined generator costs some
+/// 40 bytes of flash at each.
+#[inline(never)]
+fn draw<R: Rng>(rng: &mut R) -> u32 {
+    rng.next_u32()
+}
+
+/// Uniform in `[0, 1)`.
+fn uniform<R: Rng>(rng: &mut R) -> f32 {
+    to_unit(draw(rng))
+}
+
+/// [`uniform`] with the generator inlined, for the per-gene loops (two thirds of the draws): a call per
+/// draw there costs some 10 % of a generation's cycles.
+#[inline(always)]
+fn hot_uniform<R: Rng>(rng: &mut R) -> f32 {
+    to_unit(rng.next_u32())
+}
+
+/// The top 24 bits of `r` as a fraction in `[0, 1)`.
+fn to_unit(r: u32) -> f32 {
+    (r >> 8) as f32 * (1.0 / 16_777_216.0)
+}
+
+/// Two uniform draws in `[0, 1)` of 16-bit resolution from one 32-bit output (the hot loops need many;
+/// 1/65536 of a crossover interval or of the population is resolution enough). The generator inlined,
+/// as in [`hot_uniform`].
+#[inline(always)]
+fn two_uniforms<R: Rng>(rng: &mut R) -> (f32, f32) {
+    let r = rng.next_u32();
+    let scale = 1.0 / 65_536.0;
+    ((r & 0xFFFF) as f32 * scale, (r >> 16) as f32 * scale)
+}
+
+/// Standard Cauchy: the ratio of the coordinates of a point uniform in the unit disc (no trigonometry;
+/// a few tries at most, 0 if all eight fall outside the disc).
+fn cauchy<R: Rng>(rng: &mut R) -> f32 {
+    for _ in 0..8 {
+        let (a, b) = (2.0 * uniform(rng) - 1.0, 2.0 * uniform(rng) - 1.0);
+        if a * a + b * b <= 1.0 && b != 0.0 {
+            return a / b;
+        }
+    }
+    0.0
+}
+
+/// Index of the first smallest value (0 for an empty slice); NaN never wins. Out of line: three callers.
+#[inline(never)]
 fn argmin(v: &[f32]) -> usize {
     let (mut best, mut best_value) = (0, v.first().copied().unwrap_or(0.0));
     for (i, &c) in v.iter().enumerate() {
@@ -725,33 +650,4 @@ fn argmax(v: &[f32]) -> usize {
         }
     }
     worst
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn sine_polynomial_matches_libm_on_the_unit_interval() {
-        for i in 0..=1000 {
-            let t = i as f32 / 1000.0;
-            let exact = libm::sinf(core::f32::consts::FRAC_PI_2 * t);
-            assert!((sin_half_pi(t) - exact).abs() < 7e-6, "t = {t}");
-        }
-    }
-
-    #[test]
-    fn taga_probabilities_are_clamped_and_follow_the_paper() {
-        let stats = FitnessStats { max: -1.0, avg: -3.0, lg_generation: 0.0 };
-        let taga = Operators::TAGA_PAPER;
-        // Below average: Pc1 = 1/(2 + lg 1) + 0.8 = 1.3, clamped to 1; Pm1 = -0.1/2 + 0.13 = 0.08.
-        assert_eq!(taga.crossover_probability(-5.0, &stats), 1.0);
-        assert!((taga.mutation_probability(-5.0, &stats) - 0.08).abs() < 1e-6);
-        // The best: Pc2 and Pm2.
-        assert!((taga.crossover_probability(-1.0, &stats) - 0.8).abs() < 1e-6);
-        assert!((taga.mutation_probability(-1.0, &stats) - 0.01).abs() < 1e-6);
-        // AGA as printed: the best gets nothing.
-        assert_eq!(Operators::AGA_PAPER.crossover_probability(-1.0, &stats), 0.0);
-        assert_eq!(Operators::AGA_PAPER.mutation_probability(-1.0, &stats), 0.0);
-    }
 }
