@@ -369,8 +369,9 @@ pub enum Rejection {
 pub enum Event {
     /// A static interval began (a pose is being averaged).
     StillnessDetected,
-    /// A pose was captured and stored at this index of [`Accumulator::poses`].
-    PoseCaptured(usize),
+    /// A pose was captured and stored at this index of [`Accumulator::poses`] (`u16`: the whole
+    /// `Result<Option<Event>, AccumulatorError>` of a push fits in one register).
+    PoseCaptured(u16),
     /// A static interval ended and was not kept.
     PoseRejected(Rejection),
 }
@@ -586,6 +587,7 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
     const VALID: () = {
         assert!(BLOCK >= 4, "a block needs at least 4 samples to estimate a variance");
         assert!(BLOCK <= 1 << 16, "a block is summed in 32 bits: at most 65536 samples");
+        assert!(POSES <= 1 << 16, "a pose index is a u16: at most 65536 poses");
     };
 
     /// An empty accumulator.
@@ -781,7 +783,8 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
             return Ok(Some(Event::PoseRejected(reason)));
         }
         self.poses.push(pose).map_err(|_| AccumulatorError::Full)?;
-        Ok(Some(Event::PoseCaptured(self.poses.len() - 1)))
+        // At most POSES <= 2^16 poses (VALID): the index fits.
+        Ok(Some(Event::PoseCaptured((self.poses.len() - 1) as u16)))
     }
 
     /// The poses captured so far.
