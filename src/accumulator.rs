@@ -62,9 +62,9 @@ pub trait Reading: Copy + Default {
     /// Mean and (population) variance of `n` samples, from their sums relative to `reference`
     /// (pose close; no software `f64` for `i16` on a Cortex-M4F).
     fn mean_and_variance(reference: Self, sum: Self::Sum, sum_sq: Self::Sum, n: u32) -> (f32, f32);
-    /// Mean offset from the reference and population variance of one block of `n` samples, in `f32`
-    /// (the block statistics: no exact rounding needed).
-    fn block_mean_and_variance(sum: Self::Sum, sum_sq: Self::Sum, n: u32) -> (f32, f32);
+    /// Per-axis mean offset from the reference and population variance summed over the axes, of one
+    /// block of `n` samples, in `f32` (the block statistics: no exact rounding needed).
+    fn block_statistics(sums: &BlockSums<Self::Sum>, n: u32) -> ([f32; 3], f32);
     /// The value as `f32` (exact for `i16`; no software `f64` on a Cortex-M4F).
     fn to_f32(self) -> f32;
     /// `false` for NaN or infinity.
@@ -78,14 +78,11 @@ pub trait Reading: Copy + Default {
 }
 
 /// `v` as `f32` from its two 32-bit halves: two hardware conversions instead of the library's
-/// `__aeabi_l2f` (rounded twice: within 1 ulp, enough for block statistics).
+/// `__aeabi_ul2f` (rounded twice: within 1 ulp, enough for statistics; exact below `2^24`).
 #[inline]
-fn i64_to_f32(v: i64) -> f32 {
+fn u64_to_f32_halves(v: u64) -> f32 {
     const TWO_POW_32: f32 = 4_294_967_296.0;
-    // v = high 2^32 + low with |low| <= 2^31: exact below 2^31 (high = 0, the usual case).
-    let low = v as i32;
-    let high = (v - i64::from(low)) >> 32;
-    (high as i32) as f32 * TWO_POW_32 + low as f32
+    ((v >> 32) as u32) as f32 * TWO_POW_32 + (v as u32) as f32
 }
 
 /// `x / d` and `x % d` without the compiler's 64-bit division (`__udivmoddi4`, ~1 KB of flash on a
@@ -210,11 +207,20 @@ impl Reading for i16 {
         let [x, y, z] = axes.map(|values| i16_axis_block_sums(values, limit));
         BlockSums { sum: [x.0, y.0, z.0], sum_sq: [x.1, y.1, z.1], saturated: x.2 | y.2 | z.2 }
     }
-    fn block_mean_and_variance(sum: i64, sum_sq: i64, n: u32) -> (f32, f32) {
-        // n^2 variance = n sum_sq - sum^2, exact: n <= 2^16, sum_sq <= 2^46, |sum| <= 2^31.
+    fn block_statistics(sums: &BlockSums<i64>, n: u32) -> ([f32; 3], f32) {
         let n_inverse = 1.0 / n.max(1) as f32;
-        let n_squared_variance = i64::from(n) * sum_sq - sum * sum;
-        (i64_to_f32(sum) * n_inverse, i64_to_f32(n_squared_variance) * n_inverse * n_inverse)
+        // Per axis n^2 variance = n sum_sq - sum^2, exact: n <= 2^16 samples within 2^16 of each other
+        // give at most n^2 2^30 = 2^62 (and n sum_sq, sum^2 <= 2^62); the three axes fit a u64.
+        let mut n_squared_variance = 0u64;
+        let mut mean = [0.0; 3];
+        for ((m, &sum), &sum_sq) in mean.iter_mut().zip(&sums.sum).zip(&sums.sum_sq) {
+            // A block's raw sum fits an i32: at most 2^16 samples of at most 2^15.
+            let sum = sum as i32;
+            let sum_squared = i64::from(sum) * i64::from(sum);
+            n_squared_variance = n_squared_variance.wrapping_add((i64::from(n) * sum_sq - sum_squared) as u64);
+            *m = sum as f32 * n_inverse;
+        }
+        (mean, u64_to_f32_halves(n_squared_variance) * n_inverse * n_inverse)
     }
     fn mean_and_variance(reference: i16, sum: i64, sum_sq: i64, n: u32) -> (f32, f32) {
         let count = n.max(1);
@@ -226,7 +232,8 @@ impl Reading for i16 {
         // and is computed modulo 2^64, so the wrapped intermediate terms cancel exactly.
         let about_q = sum_sq.wrapping_sub(q.wrapping_mul(sum).wrapping_mul(2)).wrapping_add(n.wrapping_mul(q * q));
         let fraction = rem as f32 / count as f32;
-        let variance = i64_to_f32(about_q) / count as f32 - fraction * fraction;
+        // about_q is a sum of squares: not negative.
+        let variance = u64_to_f32_halves(about_q as u64) / count as f32 - fraction * fraction;
         (mean, if variance > 0.0 { variance } else { 0.0 })
     }
     #[inline]
@@ -282,10 +289,15 @@ impl Reading for f32 {
         let variance = sum_sq / n - m * m;
         ((f64::from(reference) + m) as f32, if variance > 0.0 { variance as f32 } else { 0.0 })
     }
-    fn block_mean_and_variance(sum: f64, sum_sq: f64, n: u32) -> (f32, f32) {
+    fn block_statistics(sums: &BlockSums<f64>, n: u32) -> ([f32; 3], f32) {
         let n_inverse = 1.0 / n.max(1) as f32;
-        let m = sum as f32 * n_inverse;
-        (m, sum_sq as f32 * n_inverse - m * m)
+        let (mut mean, mut variance) = ([0.0; 3], 0.0);
+        for a in 0..3 {
+            mean[a] = sums.sum[a] as f32 * n_inverse;
+            let v = sums.sum_sq[a] as f32 * n_inverse - mean[a] * mean[a];
+            variance += if v > 0.0 { v } else { 0.0 };
+        }
+        (mean, variance)
     }
     fn to_f32(self) -> f32 {
         self
@@ -530,18 +542,6 @@ impl<R: Reading> Sums<R> {
         self.saturated |= other.saturated;
     }
 
-    /// Per-axis mean offset from the reference and variance, in `f32` (block statistics).
-    fn mean_offset_and_variance(&self) -> ([f32; 3], [f32; 3]) {
-        let mut mean = [0.0; 3];
-        let mut var = [0.0; 3];
-        for a in 0..3 {
-            let (m, v) = R::block_mean_and_variance(self.sum[a], self.sum_sq[a], self.n);
-            mean[a] = m;
-            var[a] = if v > 0.0 { v } else { 0.0 };
-        }
-        (mean, var)
-    }
-
     fn pose(&self) -> Pose {
         let mut pose = Pose { n: self.n, start_index: self.start_index, end_index: self.end_index, ..Pose::default() };
         for a in 0..3 {
@@ -617,9 +617,10 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         if !(sample[0].is_finite() && sample[1].is_finite() && sample[2].is_finite()) {
             return Err(self.skip_sample());
         }
-        let i = self.buffered;
+        // Always below BLOCK (a full buffer is summed at once); a power-of-two BLOCK is masked instead of
+        // checked (no branch on the hot path).
+        let i = if BLOCK.is_power_of_two() { self.buffered & (BLOCK - 1) } else { self.buffered };
         if i >= BLOCK {
-            // Unreachable: a full buffer is summed at once.
             self.drop_block();
             return Ok(None);
         }
@@ -678,23 +679,24 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         self.block_start = self.counted;
     }
 
-    /// Sums the full buffer into `blocks[slot]` (field by field, in place: no copies of the sums) with
-    /// its statistics; the next block starts at the next sample.
+    /// Sums the full buffer into `blocks[slot]` with its statistics (mean, total variance, which it
+    /// returns); the next block starts at the next sample.
     #[inline(always)]
-    fn take_block(&mut self, slot: usize) {
+    fn take_block(&mut self, slot: usize) -> ([f32; 3], f32) {
         let [x, y, z] = &self.buffer;
         let sums = R::block_sums([x, y, z], self.saturation_limit);
-        let block = &mut self.blocks[slot % 2];
-        block.sums.reference = [x[0], y[0], z[0]].map(R::block_reference);
-        (block.sums.sum, block.sums.sum_sq, block.sums.saturated) = (sums.sum, sums.sum_sq, sums.saturated);
-        (block.sums.n, block.sums.start_index) = (BLOCK as u32, self.block_start);
-        let (offset, var) = block.sums.mean_offset_and_variance();
-        for a in 0..3 {
-            block.mean[a] = offset[a] + block.sums.reference[a].to_f32();
+        let reference = [x[0], y[0], z[0]].map(R::block_reference);
+        let (offset, variance) = R::block_statistics(&sums, BLOCK as u32);
+        let mut mean = offset;
+        for (m, r) in mean.iter_mut().zip(reference) {
+            *m += r.to_f32();
         }
-        block.variance = var[0] + var[1] + var[2];
+        let start_index = self.block_start;
         self.drop_block();
-        self.blocks[slot % 2].sums.end_index = self.counted;
+        let BlockSums { sum, sum_sq, saturated } = sums;
+        let sums = Sums { reference, sum, sum_sq, n: BLOCK as u32, start_index, end_index: self.counted, saturated };
+        self.blocks[slot % 2] = BlockStats { sums, mean, variance };
+        (mean, variance)
     }
 
     // Once per BLOCK samples: kept out of line so that `push`, inlined into the caller's sample loop, stays
@@ -702,8 +704,7 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
     #[inline(never)]
     fn close_block(&mut self) -> Result<Option<Event>, AccumulatorError> {
         let slot = (self.previous_slot + 1) % 2;
-        self.take_block(slot);
-        let (mean, variance) = (self.blocks[slot].mean, self.blocks[slot].variance);
+        let (mean, variance) = self.take_block(slot);
         let noise = self.update_noise(mean, variance);
         let previous = &self.blocks[self.previous_slot % 2];
         let drift = self.has_previous.then(|| {
@@ -895,9 +896,9 @@ mod tests {
 
     #[test]
     fn large_sums_convert_to_f32_within_an_ulp() {
-        for v in [0i64, -3, 1 << 31, -(1 << 31) - 1, 3 << 40, -(5 << 50) + 12_345] {
+        for v in [0u64, 3, 1 << 31, (1 << 32) - 1, 3 << 40, (5 << 50) + 12_345, u64::MAX] {
             let exact = v as f64;
-            let got = f64::from(i64_to_f32(v));
+            let got = f64::from(u64_to_f32_halves(v));
             assert!((got - exact).abs() <= exact.abs() * 2.0 * f64::from(f32::EPSILON), "{v}: {got}");
         }
     }
