@@ -31,7 +31,7 @@ use core::ops::{Add, AddAssign, Mul, Sub};
 pub const MAX_POSE_SAMPLES: u32 = i32::MAX as u32;
 
 /// Exact sums of one block of samples, relative to its reference ([`Reading::block_reference`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct BlockSums<S> {
     /// Per-axis sum of `sample - reference`.
     pub sum: [S; 3],
@@ -58,13 +58,39 @@ pub trait Reading: Copy + Default {
     fn count(n: u32) -> Self::Sum;
     /// The exact sums of `samples` relative to [`Reading::block_reference`] of the first one (zero for
     /// none), and whether one of them is saturated at `limit`. Called once per block.
-    fn block_sums(axes: [&[Self]; 3], limit: Self::Limit) -> BlockSums<Self::Sum>;
+    fn block_sums(axes: [&[Self]; 3], limit: Self::Limit) -> BlockSums<Self::Sum> {
+        let mut out = BlockSums::default();
+        for (a, values) in axes.iter().enumerate() {
+            let (sum, sum_sq, saturated) = Self::axis_sums(values, limit);
+            (out.sum[a], out.sum_sq[a]) = (sum, sum_sq);
+            out.saturated |= saturated;
+        }
+        out
+    }
+    /// [`Reading::block_sums`] of a full block (the accumulator's buffer), written in place: the sums
+    /// into `sum` and `sum_sq`, `true` when a sample is saturated.
+    fn full_block_sums<const N: usize>(
+        axes: &[[Self; N]; 3],
+        limit: Self::Limit,
+        sum: &mut [Self::Sum; 3],
+        sum_sq: &mut [Self::Sum; 3],
+    ) -> bool {
+        let mut saturated = false;
+        for ((values, sum), sum_sq) in axes.iter().zip(sum).zip(sum_sq) {
+            let axis = Self::axis_sums(values, limit);
+            (*sum, *sum_sq) = (axis.0, axis.1);
+            saturated |= axis.2;
+        }
+        saturated
+    }
+    /// One axis of [`Reading::block_sums`]: `(sum, sum of squares, saturated)`.
+    fn axis_sums(values: &[Self], limit: Self::Limit) -> (Self::Sum, Self::Sum, bool);
     /// Mean and (population) variance of `n` samples, from their sums relative to `reference`
     /// (pose close; no software `f64` for `i16` on a Cortex-M4F).
     fn mean_and_variance(reference: Self, sum: Self::Sum, sum_sq: Self::Sum, n: u32) -> (f32, f32);
     /// Per-axis mean offset from the reference and population variance summed over the axes, of one
     /// block of `n` samples, in `f32` (the block statistics: no exact rounding needed).
-    fn block_statistics(sums: &BlockSums<Self::Sum>, n: u32) -> ([f32; 3], f32);
+    fn block_statistics(sum: &[Self::Sum; 3], sum_sq: &[Self::Sum; 3], n: u32) -> ([f32; 3], f32);
     /// The value as `f32` (exact for `i16`; no software `f64` on a Cortex-M4F).
     fn to_f32(self) -> f32;
     /// `false` for NaN or infinity.
@@ -175,7 +201,7 @@ fn raw_i16_axis_sums(values: &[i16]) -> (i32, i64) {
 
 /// One axis of a block: raw `(sum, sum of squares, saturated)`.
 #[inline(always)]
-fn i16_axis_block_sums(values: &[i16], limit: i32) -> (i64, i64, bool) {
+fn i16_axis_sums(values: &[i16], limit: i32) -> (i64, i64, bool) {
     let first = values.first().copied().unwrap_or(0);
     let (sum, sum_sq) = raw_i16_axis_sums(values);
     // Every sample is within sqrt(sum (x - first)^2) of the first: none can reach the limit (nor a rail)
@@ -203,17 +229,17 @@ impl Reading for i16 {
     fn count(n: u32) -> i64 {
         i64::from(n)
     }
-    fn block_sums(axes: [&[i16]; 3], limit: i32) -> BlockSums<i64> {
-        let [x, y, z] = axes.map(|values| i16_axis_block_sums(values, limit));
-        BlockSums { sum: [x.0, y.0, z.0], sum_sq: [x.1, y.1, z.1], saturated: x.2 | y.2 | z.2 }
+    #[inline(always)]
+    fn axis_sums(values: &[i16], limit: i32) -> (i64, i64, bool) {
+        i16_axis_sums(values, limit)
     }
-    fn block_statistics(sums: &BlockSums<i64>, n: u32) -> ([f32; 3], f32) {
+    fn block_statistics(sum: &[i64; 3], sum_sq: &[i64; 3], n: u32) -> ([f32; 3], f32) {
         let n_inverse = 1.0 / n.max(1) as f32;
         // Per axis n^2 variance = n sum_sq - sum^2, exact: n <= 2^16 samples within 2^16 of each other
         // give at most n^2 2^30 = 2^62 (and n sum_sq, sum^2 <= 2^62); the three axes fit a u64.
         let mut n_squared_variance = 0u64;
         let mut mean = [0.0; 3];
-        for ((m, &sum), &sum_sq) in mean.iter_mut().zip(&sums.sum).zip(&sums.sum_sq) {
+        for ((m, &sum), &sum_sq) in mean.iter_mut().zip(sum).zip(sum_sq) {
             // A block's raw sum fits an i32: at most 2^16 samples of at most 2^15.
             let sum = sum as i32;
             let sum_squared = i64::from(sum) * i64::from(sum);
@@ -269,19 +295,16 @@ impl Reading for f32 {
     fn count(n: u32) -> f64 {
         f64::from(n)
     }
-    fn block_sums(axes: [&[f32]; 3], limit: f32) -> BlockSums<f64> {
-        let mut out = BlockSums { sum: [0.0; 3], sum_sq: [0.0; 3], saturated: false };
-        for a in 0..3 {
-            let values = axes[a];
-            let Some(&first) = values.first() else { continue };
-            for &v in values {
-                let d = v.delta(first);
-                out.sum[a] += d;
-                out.sum_sq[a] += d * d;
-                out.saturated |= v.saturated(limit);
-            }
+    fn axis_sums(values: &[f32], limit: f32) -> (f64, f64, bool) {
+        let (mut sum, mut sum_sq, mut saturated) = (0.0, 0.0, false);
+        let Some(&first) = values.first() else { return (sum, sum_sq, saturated) };
+        for &v in values {
+            let d = v.delta(first);
+            sum += d;
+            sum_sq += d * d;
+            saturated |= v.saturated(limit);
         }
-        out
+        (sum, sum_sq, saturated)
     }
     fn mean_and_variance(reference: f32, sum: f64, sum_sq: f64, n: u32) -> (f32, f32) {
         let n = f64::from(n.max(1));
@@ -289,12 +312,12 @@ impl Reading for f32 {
         let variance = sum_sq / n - m * m;
         ((f64::from(reference) + m) as f32, if variance > 0.0 { variance as f32 } else { 0.0 })
     }
-    fn block_statistics(sums: &BlockSums<f64>, n: u32) -> ([f32; 3], f32) {
+    fn block_statistics(sum: &[f64; 3], sum_sq: &[f64; 3], n: u32) -> ([f32; 3], f32) {
         let n_inverse = 1.0 / n.max(1) as f32;
         let (mut mean, mut variance) = ([0.0; 3], 0.0);
         for a in 0..3 {
-            mean[a] = sums.sum[a] as f32 * n_inverse;
-            let v = sums.sum_sq[a] as f32 * n_inverse - mean[a] * mean[a];
+            mean[a] = sum[a] as f32 * n_inverse;
+            let v = sum_sq[a] as f32 * n_inverse - mean[a] * mean[a];
             variance += if v > 0.0 { v } else { 0.0 };
         }
         (mean, variance)
@@ -683,19 +706,19 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
     /// returns); the next block starts at the next sample.
     #[inline(always)]
     fn take_block(&mut self, slot: usize) -> ([f32; 3], f32) {
-        let [x, y, z] = &self.buffer;
-        let sums = R::block_sums([x, y, z], self.saturation_limit);
-        let reference = [x[0], y[0], z[0]].map(R::block_reference);
-        let (offset, variance) = R::block_statistics(&sums, BLOCK as u32);
-        let mut mean = offset;
-        for (m, r) in mean.iter_mut().zip(reference) {
-            *m += r.to_f32();
-        }
         let start_index = self.block_start;
         self.drop_block();
-        let BlockSums { sum, sum_sq, saturated } = sums;
-        let sums = Sums { reference, sum, sum_sq, n: BLOCK as u32, start_index, end_index: self.counted, saturated };
-        self.blocks[slot % 2] = BlockStats { sums, mean, variance };
+        let buffer = &self.buffer;
+        let block = &mut self.blocks[slot % 2];
+        let sums = &mut block.sums;
+        sums.saturated = R::full_block_sums(buffer, self.saturation_limit, &mut sums.sum, &mut sums.sum_sq);
+        (sums.n, sums.start_index, sums.end_index) = (BLOCK as u32, start_index, self.counted);
+        let (mut mean, variance) = R::block_statistics(&sums.sum, &sums.sum_sq, BLOCK as u32);
+        for ((m, reference), values) in mean.iter_mut().zip(&mut sums.reference).zip(buffer) {
+            *reference = R::block_reference(values[0]);
+            *m += reference.to_f32();
+        }
+        (block.mean, block.variance) = (mean, variance);
         (mean, variance)
     }
 
@@ -754,9 +777,8 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         if !(self.has_previous && quiet && last.variance <= self.config.enter_factor * noise) {
             return None;
         }
-        let mut pose = Sums::new(last.sums.reference, last.sums.start_index);
-        pose.merge(&last.sums);
-        self.pose = Some(pose);
+        // A block (BLOCK <= 2^16 samples) merged into an empty pose of its reference: the block's sums.
+        self.pose = Some(last.sums);
         Some(Event::StillnessDetected)
     }
 
