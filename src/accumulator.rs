@@ -493,18 +493,19 @@ impl AccumulatorConfig {
     /// Checks that every factor is finite and positive, exits are not below entries, and the noise
     /// floor and rise are finite and not negative.
     pub fn validate(&self) -> Result<(), AccumulatorError> {
-        let positive = |v: f32| v.is_finite() && v > 0.0;
-        let ok = positive(self.enter_factor)
-            && positive(self.drift_enter_factor)
+        // Plain comparisons (every one is false for NaN): smaller than `is_finite` on a Cortex-M4F.
+        let below_infinity = |v: f32| v < f32::INFINITY;
+        let ok = self.enter_factor > 0.0
+            && self.drift_enter_factor > 0.0
             && self.exit_factor >= self.enter_factor
-            && self.exit_factor.is_finite()
+            && below_infinity(self.exit_factor)
             && self.drift_exit_factor >= self.drift_enter_factor
-            && self.drift_exit_factor.is_finite()
+            && below_infinity(self.drift_exit_factor)
             && self.full_scale > 0.0
-            && self.min_noise_variance.is_finite()
             && self.min_noise_variance >= 0.0
-            && self.noise_rise_per_block.is_finite()
-            && self.noise_rise_per_block >= 0.0;
+            && below_infinity(self.min_noise_variance)
+            && self.noise_rise_per_block >= 0.0
+            && below_infinity(self.noise_rise_per_block);
         if ok { Ok(()) } else { Err(AccumulatorError::InvalidConfig) }
     }
 }
@@ -867,6 +868,31 @@ mod tests {
         assert_eq!(pose.end_index, 82);
         pose.merge(&block);
         assert_eq!(pose.n, MAX_POSE_SAMPLES, "the count saturates");
+    }
+
+    #[test]
+    fn configs_with_nan_infinite_or_negative_values_are_refused() {
+        assert_eq!(AccumulatorConfig::DEFAULT.validate(), Ok(()));
+        let fields: [fn(&mut AccumulatorConfig) -> &mut f32; 7] = [
+            |c| &mut c.enter_factor,
+            |c| &mut c.exit_factor,
+            |c| &mut c.drift_enter_factor,
+            |c| &mut c.drift_exit_factor,
+            |c| &mut c.full_scale,
+            |c| &mut c.min_noise_variance,
+            |c| &mut c.noise_rise_per_block,
+        ];
+        for (i, field) in fields.iter().enumerate() {
+            for bad in [f32::NAN, -1.0, f32::NEG_INFINITY] {
+                let mut config = AccumulatorConfig::DEFAULT;
+                *field(&mut config) = bad;
+                assert_eq!(config.validate(), Err(AccumulatorError::InvalidConfig), "field {i} = {bad}");
+            }
+            let mut config = AccumulatorConfig::DEFAULT;
+            *field(&mut config) = f32::INFINITY;
+            // Only the saturation limit may be infinite (no limit).
+            assert_eq!(config.validate().is_ok(), i == 4, "field {i} infinite");
+        }
     }
 
     #[test]
