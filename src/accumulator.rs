@@ -567,12 +567,13 @@ impl<R: Reading> Sums<R> {
     }
 
     fn pose(&self) -> Pose {
-        let mut pose = Pose { n: self.n, start_index: self.start_index, end_index: self.end_index, ..Pose::default() };
+        let (mut mean, mut variance) = ([0.0; 3], [0.0; 3]);
         for a in 0..3 {
-            (pose.mean[a], pose.variance[a]) =
-                R::mean_and_variance(self.reference[a], self.sum[a], self.sum_sq[a], self.n);
+            // Raw sums have a zero reference (folded away at compile time).
+            let reference = if R::RELATIVE { self.reference[a] } else { R::default() };
+            (mean[a], variance[a]) = R::mean_and_variance(reference, self.sum[a], self.sum_sq[a], self.n);
         }
-        pose
+        Pose { mean, variance, n: self.n, start_index: self.start_index, end_index: self.end_index }
     }
 }
 
@@ -784,13 +785,14 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
     }
 
     fn close_pose(&mut self) -> Result<Option<Event>, AccumulatorError> {
-        let Some(sums) = self.pose.take() else {
+        let Some(sums) = &self.pose else {
             return Ok(None);
         };
-        let pose = sums.pose();
-        let rejection = if sums.saturated {
+        let (pose, saturated) = (sums.pose(), sums.saturated);
+        self.pose = None;
+        let rejection = if saturated {
             Some(Rejection::Saturated)
-        } else if sums.n < self.config.min_pose_samples {
+        } else if pose.n < self.config.min_pose_samples {
             Some(Rejection::TooShort)
         } else if pose.variance.iter().sum::<f32>() > self.config.exit_factor * self.noise_variance {
             Some(Rejection::Moving)
