@@ -57,7 +57,8 @@ pub trait Reading: Copy + Default {
     /// `n` in the sum type.
     fn count(n: u32) -> Self::Sum;
     /// The exact sums of `samples` relative to [`Reading::block_reference`] of the first one (zero for
-    /// none), and whether one of them is saturated at `limit`. Called once per block.
+    /// none), and whether one of them is saturated at `limit` (blocks of any length; the accumulator
+    /// sums its full buffer with [`Reading::full_block_sums`]).
     fn block_sums(axes: [&[Self]; 3], limit: Self::Limit) -> BlockSums<Self::Sum> {
         let mut out = BlockSums::default();
         for (a, values) in axes.iter().enumerate() {
