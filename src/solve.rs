@@ -134,17 +134,36 @@ fn check_input(x: &Deviation, poses: &[NormPose], held: &[bool; PARAM_COUNT]) ->
     Ok(())
 }
 
-/// Gauss-Newton normal equations of the per-pose errors, `(J^T J, J^T e)`, built in place; only the lower
-/// triangle of `J^T J` is written (one row of `J` per pose: the gradient of its modulus error).
-fn normal_equations(x: &Deviation, poses: &[NormPose], jtj: &mut Matrix<PARAM_COUNT>, jte: &mut Deviation) {
+/// Weight of pose `i` in [`normal_equations`]; `None` (no pose) adds nothing.
+pub(crate) type PoseWeight<'a> = &'a dyn Fn(usize) -> Option<f32>;
+
+/// The one builder of the library's information matrices: the weighted Gauss-Newton normal equations of
+/// the per-pose modulus errors, `J^T W J` and `J^T W e` (one row of `J` per pose: the gradient of its
+/// modulus error; `W` from `weight`, 1 without). Only the lower triangle of `jtj` is written. The
+/// Levenberg-Marquardt step, the verdict's information matrix and the structural test all use it.
+pub(crate) fn normal_equations(
+    x: &Deviation,
+    poses: &[NormPose],
+    weight: Option<PoseWeight<'_>>,
+    jtj: &mut Matrix<PARAM_COUNT>,
+    jte: &mut Deviation,
+) {
     *jtj = [[0.0; PARAM_COUNT]; PARAM_COUNT];
     *jte = [0.0; PARAM_COUNT];
-    for pose in poses {
+    for (i, pose) in poses.iter().enumerate() {
+        let w = match weight {
+            None => 1.0,
+            Some(weight) => match weight(i) {
+                Some(w) => w,
+                None => continue,
+            },
+        };
         let (e, g) = modulus_error_gradient(x, pose);
+        let we = w * e;
         for (sum, gi) in jte.iter_mut().zip(g) {
-            *sum += gi * e;
+            *sum += gi * we;
         }
-        add_outer_product(jtj, &g, 1.0);
+        add_outer_product(jtj, &g, w);
     }
 }
 
@@ -210,9 +229,14 @@ pub fn levenberg_marquardt_holding(
     }
     let mut lambda = config.initial_damping;
     let (mut jtj, mut jte) = ([[0.0; PARAM_COUNT]; PARAM_COUNT], [0.0; PARAM_COUNT]);
-    normal_equations(&x, poses, &mut jtj, &mut jte);
-    hold(&mut jtj, &mut jte, held);
+    // The normal equations are built (in place) at the start and after each accepted step.
+    let mut rebuild = true;
     for iteration in 1..=config.max_iterations {
+        if rebuild {
+            normal_equations(&x, poses, None, &mut jtj, &mut jte);
+            hold(&mut jtj, &mut jte, held);
+            rebuild = false;
+        }
         let mut damped = jtj;
         for i in 0..PARAM_COUNT {
             let d = jtj[i][i];
@@ -236,8 +260,7 @@ pub fn levenberg_marquardt_holding(
             if max_abs(&step) < config.step_tolerance {
                 return Ok(SolveReport { x, cost, iterations: iteration, termination: SolveTermination::Converged });
             }
-            normal_equations(&x, poses, &mut jtj, &mut jte);
-            hold(&mut jtj, &mut jte, held);
+            rebuild = true;
         } else {
             lambda *= 10.0;
             if lambda > 1e10 {
