@@ -194,10 +194,23 @@ pub fn information_matrix(
     held: &[bool; PARAM_COUNT],
     inflate: bool,
 ) -> Option<Matrix<PARAM_COUNT>> {
+    let mut info = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
+    information_in_place(x, frame, set, held, inflate, &mut info).then_some(info)
+}
+
+/// [`information_matrix`] into `info` (no copies of the matrix); `false` where it gives `None`.
+fn information_in_place(
+    x: &Deviation,
+    frame: &Frame,
+    set: &PoseSet<'_>,
+    held: &[bool; PARAM_COUNT],
+    inflate: bool,
+    info: &mut Matrix<PARAM_COUNT>,
+) -> bool {
     let n = set.len();
     let free = held.iter().filter(|&&h| !h).count();
     if n < free || n == 0 {
-        return None;
+        return false;
     }
     // One pass for the residual variance, the chi-square and whether every pose carries its noise.
     let (mut sum, mut chi2, mut all_noisy) = (0.0f32, 0.0f32, true);
@@ -212,7 +225,7 @@ pub fn information_matrix(
     let dof = n.saturating_sub(free).max(1) as f32;
     let scale = if !all_noisy {
         if n == free {
-            return None;
+            return false;
         }
         larger(sum / dof, f32::MIN_POSITIVE)
     } else if inflate && n > free {
@@ -225,9 +238,8 @@ pub fn information_matrix(
         let var = if all_noisy { scale * error_variance(x, frame, pose, m)? } else { scale };
         Some(1.0 / var)
     };
-    let (mut info, mut unused) = ([[0.0f32; PARAM_COUNT]; PARAM_COUNT], [0.0; PARAM_COUNT]);
-    normal_equations(x, set.norm, Some(&weight), &mut info, &mut unused);
-    Some(info)
+    normal_equations(x, set.norm, Some(&weight), info, &mut [0.0; PARAM_COUNT]);
+    true
 }
 
 /// Covariance of the deviation vector with the parameters in `held` fixed (their rows and columns 0):
@@ -239,8 +251,19 @@ pub fn deviation_covariance(
     set: &PoseSet<'_>,
     held: &[bool; PARAM_COUNT],
 ) -> Option<Matrix<PARAM_COUNT>> {
-    let mut info = information_matrix(x, frame, set, held, false)?;
-    covariance_holding_in_place(&mut info, held).then_some(info)
+    let mut cov = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
+    covariance_in_place(x, frame, set, held, &mut cov).then_some(cov)
+}
+
+/// [`deviation_covariance`] into `cov`; `false` where it gives `None`.
+fn covariance_in_place(
+    x: &Deviation,
+    frame: &Frame,
+    set: &PoseSet<'_>,
+    held: &[bool; PARAM_COUNT],
+    cov: &mut Matrix<PARAM_COUNT>,
+) -> bool {
+    information_in_place(x, frame, set, held, false, cov) && covariance_holding_in_place(cov, held)
 }
 
 /// Inverse of `info` with the `held` rows and columns replaced by the identity, then zeroed.
@@ -283,7 +306,10 @@ pub fn parameters_to_hold(
 ) -> [bool; PARAM_COUNT] {
     let structural = undetermined_parameters(x, set.norm);
     let mut held: [bool; PARAM_COUNT] = core::array::from_fn(|i| held[i] || structural[i]);
-    let Some(info) = information_matrix(x, frame, set, &held, false) else { return held };
+    let mut info = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
+    if !information_in_place(x, frame, set, &held, false, &mut info) {
+        return held;
+    }
     loop {
         let mut cov = info;
         if !covariance_holding_in_place(&mut cov, &held) {
@@ -330,7 +356,7 @@ pub fn param_std(frame: &Frame, covariance: &Matrix<PARAM_COUNT>) -> [f32; PARAM
 }
 
 /// Sums over the poses used, in one pass: the squared modulus errors after (normalised, free of the
-/// cancellation of raw counts) and before (under the "before" model, relative to `g`), and the
+/// cancellation of raw counts) and before (under the "before" model, output unit), and the
 /// variance of the modulus each pose's noise gives (`None` when a pose carries no variance).
 struct ModulusSums {
     after: f32,
@@ -350,7 +376,6 @@ impl ModulusSums {
             // |f_b| / g = sqrt(1 + E): d|f_b|/g = dE / 2 near |f_b| = g.
             sums.noise = sums.noise.zip(error_variance(x, frame, p, n)).map(|(s, v)| s + v / 4.0);
         }
-        sums.before /= g * g;
         sums
     }
 }
@@ -371,9 +396,9 @@ fn noise_floor_of(noise: Option<f32>, n: usize, fitted: usize) -> Option<f32> {
     Some(crate::linalg::sqrt_f32(sum / n * (n - fitted as f32) / n) * 1000.0)
 }
 
-/// RMSE (mg) of a sum of squared relative modulus errors over `n` poses; NaN for none.
-fn rmse_of_mg(sum: f32, n: usize) -> f32 {
-    if n == 0 { f32::NAN } else { crate::linalg::sqrt_f32(sum / n as f32) * 1000.0 }
+/// RMSE (mg) of a sum of squared modulus errors over `n` poses, in units of `g`; NaN for none.
+fn rmse_of_mg(sum: f32, n: usize, g: f32) -> f32 {
+    if n == 0 { f32::NAN } else { crate::linalg::sqrt_f32(sum / n as f32) / g * 1000.0 }
 }
 
 /// Judges `x` (deviation in `frame`) on the poses of `set` against `bounds`; `before` is the model the
@@ -388,14 +413,16 @@ pub fn judge(
     warnings: Warnings,
 ) -> Verdict {
     let params = frame.to_params(x);
-    let held = warnings.held;
+    let held = &warnings.held;
     let fitted = held.iter().filter(|&&h| !h).count();
     let sums = ModulusSums::of(x, frame, set, before);
-    let rmse_after_mg = rmse_of_mg(sums.after, set.len());
+    let rmse_after_mg = rmse_of_mg(sums.after, set.len(), 1.0);
     let noise_floor = noise_floor_of(sums.noise, set.len(), fitted);
-    let mut std = match deviation_covariance(x, frame, set, &held) {
-        Some(cov) => param_std(frame, &cov),
-        None => [f32::INFINITY; PARAM_COUNT],
+    let mut cov = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
+    let mut std = if covariance_in_place(x, frame, set, held, &mut cov) {
+        param_std(frame, &cov)
+    } else {
+        [f32::INFINITY; PARAM_COUNT]
     };
     let mut failures = Failures {
         rmse: !(rmse_after_mg <= bounds.max_rmse_mg),
@@ -414,6 +441,6 @@ pub fn judge(
         }
         failures.undetermined[i] = structurally_undetermined[i] || !(std[i] <= limits[i]);
     }
-    let rmse_before_mg = rmse_of_mg(sums.before, set.len());
+    let rmse_before_mg = rmse_of_mg(sums.before, set.len(), frame.gravity);
     Verdict { rmse_before_mg, rmse_after_mg, noise_floor_mg: noise_floor, param_std: std, failures, warnings }
 }
