@@ -148,8 +148,9 @@ pub(crate) fn normal_equations(
     jtj: &mut Matrix<PARAM_COUNT>,
     jte: &mut Deviation,
 ) {
-    *jtj = [[0.0; PARAM_COUNT]; PARAM_COUNT];
-    *jte = [0.0; PARAM_COUNT];
+    // Flat: one `memset` call, not one per row.
+    jtj.as_flattened_mut().fill(0.0);
+    jte.fill(0.0);
     for (i, pose) in poses.iter().enumerate() {
         let w = match weight {
             None => 1.0,
@@ -231,7 +232,8 @@ pub fn levenberg_marquardt_holding(
         return Err(SolveError::Diverged);
     }
     let mut lambda = config.initial_damping;
-    let (mut jtj, mut jte) = ([[0.0; PARAM_COUNT]; PARAM_COUNT], [0.0; PARAM_COUNT]);
+    let mut jtj = [[0.0; PARAM_COUNT]; PARAM_COUNT];
+    let mut jte = [0.0; PARAM_COUNT];
     // The normal equations are built (in place) at the start and after each accepted step.
     let mut rebuild = true;
     for iteration in 1..=config.max_iterations {
