@@ -111,7 +111,9 @@ macro_rules! add_outer_rows {
 
 /// Adds `w g g^T` to the lower triangle of `m` (`m[i][j]`, `j <= i`): the one place the library builds
 /// an information matrix or normal equations (the 9 model parameters, or the 9 quadric coefficients of
-/// the ellipsoid fit) from per-row gradients.
+/// the ellipsoid fit) from per-row gradients. Straight-line, measured on the bench: in a loop it is 82
+/// bytes instead of 798, but takes the LM from 84 k to 121 k cycles (budget 100 k); the first five rows
+/// alone in a loop save 176 bytes for 17.6 k cycles.
 #[inline(never)]
 pub fn add_outer_product(m: &mut Matrix<9>, g: &[f32; 9], w: f32) {
     add_outer_rows!(m, g, w;

@@ -257,7 +257,8 @@ pub fn levenberg_marquardt_holding(
         };
         let candidate = add(&x, &step);
         let candidate_cost = objective(&candidate, poses);
-        if candidate_cost.is_finite() && candidate_cost <= cost {
+        // (`cost` is finite: not above it means finite, NaN excluded.)
+        if candidate_cost <= cost {
             x = candidate;
             cost = candidate_cost;
             lambda = if lambda * 0.3 > 1e-9 { lambda * 0.3 } else { 1e-9 };
