@@ -202,8 +202,10 @@ pub(crate) fn check_input(poses: &[Pose], keep: &[bool], gravity: f32) -> Result
     if !(gravity > 0.0 && gravity < f32::INFINITY) {
         return Err(EllipsoidError::InvalidGravity);
     }
-    if kept(poses, keep).flatten().any(|v| !finite(v)) {
-        return Err(EllipsoidError::NonFinitePose);
+    for m in kept(poses, keep) {
+        if !(finite(m[0]) && finite(m[1]) && finite(m[2])) {
+            return Err(EllipsoidError::NonFinitePose);
+        }
     }
     Ok(())
 }
@@ -222,93 +224,109 @@ pub fn fit_ellipsoid(
     rule: &OutlierRule,
 ) -> Result<EllipsoidFit, EllipsoidError> {
     check_input(poses, keep, gravity)?;
-    let mut fit = Fitting { poses, keep, gravity };
-    let mut excluded = PoseList::EMPTY;
-    loop {
-        let kept = fit.keep.iter().take(poses.len()).filter(|&&k| k).count();
-        if kept < COEFFS {
-            return Err(EllipsoidError::TooFewPoses { got: kept });
-        }
-        let room = usize::from(excluded.len) < MAX_EXCLUDED && kept > COEFFS + 1;
-        let fitted = fit.fit_once();
-        // A gross outlier can bend the quadric into a non-ellipsoid, or into an ellipsoid no
-        // accelerometer has: then look for the pose without which the rest fit.
-        let bent = fitted.as_ref().is_none_or(|f| !plausible(&f.params));
-        let mut out = if bent && room && finite(rule.floor_g) { fit.best_left_out() } else { None };
-        if out.is_none() {
-            let Some(Fitted { params, center, held }) = fitted else {
-                return Err(EllipsoidError::Degenerate { missing: missing_directions(poses, fit.keep) });
-            };
-            let (worst, worst_abs, rmse_g) = fit.worst_and_rms(&params);
-            // The limit is at least the floor (or NaN): the median is needed only above the floor.
-            if !(worst_abs > rule.floor_g)
-                || !room
-                || !(worst_abs > larger(rule.floor_g, rule.robust_sigmas * 1.4826 * fit.median_abs(&params)))
-            {
-                return Ok(EllipsoidFit { params, center, excluded, held, rmse_g });
-            }
-            out = Some(worst);
-        }
-        if let Some(i) = out {
-            if let Some(k) = fit.keep.get_mut(i) {
-                *k = false;
-            }
-            excluded.push(i);
-        }
-    }
+    let fit = EllipsoidFit {
+        params: Params::IDENTITY,
+        center: [0.0; 3],
+        excluded: PoseList::EMPTY,
+        held: [false; 3],
+        rmse_g: 0.0,
+    };
+    let mut fitting = Fitting { poses, keep, gravity, fit };
+    fitting.robust(rule)?;
+    Ok(fitting.fit)
 }
 
-/// One least-squares fit: the model, the centre, the cross terms held.
-struct Fitted {
-    params: Params,
-    center: [f32; 3],
-    held: [bool; 3],
-}
-
-/// The poses, the ones kept and gravity: what every step of the robust fit reads.
+/// The poses, the ones kept and gravity, and the fit: the state of the robust fit.
 struct Fitting<'a> {
     poses: &'a [Pose],
     keep: &'a mut [bool],
     gravity: f32,
+    fit: EllipsoidFit,
 }
 
 impl Fitting<'_> {
+    /// Fits, leaving out poses per `rule`, until the fit stands.
+    fn robust(&mut self, rule: &OutlierRule) -> Result<(), EllipsoidError> {
+        loop {
+            let kept = self.keep.iter().take(self.poses.len()).filter(|&&k| k).count();
+            if kept < COEFFS {
+                return Err(EllipsoidError::TooFewPoses { got: kept });
+            }
+            let room = usize::from(self.fit.excluded.len) < MAX_EXCLUDED && kept > COEFFS + 1;
+            let mut fitted = self.fit_once();
+            // A gross outlier can bend the quadric into a non-ellipsoid, or into an ellipsoid no
+            // accelerometer has: then look for the pose without which the rest fit.
+            if fitted != Some(true) && room && finite(rule.floor_g) {
+                if let Some(i) = self.best_left_out() {
+                    self.leave_out(i);
+                    continue;
+                }
+                fitted = self.fit_once();
+            }
+            if fitted.is_none() {
+                return Err(EllipsoidError::Degenerate { missing: missing_directions(self.poses, self.keep) });
+            }
+            let (worst, worst_abs, rmse_g) = self.worst_and_rms();
+            self.fit.rmse_g = rmse_g;
+            // The limit is at least the floor (or NaN): the median is needed only above the floor.
+            if !(worst_abs > rule.floor_g)
+                || !room
+                || !(worst_abs > larger(rule.floor_g, rule.robust_sigmas * 1.4826 * self.median_abs()))
+            {
+                return Ok(());
+            }
+            self.leave_out(worst);
+        }
+    }
+
+    fn leave_out(&mut self, i: usize) {
+        if let Some(k) = self.keep.get_mut(i) {
+            *k = false;
+        }
+        self.fit.excluded.push(i);
+    }
+
     /// The kept pose without which the others fit an ellipsoid best (smallest modulus RMS).
     fn best_left_out(&mut self) -> Option<usize> {
         let mut best: Option<(usize, f32)> = None;
-        for i in 0..self.poses.len().min(self.keep.len()) {
-            if !self.keep[i] {
-                continue;
+        for i in 0..self.poses.len() {
+            // (`fit_once` takes `self` mutably: no index into `keep`, whose check could panic.)
+            match self.keep.get_mut(i) {
+                Some(k) if *k => *k = false,
+                _ => continue,
             }
-            self.keep[i] = false;
-            if let Some(fit) = self.fit_once().filter(|f| plausible(&f.params)) {
-                let rms = self.worst_and_rms(&fit.params).2;
+            if self.fit_once() == Some(true) {
+                let rms = self.worst_and_rms().2;
                 if best.is_none_or(|(_, b)| rms < b) {
                     best = Some((i, rms));
                 }
             }
-            self.keep[i] = true;
+            if let Some(k) = self.keep.get_mut(i) {
+                *k = true;
+            }
         }
         best.map(|(i, _)| i)
     }
 
     /// Reference point (mean) and RMS spread of the kept means: the numbers the quadric is fitted in.
     fn reference(&self) -> ([f32; 3], f32) {
-        let n = kept(self.poses, self.keep).count().max(1) as f32;
-        let mut sum = [0.0f32; 3];
+        let (mut sum, mut n) = ([0.0f32; 3], 0u32);
         for m in kept(self.poses, self.keep) {
             for a in 0..3 {
                 sum[a] += m[a];
             }
+            n += 1;
         }
+        let n = n.max(1) as f32;
         let center = sum.map(|s| s / n);
         let spread: f32 = kept(self.poses, self.keep).map(|m| norm_squared(difference(m, center))).sum();
         (center, sqrt_f32(spread / n))
     }
 
-    /// One least-squares fit of the quadric to the kept poses, factored into the model; `None` when
-    /// the poses do not determine an ellipsoid.
-    fn fit_once(&self) -> Option<Fitted> {
+    /// One least-squares fit of the quadric to the kept poses, factored into the model (in
+    /// `self.fit`): `None` when the poses do not determine an ellipsoid, else whether it is one an
+    /// accelerometer can have.
+    fn fit_once(&mut self) -> Option<bool> {
         let (m0, s) = self.reference();
         let mut ata: Matrix<COEFFS> = [[0.0; COEFFS]; COEFFS];
         let mut atb = [0.0f32; COEFFS];
@@ -340,24 +358,47 @@ impl Fitting<'_> {
         }
         // `atb` becomes the quadric coefficients.
         solve_spd_holding_in_place(&mut ata, &mut atb, &held).ok()?;
-        let (params, center) = factor(&atb, m0, s, self.gravity)?;
         // Quadric cross terms xy, xz, yz map to Mxx, Myy, Mzz.
-        Some(Fitted { params, center, held: [held[6], held[7], held[8]] })
+        self.fit.held = [held[6], held[7], held[8]];
+        self.factor(&atb, m0, s)?;
+        Some(plausible(&self.fit.params))
     }
 
-    /// `| |f_b| / g - 1 |` of pose `i` under `p`; `None` when it is not kept. Out of line: every
+    /// The quadric `v^T A v + b^T v = 1` in `v = (m - m0) / s` to the paper's `Ka`, `B` and the
+    /// centre; `None` unless an ellipsoid.
+    fn factor(&mut self, theta: &[f32; COEFFS], m0: [f32; 3], s: f32) -> Option<()> {
+        // A = L^T L, L lower-triangular; the centre solves A v0 = -b / 2: L^T y = -b / 2, then L v0 = y.
+        let l = lower_factor([theta[0], theta[1], theta[2]], [theta[6], theta[7], theta[8]])?;
+        let ([sx, sy, sz], [mx, my, mz]) = (l.scale, l.nonorth);
+        let b = [theta[3], theta[4], theta[5]];
+        let y2 = -0.5 * b[2] / sz;
+        let y1 = (-0.5 * b[1] - mz * y2) / sy;
+        let y0 = (-0.5 * b[0] - mx * y1 - my * y2) / sx;
+        let v0 = y0 / sx;
+        let v1 = (y1 - mx * v0) / sy;
+        let v2 = (y2 - my * v0 - mz * v1) / sz;
+        // v^T A v + b^T v = 1 is |L (v - v0)|^2 = 1 + |y|^2 = k, and Ka^T Ka = g^2 A / (k s^2):
+        // Ka = L g / (s sqrt(k)).
+        let w = self.gravity / (s * sqrt_f32(1.0 + y0 * y0 + y1 * y1 + y2 * y2));
+        let ka = Params { bias: [0.0; 3], scale: l.scale.map(|v| w * v), nonorth: l.nonorth.map(|v| w * v) };
+        self.fit.center = [m0[0] + s * v0, m0[1] + s * v1, m0[2] + s * v2];
+        self.fit.params = Params { bias: ka.ka_times(self.fit.center), ..ka };
+        self.fit.params.is_finite().then_some(())
+    }
+
+    /// `| |f_b| / g - 1 |` of pose `i` under the fit; `None` when it is not kept. Out of line: every
     /// statistic below calls it.
     #[inline(never)]
-    fn abs_error(&self, p: &Params, i: usize) -> Option<f32> {
+    fn abs_error(&self, i: usize) -> Option<f32> {
         let (pose, &kept) = (self.poses.get(i)?, self.keep.get(i)?);
-        kept.then(|| (sqrt_f32(norm_squared(p.apply(pose.mean))) / self.gravity - 1.0).abs())
+        kept.then(|| (sqrt_f32(norm_squared(self.fit.params.apply(pose.mean))) / self.gravity - 1.0).abs())
     }
 
     /// The index and size of the largest modulus error of the kept poses, and their RMS.
-    fn worst_and_rms(&self, p: &Params) -> (usize, f32, f32) {
+    fn worst_and_rms(&self) -> (usize, f32, f32) {
         let (mut worst, mut worst_abs, mut sum, mut n) = (0, -1.0f32, 0.0f32, 0u32);
         for i in 0..self.poses.len() {
-            if let Some(e) = self.abs_error(p, i) {
+            if let Some(e) = self.abs_error(i) {
                 if e > worst_abs {
                     (worst, worst_abs) = (i, e);
                 }
@@ -370,8 +411,8 @@ impl Fitting<'_> {
 
     /// Lower median of the kept `|e|` without a buffer: the smallest value with at least half the
     /// values at or below it (quadratic in the pose count, which is small).
-    fn median_abs(&self, p: &Params) -> f32 {
-        let errors = || (0..self.poses.len()).filter_map(|i| self.abs_error(p, i));
+    fn median_abs(&self) -> f32 {
+        let errors = || (0..self.poses.len()).filter_map(|i| self.abs_error(i));
         let n = errors().count();
         let mut best = f32::INFINITY;
         for v in errors() {
@@ -408,43 +449,24 @@ fn plausible(p: &Params) -> bool {
         && m[2].abs() <= PLAUSIBLE_NONORTH * s[1]
 }
 
-/// `v^T A v + b^T v = 1` in `v = (m - m0) / s` to the paper's `Ka`, `B` and the centre; `None` unless
-/// an ellipsoid.
-fn factor(theta: &[f32; COEFFS], m0: [f32; 3], s: f32, gravity: f32) -> Option<(Params, [f32; 3])> {
-    // A = L^T L, L lower-triangular; the centre solves A v0 = -b / 2: L^T y = -b / 2, then L v0 = y.
-    let l = lower_factor([theta[0], theta[1], theta[2]], [theta[6], theta[7], theta[8]])?;
-    let ([sx, sy, sz], [mx, my, mz]) = (l.scale, l.nonorth);
-    let b = [theta[3], theta[4], theta[5]];
-    let y2 = -0.5 * b[2] / sz;
-    let y1 = (-0.5 * b[1] - mz * y2) / sy;
-    let y0 = (-0.5 * b[0] - mx * y1 - my * y2) / sx;
-    let v0 = y0 / sx;
-    let v1 = (y1 - mx * v0) / sy;
-    let v2 = (y2 - my * v0 - mz * v1) / sz;
-    // v^T A v + b^T v = 1 is |L (v - v0)|^2 = 1 + |y|^2 = k, and Ka^T Ka = g^2 A / (k s^2):
-    // Ka = L g / (s sqrt(k)).
-    let w = gravity / (s * sqrt_f32(1.0 + y0 * y0 + y1 * y1 + y2 * y2));
-    let ka = Params { bias: [0.0; 3], scale: l.scale.map(|v| w * v), nonorth: l.nonorth.map(|v| w * v) };
-    let center = [m0[0] + s * v0, m0[1] + s * v1, m0[2] + s * v2];
-    let params = Params { bias: ka.ka_times(center), ..ka };
-    params.is_finite().then_some((params, center))
-}
-
 /// The lower-triangular `L` with `L^T L = a` (a Cholesky factorisation in reversed order, bottom row
 /// first) for the symmetric `a` given by its diagonal and its `xy, xz, yz` entries, as the `Ka` of a
 /// model without bias; `None` unless `a` is positive definite.
 fn lower_factor(diagonal: [f32; 3], off: [f32; 3]) -> Option<Params> {
-    let szz = sqrt_positive(diagonal[2])?;
+    // A pivot that is not positive gives a diagonal entry that is 0 or NaN, and NaN propagates to
+    // the entries after it: one check at the end.
+    let szz = sqrt_f32(diagonal[2]);
     let mzz = off[2] / szz;
     let myy = off[1] / szz;
-    let syy = sqrt_positive(diagonal[1] - mzz * mzz)?;
+    let syy = sqrt_f32(diagonal[1] - mzz * mzz);
     let mxx = (off[0] - myy * mzz) / syy;
-    let sxx = sqrt_positive(diagonal[0] - mxx * mxx - myy * myy)?;
-    Some(Params { bias: [0.0; 3], scale: [sxx, syy, szz], nonorth: [mxx, myy, mzz] })
-}
-
-fn sqrt_positive(v: f32) -> Option<f32> {
-    (v > 0.0 && v < f32::INFINITY).then(|| sqrt_f32(v))
+    let sxx = sqrt_f32(diagonal[0] - mxx * mxx - myy * myy);
+    let scale = [sxx, syy, szz];
+    scale.iter().all(|&v| v > 0.0 && v < f32::INFINITY).then_some(Params {
+        bias: [0.0; 3],
+        scale,
+        nonorth: [mxx, myy, mzz],
+    })
 }
 
 /// Per-axis centre and half-width of the range of the kept means.
@@ -457,7 +479,10 @@ pub(crate) fn mid_range(poses: &[Pose], keep: &[bool]) -> ([f32; 3], [f32; 3]) {
             hi[a] = larger(m[a], hi[a]);
         }
     }
-    (core::array::from_fn(|a| 0.5 * (hi[a] + lo[a])), core::array::from_fn(|a| 0.5 * (hi[a] - lo[a])))
+    for a in 0..3 {
+        (lo[a], hi[a]) = (0.5 * (hi[a] + lo[a]), 0.5 * (hi[a] - lo[a]));
+    }
+    (lo, hi)
 }
 
 /// The largest of `v` and 0.
