@@ -137,14 +137,14 @@ impl<const MAX_POSES: usize> NormalizedPoses<MAX_POSES> {
         }
         let mut keep = [true; MAX_POSES];
         let keep = &mut keep[..poses.len()];
-        let (initial, frame) = initial_estimate(poses, keep, init, gravity, rule)?;
+        initial_estimate(&mut self.initial, &mut self.frame, poses, keep, init, gravity, rule)?;
+        let (frame, initial) = (self.frame, &self.initial);
         self.start = frame.to_deviation(&initial.params);
         for i in 0..PARAM_COUNT {
             if initial.held[i] {
                 self.start[i] = 0.0;
             }
         }
-        (self.frame, self.initial) = (frame, initial);
         self.poses.clear();
         self.source.clear();
         for (i, (p, _)) in poses.iter().zip(keep.iter()).enumerate().filter(|(_, (_, k))| **k) {
@@ -186,24 +186,27 @@ impl<const MAX_POSES: usize> NormalizedPoses<MAX_POSES> {
     }
 }
 
-/// The estimate `init` asks for (see [`Init`]) and its frame; `keep` marks the poses it uses.
+/// The estimate `init` asks for (see [`Init`]) and its frame, written into `initial` and `frame`;
+/// `keep` marks the poses it uses.
 fn initial_estimate(
+    initial: &mut Initial,
+    frame: &mut Frame,
     poses: &[Pose],
     keep: &mut [bool],
     init: Init,
     gravity: f32,
     rule: &OutlierRule,
-) -> Result<(Initial, Frame), InitError> {
+) -> Result<(), InitError> {
     let mut ellipsoid_error = None;
     if init != Init::SixPosition {
         match fit_ellipsoid(poses, keep, gravity, rule) {
             Ok(fit) => {
                 // The normalising frame of the fit: its centre and gains `1 / S`.
                 let gain = fit.params.scale.map(|s| 1.0 / s);
-                let frame = Frame::new(fit.center, gain, gravity).map_err(|e| InitError::Coarse(e.into()))?;
+                *frame = Frame::new(fit.center, gain, gravity).map_err(|e| InitError::Coarse(e.into()))?;
                 let held = held_parameters(&fit.held);
-                let initial = Initial { kind: Init::Ellipsoid, params: fit.params, excluded: fit.excluded, held };
-                return Ok((initial, frame));
+                *initial = Initial { kind: Init::Ellipsoid, params: fit.params, excluded: fit.excluded, held };
+                return Ok(());
             }
             Err(e) if init == Init::Ellipsoid => return Err(InitError::Ellipsoid(e)),
             Err(e) => {
@@ -216,7 +219,8 @@ fn initial_estimate(
     // ellipsoid's error is the one reported.
     let c = CoarseCalibration::from_poses(poses, keep, gravity)
         .map_err(|e| ellipsoid_error.map_or(InitError::Coarse(e), InitError::Ellipsoid))?;
-    let initial =
+    *frame = *c.frame();
+    *initial =
         Initial { kind: Init::SixPosition, params: c.params(), excluded: PoseList::EMPTY, held: [false; PARAM_COUNT] };
-    Ok((initial, *c.frame()))
+    Ok(())
 }
