@@ -84,6 +84,13 @@ impl core::fmt::Display for CoarseError {
 
 impl core::error::Error for CoarseError {}
 
+/// The coarse calibration's name for an input error.
+impl From<EllipsoidError> for CoarseError {
+    fn from(e: EllipsoidError) -> Self {
+        if e == EllipsoidError::InvalidGravity { Self::InvalidGravity } else { Self::NonFinitePose }
+    }
+}
+
 impl From<FrameError> for CoarseError {
     fn from(e: FrameError) -> Self {
         match e {
@@ -149,10 +156,12 @@ impl CoarseCalibration {
     /// Coarse calibration from the means (input unit) of the poses flagged in `keep` (poses past its
     /// end are not used) against `gravity` (output unit).
     pub fn from_poses(poses: &[Pose], keep: &[bool], gravity: f32) -> Result<Self, CoarseError> {
-        check_input(poses, keep, gravity).map_err(|e| match e {
-            EllipsoidError::InvalidGravity => CoarseError::InvalidGravity,
-            _ => CoarseError::NonFinitePose,
-        })?;
+        check_input(poses, keep, gravity).map_err(CoarseError::from)?;
+        Self::from_valid_poses(poses, keep, gravity)
+    }
+
+    /// [`CoarseCalibration::from_poses`] of input [`check_input`] has accepted.
+    pub(crate) fn from_valid_poses(poses: &[Pose], keep: &[bool], gravity: f32) -> Result<Self, CoarseError> {
         // Centre and half-range per axis from the extremes: removes the large offsets of raw counts.
         let (mid, half) = mid_range(poses, keep);
         // An axis pointed up and down spans about twice gravity, like the widest one; one that spans

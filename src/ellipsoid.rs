@@ -224,6 +224,16 @@ pub fn fit_ellipsoid(
     rule: &OutlierRule,
 ) -> Result<EllipsoidFit, EllipsoidError> {
     check_input(poses, keep, gravity)?;
+    fit_valid(poses, keep, gravity, rule)
+}
+
+/// [`fit_ellipsoid`] of input [`check_input`] has accepted.
+pub(crate) fn fit_valid(
+    poses: &[Pose],
+    keep: &mut [bool],
+    gravity: f32,
+    rule: &OutlierRule,
+) -> Result<EllipsoidFit, EllipsoidError> {
     let fit = EllipsoidFit {
         params: Params::IDENTITY,
         center: [0.0; 3],

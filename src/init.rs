@@ -25,7 +25,7 @@
 
 use crate::accumulator::Pose;
 use crate::coarse::{CoarseCalibration, CoarseError};
-use crate::ellipsoid::{EllipsoidError, OutlierRule, PoseList, fit_ellipsoid, held_parameters};
+use crate::ellipsoid::{EllipsoidError, OutlierRule, PoseList, check_input, fit_valid, held_parameters};
 use crate::frame::{Deviation, Frame, NormPose};
 use crate::model::{PARAM_COUNT, Params};
 use crate::verdict::PoseSet;
@@ -197,9 +197,13 @@ fn initial_estimate(
     gravity: f32,
     rule: &OutlierRule,
 ) -> Result<(), InitError> {
+    // The same checks for both (as the six faces' error when they are asked for).
+    if let Err(e) = check_input(poses, keep, gravity) {
+        return Err(if init == Init::SixPosition { InitError::Coarse(e.into()) } else { InitError::Ellipsoid(e) });
+    }
     let mut ellipsoid_error = None;
     if init != Init::SixPosition {
-        match fit_ellipsoid(poses, keep, gravity, rule) {
+        match fit_valid(poses, keep, gravity, rule) {
             Ok(fit) => {
                 // The normalising frame of the fit: its centre and gains `1 / S`.
                 let gain = fit.params.scale.map(|s| 1.0 / s);
@@ -217,7 +221,7 @@ fn initial_estimate(
     }
     // The six faces' own frame, exactly (the paper's path); when they are the fallback, the
     // ellipsoid's error is the one reported.
-    let c = CoarseCalibration::from_poses(poses, keep, gravity)
+    let c = CoarseCalibration::from_valid_poses(poses, keep, gravity)
         .map_err(|e| ellipsoid_error.map_or(InitError::Coarse(e), InitError::Ellipsoid))?;
     *frame = *c.frame();
     *initial =
