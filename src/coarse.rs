@@ -122,10 +122,13 @@ impl SearchWidths {
     pub fn search_box(&self, center: &Deviation) -> Result<SearchBox<PARAM_COUNT>, GaError> {
         // Bias, scale, non-orthogonality: three parameters each.
         let half = [self.bias_g, self.scale_rel, self.nonorth];
-        SearchBox::new(
-            core::array::from_fn(|i| center[i] - half[i / 3]),
-            core::array::from_fn(|i| center[i] + half[i / 3]),
-        )
+        let mut lower = [0.0; PARAM_COUNT];
+        let mut upper = [0.0; PARAM_COUNT];
+        for i in 0..PARAM_COUNT {
+            lower[i] = center[i] - half[i / 3];
+            upper[i] = center[i] + half[i / 3];
+        }
+        SearchBox::new(lower, upper)
     }
 }
 
@@ -176,7 +179,12 @@ impl CoarseCalibration {
         let mut sums = [[0.0f32; 2]; 3];
         let mut counts = [[0u16; 2]; 3];
         for m in kept(poses, keep) {
-            let u = core::array::from_fn(|a| if half[a] > 0.0 { (m[a] - mid[a]) / half[a] } else { 0.0 });
+            let mut u = [0.0; 3];
+            for a in 0..3 {
+                if half[a] > 0.0 {
+                    u[a] = (m[a] - mid[a]) / half[a];
+                }
+            }
             let near = half_axes_near(u, DOMINANCE);
             // All six only for u = 0, which points nowhere.
             if near == 0x3f {

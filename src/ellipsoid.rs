@@ -328,7 +328,7 @@ impl Fitting<'_> {
             n += 1;
         }
         let n = n.max(1) as f32;
-        let center = sum.map(|s| s / n);
+        let center = [sum[0] / n, sum[1] / n, sum[2] / n];
         let spread: f32 = kept(self.poses, self.keep).map(|m| norm_squared(difference(m, center))).sum();
         (center, sqrt_f32(spread / n))
     }
@@ -341,7 +341,7 @@ impl Fitting<'_> {
         let mut ata: Matrix<COEFFS> = [[0.0; COEFFS]; COEFFS];
         let mut atb = [0.0f32; COEFFS];
         for m in kept(self.poses, self.keep) {
-            let v = difference(m, m0).map(|d| d / s);
+            let v = [(m[0] - m0[0]) / s, (m[1] - m0[1]) / s, (m[2] - m0[2]) / s];
             let row = [
                 v[0] * v[0],
                 v[1] * v[1],
@@ -390,7 +390,7 @@ impl Fitting<'_> {
         // v^T A v + b^T v = 1 is |L (v - v0)|^2 = 1 + |y|^2 = k, and Ka^T Ka = g^2 A / (k s^2):
         // Ka = L g / (s sqrt(k)).
         let w = self.gravity / (s * sqrt_f32(1.0 + y0 * y0 + y1 * y1 + y2 * y2));
-        let ka = Params { bias: [0.0; 3], scale: l.scale.map(|v| w * v), nonorth: l.nonorth.map(|v| w * v) };
+        let ka = Params { bias: [0.0; 3], scale: [w * sx, w * sy, w * sz], nonorth: [w * mx, w * my, w * mz] };
         self.fit.center = [m0[0] + s * v0, m0[1] + s * v1, m0[2] + s * v2];
         self.fit.params = Params { bias: ka.ka_times(self.fit.center), ..ka };
         self.fit.params.is_finite().then_some(())
@@ -464,17 +464,17 @@ fn plausible(p: &Params) -> bool {
 /// model without bias; `None` unless `a` is positive definite.
 fn lower_factor(diagonal: [f32; 3], off: [f32; 3]) -> Option<Params> {
     // A pivot that is not positive gives a diagonal entry that is 0 or NaN, and NaN propagates to
-    // the entries after it: one check at the end.
+    // the entries after it; an infinite one makes the model infinite: one check at the end (and
+    // the caller's that the model is finite).
     let szz = sqrt_f32(diagonal[2]);
     let mzz = off[2] / szz;
     let myy = off[1] / szz;
     let syy = sqrt_f32(diagonal[1] - mzz * mzz);
     let mxx = (off[0] - myy * mzz) / syy;
     let sxx = sqrt_f32(diagonal[0] - mxx * mxx - myy * myy);
-    let scale = [sxx, syy, szz];
-    scale.iter().all(|&v| v > 0.0 && v < f32::INFINITY).then_some(Params {
+    (sxx > 0.0 && syy > 0.0 && szz > 0.0).then_some(Params {
         bias: [0.0; 3],
-        scale,
+        scale: [sxx, syy, szz],
         nonorth: [mxx, myy, mzz],
     })
 }
@@ -516,7 +516,10 @@ pub fn missing_directions(poses: &[Pose], keep: &[bool]) -> Directions {
     let (mid, half) = mid_range(poses, keep);
     let widest = larger(largest(half), f32::MIN_POSITIVE);
     // cos 60 deg = 0.5.
-    let seen = kept(poses, keep).fold(0, |seen, m| seen | half_axes_near(difference(m, mid).map(|d| d / widest), 0.5));
+    let mut seen = 0;
+    for m in kept(poses, keep) {
+        seen |= half_axes_near([(m[0] - mid[0]) / widest, (m[1] - mid[1]) / widest, (m[2] - mid[2]) / widest], 0.5);
+    }
     Directions(!seen & 0x3f)
 }
 

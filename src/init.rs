@@ -206,7 +206,8 @@ fn initial_estimate(
         match fit_valid(poses, keep, gravity, rule) {
             Ok(fit) => {
                 // The normalising frame of the fit: its centre and gains `1 / S`.
-                let gain = fit.params.scale.map(|s| 1.0 / s);
+                let s = fit.params.scale;
+                let gain = [1.0 / s[0], 1.0 / s[1], 1.0 / s[2]];
                 *frame = Frame::new(fit.center, gain, gravity).map_err(|e| InitError::Coarse(e.into()))?;
                 let held = held_parameters(&fit.held);
                 *initial = Initial { kind: Init::Ellipsoid, params: fit.params, excluded: fit.excluded, held };
