@@ -212,7 +212,7 @@ pub(crate) fn check_input(poses: &[Pose], keep: &[bool], gravity: f32) -> Result
 
 /// The means of the poses flagged in `keep` (poses past its end are not kept).
 pub(crate) fn kept<'a>(poses: &'a [Pose], keep: &'a [bool]) -> impl Iterator<Item = [f32; 3]> + 'a {
-    poses.iter().zip(keep).filter(|(_, k)| **k).map(|(p, _)| p.mean)
+    keep.iter().zip(poses).filter_map(|(&k, p)| k.then_some(p.mean))
 }
 
 /// Fits the ellipsoid to the means of the poses flagged in `keep` (same length as `poses`; poses
@@ -258,7 +258,7 @@ impl Fitting<'_> {
     /// Fits, leaving out poses per `rule`, until the fit stands.
     fn robust(&mut self, rule: &OutlierRule) -> Result<(), EllipsoidError> {
         loop {
-            let kept = self.keep.iter().take(self.poses.len()).filter(|&&k| k).count();
+            let kept = kept(self.poses, self.keep).count();
             if kept < COEFFS {
                 return Err(EllipsoidError::TooFewPoses { got: kept });
             }
