@@ -186,16 +186,12 @@ impl CoarseCalibration {
                 }
             }
             let near = half_axes_near(u, DOMINANCE);
-            // All six only for u = 0, which points nowhere.
-            if near == 0x3f {
-                continue;
-            }
-            for bit in 0..6 {
-                if near & (1 << bit) != 0 {
-                    let (a, side) = (bit / 2, bit % 2);
-                    sums[a][side] += m[a];
-                    counts[a][side] = counts[a][side].saturating_add(1);
-                }
+            // At most one half-axis is within 25 deg (all six only for u = 0, which points nowhere).
+            if near != 0 && near != 0x3f {
+                let bit = near.trailing_zeros() as usize;
+                let (a, side) = (bit / 2, bit % 2);
+                sums[a][side] += m[a];
+                counts[a][side] = counts[a][side].saturating_add(1);
             }
         }
         let mut offset = [0.0; 3];

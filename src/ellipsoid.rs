@@ -234,8 +234,9 @@ pub(crate) fn fit_valid(
     gravity: f32,
     rule: &OutlierRule,
 ) -> Result<EllipsoidFit, EllipsoidError> {
+    // All zeros (one clear): the fit overwrites the model before anything reads it.
     let fit = EllipsoidFit {
-        params: Params::IDENTITY,
+        params: Params { bias: [0.0; 3], scale: [0.0; 3], nonorth: [0.0; 3] },
         center: [0.0; 3],
         excluded: PoseList::EMPTY,
         held: [false; 3],
