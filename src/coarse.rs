@@ -172,7 +172,8 @@ impl CoarseCalibration {
         let widest = largest(half);
         for a in 0..3 {
             if widest > 0.0 && half[a] < MIN_SPAN_FRACTION * widest {
-                let span_pct = (100.0 * half[a] / widest).clamp(0.0, 99.0) as u8;
+                // In [0, 75): the cast needs no clamp.
+                let span_pct = (100.0 * half[a] / widest) as u8;
                 return Err(CoarseError::NotReversed { axis: a as u8, span_pct });
             }
         }

@@ -203,7 +203,8 @@ pub(crate) fn check_input(poses: &[Pose], keep: &[bool], gravity: f32) -> Result
         return Err(EllipsoidError::InvalidGravity);
     }
     for m in kept(poses, keep) {
-        if !(finite(m[0]) && finite(m[1]) && finite(m[2])) {
+        // `x - x` is 0 for a finite `x`, NaN otherwise.
+        if (m[0] - m[0]) + (m[1] - m[1]) + (m[2] - m[2]) != 0.0 {
             return Err(EllipsoidError::NonFinitePose);
         }
     }
