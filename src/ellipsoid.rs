@@ -192,9 +192,10 @@ pub struct EllipsoidFit {
     pub rmse_g: f32,
 }
 
-/// `true` for a finite `v`: one comparison on the FPU (`f32::is_finite` works on the bits).
+/// `true` for a finite `v`: `v - v` is 0 for a finite `v`, NaN otherwise (on the FPU:
+/// `f32::is_finite` works on the bits).
 pub(crate) fn finite(v: f32) -> bool {
-    v.abs() < f32::INFINITY
+    v - v == 0.0
 }
 
 /// Checks gravity and the kept means, the same for both initialisations: `Ok` or which is wrong.
