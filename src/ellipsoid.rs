@@ -194,11 +194,13 @@ pub struct EllipsoidFit {
 
 /// `true` for a finite `v`: `v - v` is 0 for a finite `v`, NaN otherwise (on the FPU:
 /// `f32::is_finite` works on the bits).
+#[allow(clippy::eq_op)] // `v - v` is the test.
 pub(crate) fn finite(v: f32) -> bool {
     v - v == 0.0
 }
 
 /// Checks gravity and the kept means, the same for both initialisations: `Ok` or which is wrong.
+#[allow(clippy::eq_op)] // `x - x` is the test.
 pub(crate) fn check_input(poses: &[Pose], keep: &[bool], gravity: f32) -> Result<(), EllipsoidError> {
     if !(gravity > 0.0 && gravity < f32::INFINITY) {
         return Err(EllipsoidError::InvalidGravity);
