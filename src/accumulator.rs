@@ -180,19 +180,20 @@ fn ratio_to_f32(total: i64, n: u32) -> f32 {
 }
 
 /// Raw sums `(sum x, sum x^2)` of one axis of a block of `i16` samples (at most `2^16`: the `i32` sum
-/// is exact, `2^16 * 2^15 = 2^31`), two samples per step; each square (at most `2^30`) is one
+/// is exact, `2^16 * 2^15 = 2^31`), four samples per step; each square (at most `2^30`) is one
 /// multiply-accumulate into the `i64` (`smlal` on a Cortex-M4). Raw sums of a pose stay exact in `i64`:
 /// at most `2^31` samples, `2^31 * 2^30 = 2^61`.
 #[inline(always)]
 fn raw_i16_axis_sums(values: &[i16]) -> (i32, i64) {
     let (mut sum, mut sum_sq) = (0i32, 0i64);
-    let mut pairs = values.chunks_exact(2);
-    for pair in &mut pairs {
-        let (a, b) = (i32::from(pair[0]), i32::from(pair[1]));
-        sum += a + b;
+    let mut quads = values.chunks_exact(4);
+    for quad in &mut quads {
+        let (a, b, c, d) = (i32::from(quad[0]), i32::from(quad[1]), i32::from(quad[2]), i32::from(quad[3]));
+        sum += (a + b) + (c + d);
         sum_sq += i64::from(a) * i64::from(a) + i64::from(b) * i64::from(b);
+        sum_sq += i64::from(c) * i64::from(c) + i64::from(d) * i64::from(d);
     }
-    for &v in pairs.remainder() {
+    for &v in quads.remainder() {
         let a = i32::from(v);
         sum += a;
         sum_sq += i64::from(a) * i64::from(a);
