@@ -25,12 +25,8 @@ pub(crate) struct JointFit {
 fn stacked(ctx: &Context<'_>, w: &Within, v: &WithinVariant) -> (Vec<Vec<f64>>, Vec<f64>, Vec<usize>) {
     let weight = 1.0 / ctx.e_white.sqrt();
     let base = ctx.base_rows.first().map_or(0, Vec::len);
-    let mut rows: Vec<Vec<f64>> = ctx
-        .base_rows
-        .iter()
-        .zip(&v.pose_extra)
-        .map(|(b, e)| b.iter().chain(e).map(|x| x * weight).collect())
-        .collect();
+    let mut rows: Vec<Vec<f64>> =
+        ctx.base_rows.iter().zip(&v.pose_extra).map(|(b, e)| b.iter().chain(e).map(|x| x * weight).collect()).collect();
     let mut r: Vec<f64> = ctx.m.r.iter().map(|x| x * weight).collect();
     let mut fold = ctx.fold.clone();
     for (i, row) in v.rows.iter().enumerate() {
@@ -56,10 +52,8 @@ pub(crate) fn best(ctx: &Context<'_>, w: &Within, variants: &[WithinVariant]) ->
     if !ctx.pose_level || !(ctx.e_white > 0.0) {
         return None;
     }
-    let (ratio, v) = variants
-        .iter()
-        .filter_map(|v| heldout_ratio(ctx, w, v).map(|r| (r, v)))
-        .min_by(|a, b| a.0.total_cmp(&b.0))?;
+    let (ratio, v) =
+        variants.iter().filter_map(|v| heldout_ratio(ctx, w, v).map(|r| (r, v))).min_by(|a, b| a.0.total_cmp(&b.0))?;
     let (rows, r, _) = stacked(ctx, w, v);
     let fitted = fit_residuals(&rows, &r, &vec![false; r.len()])?;
     let scale = ctx.e_white.sqrt();
