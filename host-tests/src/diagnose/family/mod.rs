@@ -8,6 +8,7 @@ mod drift;
 mod joint;
 mod motion;
 mod nonlinearity;
+mod ringing;
 mod settling;
 mod temperature;
 
