@@ -34,13 +34,9 @@ fn ranking(e: &Evaluation) -> f64 {
     e.candidate.evidence() + cause
 }
 
-/// Picks the verdict among the evaluated families and measures the shrink.
-pub(crate) fn decide(m: &Measured, evaluations: &[Evaluation], probes: &[Probe]) -> Decision {
-    let significant = m.gap.significant;
-    let best_probe = probes
-        .iter()
-        .filter(|p| p.heldout_gain.is_finite() && p.heldout_gain >= MIN_GAIN)
-        .max_by(|a, b| a.heldout_gain.total_cmp(&b.heldout_gain));
+/// The strongest family: one that predicts the withheld values if it explains enough, else the
+/// better of those and the noise models.
+fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation]) -> Option<(usize, &'e Evaluation)> {
     let usable = |e: &&Evaluation| e.candidate.applicable && e.candidate.evidence().is_finite();
     let strongest = |noise: bool| {
         evaluations
@@ -59,14 +55,24 @@ pub(crate) fn decide(m: &Measured, evaluations: &[Evaluation], probes: &[Probe])
         half_left && strongest(true).is_some_and(|(_, n)| n.candidate.evidence() >= e + NOISE_FAR_AHEAD)
     };
     let value = strongest(false).filter(|(_, e)| e.candidate.evidence() >= MIN_GAIN);
-    let best = value.filter(|(_, e)| !noise_far_ahead(e)).or_else(|| {
+    value.filter(|(_, e)| !noise_far_ahead(e)).or_else(|| {
         let noise = strongest(true);
         let other = strongest(false);
         match (noise, other) {
             (Some(n), Some(o)) => Some(if n.1.candidate.evidence() >= o.1.candidate.evidence() { n } else { o }),
             (n, o) => n.or(o),
         }
-    });
+    })
+}
+
+/// Picks the verdict among the evaluated families and measures the shrink.
+pub(crate) fn decide(m: &Measured, evaluations: &[Evaluation], probes: &[Probe]) -> Decision {
+    let significant = m.gap.significant;
+    let best_probe = probes
+        .iter()
+        .filter(|p| p.heldout_gain.is_finite() && p.heldout_gain >= MIN_GAIN)
+        .max_by(|a, b| a.heldout_gain.total_cmp(&b.heldout_gain));
+    let best = best_family(m, evaluations);
     // A family wins only if no out-of-catalogue probe explains the withheld poses better.
     let beaten = |gain: f64| best_probe.is_some_and(|p| p.heldout_gain > gain);
     let winner = best

@@ -84,3 +84,57 @@ pub(crate) fn rings(samples: &[[f64; 3]], poses: &[PoseData], disturbed: &[bool]
     let Some(peak) = (0..cycles.len()).max_by(|&a, &b| early[a].total_cmp(&early[b])) else { return false };
     early[peak] >= PEAK_OVER_MEDIAN * median(&early) && early[peak] >= DAMPED_RATIO * late[peak]
 }
+
+#[cfg(test)]
+mod tests {
+    use rand_core::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+    use rand_xoshiro::Xoshiro256PlusPlus;
+
+    use super::*;
+    use crate::diagnose::SEGMENTS;
+
+    const RATE_HZ: f64 = 200.0;
+    const HOLD: usize = 600;
+
+    /// Three holds of white noise (1 unit) plus `signal(t)` (t in s from each hold's start).
+    fn holds(signal: &dyn Fn(f64) -> f64) -> (Vec<[f64; 3]>, Vec<PoseData>) {
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(7);
+        let noise = Normal::new(0.0, 1.0).unwrap();
+        let mut samples = Vec::new();
+        let mut poses = Vec::new();
+        for _ in 0..3 {
+            let start = samples.len();
+            for n in 0..HOLD {
+                let s = signal(n as f64 / RATE_HZ);
+                samples.push(std::array::from_fn(|a| noise.sample(&mut rng) + if a == 0 { s } else { 0.0 }));
+            }
+            poses.push(PoseData {
+                mean: [0.0; 3],
+                var: [1.0; 3],
+                n: HOLD,
+                t_start: 0.0,
+                t_end: HOLD as f64 / RATE_HZ,
+                temp: None,
+                seg: [[0.0; 3]; SEGMENTS],
+                seg_n: HOLD / SEGMENTS,
+                rows: start..start + HOLD,
+            });
+        }
+        (samples, poses)
+    }
+
+    #[test]
+    fn a_damped_oscillation_at_one_frequency_rings_and_noise_or_a_steady_one_does_not() {
+        let all = [true; 3];
+        let damped = |t: f64| 3.0 * (-t / 1.0).exp() * (std::f64::consts::TAU * 7.0 * t).sin();
+        let (s, p) = holds(&damped);
+        assert!(rings(&s, &p, &all, RATE_HZ));
+        let (s, p) = holds(&|_| 0.0);
+        assert!(!rings(&s, &p, &all, RATE_HZ), "white noise");
+        let steady = |t: f64| 3.0 * (std::f64::consts::TAU * 7.0 * t).sin();
+        let (s, p) = holds(&steady);
+        assert!(!rings(&s, &p, &all, RATE_HZ), "a steady pickup is not damped");
+        assert!(!rings(&s, &p, &[false; 3], RATE_HZ), "no disturbed hold");
+    }
+}
