@@ -114,7 +114,7 @@ mod firmware {
             match event {
                 Ok(Some(Event::StillnessDetected)) => rprintln!("still..."),
                 Ok(Some(Event::PoseCaptured(i))) => {
-                    let p = acc.poses().get(i).copied().unwrap_or_default();
+                    let p = acc.poses().get(usize::from(i)).copied().unwrap_or_default();
                     rprintln!(
                         "pose {}: mean [{:.1}, {:.1}, {:.1}] LSB, {} samples",
                         i,

@@ -31,7 +31,7 @@ use core::ops::{Add, AddAssign, Mul, Sub};
 pub const MAX_POSE_SAMPLES: u32 = i32::MAX as u32;
 
 /// Exact sums of one block of samples, relative to its reference ([`Reading::block_reference`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct BlockSums<S> {
     /// Per-axis sum of `sample - reference`.
     pub sum: [S; 3],
@@ -57,14 +57,41 @@ pub trait Reading: Copy + Default {
     /// `n` in the sum type.
     fn count(n: u32) -> Self::Sum;
     /// The exact sums of `samples` relative to [`Reading::block_reference`] of the first one (zero for
-    /// none), and whether one of them is saturated at `limit`. Called once per block.
-    fn block_sums(axes: [&[Self]; 3], limit: Self::Limit) -> BlockSums<Self::Sum>;
+    /// none), and whether one of them is saturated at `limit` (blocks of any length; the accumulator
+    /// sums its full buffer with [`Reading::full_block_sums`]).
+    fn block_sums(axes: [&[Self]; 3], limit: Self::Limit) -> BlockSums<Self::Sum> {
+        let mut out = BlockSums::default();
+        for (a, values) in axes.iter().enumerate() {
+            let (sum, sum_sq, saturated) = Self::axis_sums(values, limit);
+            (out.sum[a], out.sum_sq[a]) = (sum, sum_sq);
+            out.saturated |= saturated;
+        }
+        out
+    }
+    /// [`Reading::block_sums`] of a full block (the accumulator's buffer), written in place: the sums
+    /// into `sum` and `sum_sq`, `true` when a sample is saturated.
+    fn full_block_sums<const N: usize>(
+        axes: &[[Self; N]; 3],
+        limit: Self::Limit,
+        sum: &mut [Self::Sum; 3],
+        sum_sq: &mut [Self::Sum; 3],
+    ) -> bool {
+        let mut saturated = false;
+        for ((values, sum), sum_sq) in axes.iter().zip(sum).zip(sum_sq) {
+            let axis = Self::axis_sums(values, limit);
+            (*sum, *sum_sq) = (axis.0, axis.1);
+            saturated |= axis.2;
+        }
+        saturated
+    }
+    /// One axis of [`Reading::block_sums`]: `(sum, sum of squares, saturated)`.
+    fn axis_sums(values: &[Self], limit: Self::Limit) -> (Self::Sum, Self::Sum, bool);
     /// Mean and (population) variance of `n` samples, from their sums relative to `reference`
     /// (pose close; no software `f64` for `i16` on a Cortex-M4F).
     fn mean_and_variance(reference: Self, sum: Self::Sum, sum_sq: Self::Sum, n: u32) -> (f32, f32);
-    /// Mean offset from the reference and population variance of one block of `n` samples, in `f32`
-    /// (the block statistics: no exact rounding needed).
-    fn block_mean_and_variance(sum: Self::Sum, sum_sq: Self::Sum, n: u32) -> (f32, f32);
+    /// Per-axis mean offset from the reference and population variance summed over the axes, of one
+    /// block of `n` samples, in `f32` (the block statistics: no exact rounding needed).
+    fn block_statistics(sum: &[Self::Sum; 3], sum_sq: &[Self::Sum; 3], n: u32) -> ([f32; 3], f32);
     /// The value as `f32` (exact for `i16`; no software `f64` on a Cortex-M4F).
     fn to_f32(self) -> f32;
     /// `false` for NaN or infinity.
@@ -78,14 +105,11 @@ pub trait Reading: Copy + Default {
 }
 
 /// `v` as `f32` from its two 32-bit halves: two hardware conversions instead of the library's
-/// `__aeabi_l2f` (rounded twice: within 1 ulp, enough for block statistics).
+/// `__aeabi_ul2f` (rounded twice: within 1 ulp, enough for statistics; exact below `2^24`).
 #[inline]
-fn i64_to_f32(v: i64) -> f32 {
+fn u64_to_f32_halves(v: u64) -> f32 {
     const TWO_POW_32: f32 = 4_294_967_296.0;
-    // v = high 2^32 + low with |low| <= 2^31: exact below 2^31 (high = 0, the usual case).
-    let low = v as i32;
-    let high = (v - i64::from(low)) >> 32;
-    (high as i32) as f32 * TWO_POW_32 + low as f32
+    ((v >> 32) as u32) as f32 * TWO_POW_32 + (v as u32) as f32
 }
 
 /// `x / d` and `x % d` without the compiler's 64-bit division (`__udivmoddi4`, ~1 KB of flash on a
@@ -156,19 +180,20 @@ fn ratio_to_f32(total: i64, n: u32) -> f32 {
 }
 
 /// Raw sums `(sum x, sum x^2)` of one axis of a block of `i16` samples (at most `2^16`: the `i32` sum
-/// is exact, `2^16 * 2^15 = 2^31`), two samples per step; each square (at most `2^30`) is one
+/// is exact, `2^16 * 2^15 = 2^31`), four samples per step; each square (at most `2^30`) is one
 /// multiply-accumulate into the `i64` (`smlal` on a Cortex-M4). Raw sums of a pose stay exact in `i64`:
 /// at most `2^31` samples, `2^31 * 2^30 = 2^61`.
 #[inline(always)]
 fn raw_i16_axis_sums(values: &[i16]) -> (i32, i64) {
     let (mut sum, mut sum_sq) = (0i32, 0i64);
-    let mut pairs = values.chunks_exact(2);
-    for pair in &mut pairs {
-        let (a, b) = (i32::from(pair[0]), i32::from(pair[1]));
-        sum += a + b;
+    let mut quads = values.chunks_exact(4);
+    for quad in &mut quads {
+        let (a, b, c, d) = (i32::from(quad[0]), i32::from(quad[1]), i32::from(quad[2]), i32::from(quad[3]));
+        sum += (a + b) + (c + d);
         sum_sq += i64::from(a) * i64::from(a) + i64::from(b) * i64::from(b);
+        sum_sq += i64::from(c) * i64::from(c) + i64::from(d) * i64::from(d);
     }
-    for &v in pairs.remainder() {
+    for &v in quads.remainder() {
         let a = i32::from(v);
         sum += a;
         sum_sq += i64::from(a) * i64::from(a);
@@ -178,7 +203,7 @@ fn raw_i16_axis_sums(values: &[i16]) -> (i32, i64) {
 
 /// One axis of a block: raw `(sum, sum of squares, saturated)`.
 #[inline(always)]
-fn i16_axis_block_sums(values: &[i16], limit: i32) -> (i64, i64, bool) {
+fn i16_axis_sums(values: &[i16], limit: i32) -> (i64, i64, bool) {
     let first = values.first().copied().unwrap_or(0);
     let (sum, sum_sq) = raw_i16_axis_sums(values);
     // Every sample is within sqrt(sum (x - first)^2) of the first: none can reach the limit (nor a rail)
@@ -206,15 +231,24 @@ impl Reading for i16 {
     fn count(n: u32) -> i64 {
         i64::from(n)
     }
-    fn block_sums(axes: [&[i16]; 3], limit: i32) -> BlockSums<i64> {
-        let [x, y, z] = axes.map(|values| i16_axis_block_sums(values, limit));
-        BlockSums { sum: [x.0, y.0, z.0], sum_sq: [x.1, y.1, z.1], saturated: x.2 | y.2 | z.2 }
+    #[inline(always)]
+    fn axis_sums(values: &[i16], limit: i32) -> (i64, i64, bool) {
+        i16_axis_sums(values, limit)
     }
-    fn block_mean_and_variance(sum: i64, sum_sq: i64, n: u32) -> (f32, f32) {
-        // n^2 variance = n sum_sq - sum^2, exact: n <= 2^16, sum_sq <= 2^46, |sum| <= 2^31.
+    fn block_statistics(sum: &[i64; 3], sum_sq: &[i64; 3], n: u32) -> ([f32; 3], f32) {
         let n_inverse = 1.0 / n.max(1) as f32;
-        let n_squared_variance = i64::from(n) * sum_sq - sum * sum;
-        (i64_to_f32(sum) * n_inverse, i64_to_f32(n_squared_variance) * n_inverse * n_inverse)
+        // Per axis n^2 variance = n sum_sq - sum^2, exact: n <= 2^16 samples within 2^16 of each other
+        // give at most n^2 2^30 = 2^62 (and n sum_sq, sum^2 <= 2^62); the three axes fit a u64.
+        let mut n_squared_variance = 0u64;
+        let mut mean = [0.0; 3];
+        for ((m, &sum), &sum_sq) in mean.iter_mut().zip(sum).zip(sum_sq) {
+            // A block's raw sum fits an i32: at most 2^16 samples of at most 2^15.
+            let sum = sum as i32;
+            let sum_squared = i64::from(sum) * i64::from(sum);
+            n_squared_variance = n_squared_variance.wrapping_add((i64::from(n) * sum_sq - sum_squared) as u64);
+            *m = sum as f32 * n_inverse;
+        }
+        (mean, u64_to_f32_halves(n_squared_variance) * n_inverse * n_inverse)
     }
     fn mean_and_variance(reference: i16, sum: i64, sum_sq: i64, n: u32) -> (f32, f32) {
         let count = n.max(1);
@@ -226,7 +260,8 @@ impl Reading for i16 {
         // and is computed modulo 2^64, so the wrapped intermediate terms cancel exactly.
         let about_q = sum_sq.wrapping_sub(q.wrapping_mul(sum).wrapping_mul(2)).wrapping_add(n.wrapping_mul(q * q));
         let fraction = rem as f32 / count as f32;
-        let variance = i64_to_f32(about_q) / count as f32 - fraction * fraction;
+        // about_q is a sum of squares: not negative.
+        let variance = u64_to_f32_halves(about_q as u64) / count as f32 - fraction * fraction;
         (mean, if variance > 0.0 { variance } else { 0.0 })
     }
     #[inline]
@@ -262,19 +297,16 @@ impl Reading for f32 {
     fn count(n: u32) -> f64 {
         f64::from(n)
     }
-    fn block_sums(axes: [&[f32]; 3], limit: f32) -> BlockSums<f64> {
-        let mut out = BlockSums { sum: [0.0; 3], sum_sq: [0.0; 3], saturated: false };
-        for a in 0..3 {
-            let values = axes[a];
-            let Some(&first) = values.first() else { continue };
-            for &v in values {
-                let d = v.delta(first);
-                out.sum[a] += d;
-                out.sum_sq[a] += d * d;
-                out.saturated |= v.saturated(limit);
-            }
+    fn axis_sums(values: &[f32], limit: f32) -> (f64, f64, bool) {
+        let (mut sum, mut sum_sq, mut saturated) = (0.0, 0.0, false);
+        let Some(&first) = values.first() else { return (sum, sum_sq, saturated) };
+        for &v in values {
+            let d = v.delta(first);
+            sum += d;
+            sum_sq += d * d;
+            saturated |= v.saturated(limit);
         }
-        out
+        (sum, sum_sq, saturated)
     }
     fn mean_and_variance(reference: f32, sum: f64, sum_sq: f64, n: u32) -> (f32, f32) {
         let n = f64::from(n.max(1));
@@ -282,10 +314,15 @@ impl Reading for f32 {
         let variance = sum_sq / n - m * m;
         ((f64::from(reference) + m) as f32, if variance > 0.0 { variance as f32 } else { 0.0 })
     }
-    fn block_mean_and_variance(sum: f64, sum_sq: f64, n: u32) -> (f32, f32) {
+    fn block_statistics(sum: &[f64; 3], sum_sq: &[f64; 3], n: u32) -> ([f32; 3], f32) {
         let n_inverse = 1.0 / n.max(1) as f32;
-        let m = sum as f32 * n_inverse;
-        (m, sum_sq as f32 * n_inverse - m * m)
+        let (mut mean, mut variance) = ([0.0; 3], 0.0);
+        for a in 0..3 {
+            mean[a] = sum[a] as f32 * n_inverse;
+            let v = sum_sq[a] as f32 * n_inverse - mean[a] * mean[a];
+            variance += if v > 0.0 { v } else { 0.0 };
+        }
+        (mean, variance)
     }
     fn to_f32(self) -> f32 {
         self
@@ -369,8 +406,9 @@ pub enum Rejection {
 pub enum Event {
     /// A static interval began (a pose is being averaged).
     StillnessDetected,
-    /// A pose was captured and stored at this index of [`Accumulator::poses`].
-    PoseCaptured(usize),
+    /// A pose was captured and stored at this index of [`Accumulator::poses`] (`u16`: the whole
+    /// `Result<Option<Event>, AccumulatorError>` of a push fits in one register).
+    PoseCaptured(u16),
     /// A static interval ended and was not kept.
     PoseRejected(Rejection),
 }
@@ -457,18 +495,19 @@ impl AccumulatorConfig {
     /// Checks that every factor is finite and positive, exits are not below entries, and the noise
     /// floor and rise are finite and not negative.
     pub fn validate(&self) -> Result<(), AccumulatorError> {
-        let positive = |v: f32| v.is_finite() && v > 0.0;
-        let ok = positive(self.enter_factor)
-            && positive(self.drift_enter_factor)
+        // Plain comparisons (every one is false for NaN): smaller than `is_finite` on a Cortex-M4F.
+        let below_infinity = |v: f32| v < f32::INFINITY;
+        let ok = self.enter_factor > 0.0
+            && self.drift_enter_factor > 0.0
             && self.exit_factor >= self.enter_factor
-            && self.exit_factor.is_finite()
+            && below_infinity(self.exit_factor)
             && self.drift_exit_factor >= self.drift_enter_factor
-            && self.drift_exit_factor.is_finite()
+            && below_infinity(self.drift_exit_factor)
             && self.full_scale > 0.0
-            && self.min_noise_variance.is_finite()
             && self.min_noise_variance >= 0.0
-            && self.noise_rise_per_block.is_finite()
-            && self.noise_rise_per_block >= 0.0;
+            && below_infinity(self.min_noise_variance)
+            && self.noise_rise_per_block >= 0.0
+            && below_infinity(self.noise_rise_per_block);
         if ok { Ok(()) } else { Err(AccumulatorError::InvalidConfig) }
     }
 }
@@ -529,25 +568,14 @@ impl<R: Reading> Sums<R> {
         self.saturated |= other.saturated;
     }
 
-    /// Per-axis mean offset from the reference and variance, in `f32` (block statistics).
-    fn mean_offset_and_variance(&self) -> ([f32; 3], [f32; 3]) {
-        let mut mean = [0.0; 3];
-        let mut var = [0.0; 3];
-        for a in 0..3 {
-            let (m, v) = R::block_mean_and_variance(self.sum[a], self.sum_sq[a], self.n);
-            mean[a] = m;
-            var[a] = if v > 0.0 { v } else { 0.0 };
-        }
-        (mean, var)
-    }
-
     fn pose(&self) -> Pose {
-        let mut pose = Pose { n: self.n, start_index: self.start_index, end_index: self.end_index, ..Pose::default() };
+        let (mut mean, mut variance) = ([0.0; 3], [0.0; 3]);
         for a in 0..3 {
-            (pose.mean[a], pose.variance[a]) =
-                R::mean_and_variance(self.reference[a], self.sum[a], self.sum_sq[a], self.n);
+            // Raw sums have a zero reference (folded away at compile time).
+            let reference = if R::RELATIVE { self.reference[a] } else { R::default() };
+            (mean[a], variance[a]) = R::mean_and_variance(reference, self.sum[a], self.sum_sq[a], self.n);
         }
-        pose
+        Pose { mean, variance, n: self.n, start_index: self.start_index, end_index: self.end_index }
     }
 }
 
@@ -586,6 +614,7 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
     const VALID: () = {
         assert!(BLOCK >= 4, "a block needs at least 4 samples to estimate a variance");
         assert!(BLOCK <= 1 << 16, "a block is summed in 32 bits: at most 65536 samples");
+        assert!(POSES <= 1 << 16, "a pose index is a u16: at most 65536 poses");
     };
 
     /// An empty accumulator.
@@ -615,9 +644,10 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         if !(sample[0].is_finite() && sample[1].is_finite() && sample[2].is_finite()) {
             return Err(self.skip_sample());
         }
-        let i = self.buffered;
+        // Always below BLOCK (a full buffer is summed at once); a power-of-two BLOCK is masked instead of
+        // checked (no branch on the hot path).
+        let i = if BLOCK.is_power_of_two() { self.buffered & (BLOCK - 1) } else { self.buffered };
         if i >= BLOCK {
-            // Unreachable: a full buffer is summed at once.
             self.drop_block();
             return Ok(None);
         }
@@ -676,23 +706,24 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         self.block_start = self.counted;
     }
 
-    /// Sums the full buffer into `blocks[slot]` (field by field, in place: no copies of the sums) with
-    /// its statistics; the next block starts at the next sample.
+    /// Sums the full buffer into `blocks[slot]` with its statistics (mean, total variance, which it
+    /// returns); the next block starts at the next sample.
     #[inline(always)]
-    fn take_block(&mut self, slot: usize) {
-        let [x, y, z] = &self.buffer;
-        let sums = R::block_sums([x, y, z], self.saturation_limit);
-        let block = &mut self.blocks[slot % 2];
-        block.sums.reference = [x[0], y[0], z[0]].map(R::block_reference);
-        (block.sums.sum, block.sums.sum_sq, block.sums.saturated) = (sums.sum, sums.sum_sq, sums.saturated);
-        (block.sums.n, block.sums.start_index) = (BLOCK as u32, self.block_start);
-        let (offset, var) = block.sums.mean_offset_and_variance();
-        for a in 0..3 {
-            block.mean[a] = offset[a] + block.sums.reference[a].to_f32();
-        }
-        block.variance = var[0] + var[1] + var[2];
+    fn take_block(&mut self, slot: usize) -> ([f32; 3], f32) {
+        let start_index = self.block_start;
         self.drop_block();
-        self.blocks[slot % 2].sums.end_index = self.counted;
+        let buffer = &self.buffer;
+        let block = &mut self.blocks[slot % 2];
+        let sums = &mut block.sums;
+        sums.saturated = R::full_block_sums(buffer, self.saturation_limit, &mut sums.sum, &mut sums.sum_sq);
+        (sums.n, sums.start_index, sums.end_index) = (BLOCK as u32, start_index, self.counted);
+        let (mut mean, variance) = R::block_statistics(&sums.sum, &sums.sum_sq, BLOCK as u32);
+        for ((m, reference), values) in mean.iter_mut().zip(&mut sums.reference).zip(buffer) {
+            *reference = R::block_reference(values[0]);
+            *m += reference.to_f32();
+        }
+        (block.mean, block.variance) = (mean, variance);
+        (mean, variance)
     }
 
     // Once per BLOCK samples: kept out of line so that `push`, inlined into the caller's sample loop, stays
@@ -700,8 +731,7 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
     #[inline(never)]
     fn close_block(&mut self) -> Result<Option<Event>, AccumulatorError> {
         let slot = (self.previous_slot + 1) % 2;
-        self.take_block(slot);
-        let (mean, variance) = (self.blocks[slot].mean, self.blocks[slot].variance);
+        let (mean, variance) = self.take_block(slot);
         let noise = self.update_noise(mean, variance);
         let previous = &self.blocks[self.previous_slot % 2];
         let drift = self.has_previous.then(|| {
@@ -751,20 +781,20 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         if !(self.has_previous && quiet && last.variance <= self.config.enter_factor * noise) {
             return None;
         }
-        let mut pose = Sums::new(last.sums.reference, last.sums.start_index);
-        pose.merge(&last.sums);
-        self.pose = Some(pose);
+        // A block (BLOCK <= 2^16 samples) merged into an empty pose of its reference: the block's sums.
+        self.pose = Some(last.sums);
         Some(Event::StillnessDetected)
     }
 
     fn close_pose(&mut self) -> Result<Option<Event>, AccumulatorError> {
-        let Some(sums) = self.pose.take() else {
+        let Some(sums) = &self.pose else {
             return Ok(None);
         };
-        let pose = sums.pose();
-        let rejection = if sums.saturated {
+        let (pose, saturated) = (sums.pose(), sums.saturated);
+        self.pose = None;
+        let rejection = if saturated {
             Some(Rejection::Saturated)
-        } else if sums.n < self.config.min_pose_samples {
+        } else if pose.n < self.config.min_pose_samples {
             Some(Rejection::TooShort)
         } else if pose.variance.iter().sum::<f32>() > self.config.exit_factor * self.noise_variance {
             Some(Rejection::Moving)
@@ -781,7 +811,8 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
             return Ok(Some(Event::PoseRejected(reason)));
         }
         self.poses.push(pose).map_err(|_| AccumulatorError::Full)?;
-        Ok(Some(Event::PoseCaptured(self.poses.len() - 1)))
+        // At most POSES <= 2^16 poses (VALID): the index fits.
+        Ok(Some(Event::PoseCaptured((self.poses.len() - 1) as u16)))
     }
 
     /// The poses captured so far.
@@ -844,6 +875,31 @@ mod tests {
     }
 
     #[test]
+    fn configs_with_nan_infinite_or_negative_values_are_refused() {
+        assert_eq!(AccumulatorConfig::DEFAULT.validate(), Ok(()));
+        let fields: [fn(&mut AccumulatorConfig) -> &mut f32; 7] = [
+            |c| &mut c.enter_factor,
+            |c| &mut c.exit_factor,
+            |c| &mut c.drift_enter_factor,
+            |c| &mut c.drift_exit_factor,
+            |c| &mut c.full_scale,
+            |c| &mut c.min_noise_variance,
+            |c| &mut c.noise_rise_per_block,
+        ];
+        for (i, field) in fields.iter().enumerate() {
+            for bad in [f32::NAN, -1.0, f32::NEG_INFINITY] {
+                let mut config = AccumulatorConfig::DEFAULT;
+                *field(&mut config) = bad;
+                assert_eq!(config.validate(), Err(AccumulatorError::InvalidConfig), "field {i} = {bad}");
+            }
+            let mut config = AccumulatorConfig::DEFAULT;
+            *field(&mut config) = f32::INFINITY;
+            // Only the saturation limit may be infinite (no limit).
+            assert_eq!(config.validate().is_ok(), i == 4, "field {i} infinite");
+        }
+    }
+
+    #[test]
     fn sample_index_saturates() {
         let mut acc: Accumulator<i16, 4, 32> = Accumulator::new(AccumulatorConfig::DEFAULT).unwrap();
         acc.counted = u32::MAX - 40;
@@ -892,9 +948,9 @@ mod tests {
 
     #[test]
     fn large_sums_convert_to_f32_within_an_ulp() {
-        for v in [0i64, -3, 1 << 31, -(1 << 31) - 1, 3 << 40, -(5 << 50) + 12_345] {
+        for v in [0u64, 3, 1 << 31, (1 << 32) - 1, 3 << 40, (5 << 50) + 12_345, u64::MAX] {
             let exact = v as f64;
-            let got = f64::from(i64_to_f32(v));
+            let got = f64::from(u64_to_f32_halves(v));
             assert!((got - exact).abs() <= exact.abs() * 2.0 * f64::from(f32::EPSILON), "{v}: {got}");
         }
     }

@@ -684,7 +684,7 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize, const POP: usize> Sessi
             return Err(SessionError::Finished);
         }
         if let Ok(Some(Event::PoseCaptured(index))) = self.acc.finish() {
-            let state = self.captured(index);
+            let state = self.captured(usize::from(index));
             self.set_state(state);
         }
         Ok(())
@@ -793,7 +793,7 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize, const POP: usize> Sessi
                 self.pose_start = self.acc.samples_seen().saturating_sub(two_blocks);
                 self.idle_state()
             }
-            Some(Event::PoseCaptured(index)) => self.captured(index),
+            Some(Event::PoseCaptured(index)) => self.captured(usize::from(index)),
             Some(Event::PoseRejected(reason)) => State::PoseRejected(reason),
             None if interrupted => State::Interrupted,
             None => self.idle_state(),

@@ -9,9 +9,10 @@
 
 use crate::accumulator::Pose;
 use crate::ellipsoid::PoseList;
-use crate::frame::{Deviation, Frame, NormPose, modulus_error_gradient};
-use crate::linalg::{Matrix, add_outer_product, larger, spd_inverse_holding_in_place};
+use crate::frame::{Deviation, Frame, NormPose};
+use crate::linalg::{Matrix, larger, spd_inverse_holding_in_place};
 use crate::model::{PARAM_COUNT, Params};
+use crate::solve::normal_equations;
 
 /// The poses of a calibration: the captured poses, the normalised poses the optimisers use, and for
 /// each normalised pose the index of the captured pose it came from (poses left out have none).
@@ -28,7 +29,13 @@ pub struct PoseSet<'a> {
 impl PoseSet<'_> {
     /// The pairs (captured, normalised) of the poses used.
     pub fn pairs(&self) -> impl Iterator<Item = (&Pose, &NormPose)> + '_ {
-        self.norm.iter().zip(self.source).filter_map(|(n, &s)| self.poses.get(usize::from(s)).map(|p| (p, n)))
+        (0..self.norm.len()).filter_map(|i| self.pair(i))
+    }
+
+    /// The pair (captured, normalised) of normalised pose `i`; `None` when it has no captured pose.
+    fn pair(&self, i: usize) -> Option<(&Pose, &NormPose)> {
+        let captured = self.poses.get(usize::from(*self.source.get(i)?))?;
+        Some((captured, self.norm.get(i)?))
     }
 
     /// Number of poses used.
@@ -149,9 +156,9 @@ impl Verdict {
     }
 }
 
-/// Largest plausible deviation from the coarse estimate per deviation coordinate: bias 0.5 g, scale
-/// 50 %, non-orthogonality 0.5 rad.
-const PLAUSIBLE_DEVIATION: Deviation = [0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5];
+/// Largest plausible deviation from the coarse estimate of every deviation coordinate: bias 0.5 g,
+/// scale 50 %, non-orthogonality 0.5 rad.
+const PLAUSIBLE_DEVIATION: f32 = 0.5;
 
 /// Variance of one pose's normalised modulus error `E / g^2` due to its averaging noise; `None` if the
 /// pose carries no variance.
@@ -178,7 +185,8 @@ fn error_variance(x: &Deviation, frame: &Frame, pose: &Pose, norm: &NormPose) ->
 /// number of parameters not in `held`; with `inflate`, every variance is scaled up by the reduced
 /// chi-square when that exceeds 1 (the residuals are larger than the noise: the uncertainty of an
 /// estimate that is not yet the optimum). `None` with fewer poses than free parameters (or no more,
-/// when the residuals must give the noise).
+/// when the residuals must give the noise). Only the lower triangle is written (the upper one is 0):
+/// it is all the inverses read.
 pub fn information_matrix(
     x: &Deviation,
     frame: &Frame,
@@ -186,10 +194,23 @@ pub fn information_matrix(
     held: &[bool; PARAM_COUNT],
     inflate: bool,
 ) -> Option<Matrix<PARAM_COUNT>> {
+    let mut info = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
+    information_in_place(x, frame, set, held, inflate, &mut info).then_some(info)
+}
+
+/// [`information_matrix`] into `info` (no copies of the matrix); `false` where it gives `None`.
+fn information_in_place(
+    x: &Deviation,
+    frame: &Frame,
+    set: &PoseSet<'_>,
+    held: &[bool; PARAM_COUNT],
+    inflate: bool,
+    info: &mut Matrix<PARAM_COUNT>,
+) -> bool {
     let n = set.len();
     let free = held.iter().filter(|&&h| !h).count();
     if n < free || n == 0 {
-        return None;
+        return false;
     }
     // One pass for the residual variance, the chi-square and whether every pose carries its noise.
     let (mut sum, mut chi2, mut all_noisy) = (0.0f32, 0.0f32, true);
@@ -204,7 +225,7 @@ pub fn information_matrix(
     let dof = n.saturating_sub(free).max(1) as f32;
     let scale = if !all_noisy {
         if n == free {
-            return None;
+            return false;
         }
         larger(sum / dof, f32::MIN_POSITIVE)
     } else if inflate && n > free {
@@ -212,18 +233,13 @@ pub fn information_matrix(
     } else {
         1.0
     };
-    let mut info = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
-    for (pose, m) in set.pairs() {
+    let weight = |i: usize| {
+        let (pose, m) = set.pair(i)?;
         let var = if all_noisy { scale * error_variance(x, frame, pose, m)? } else { scale };
-        let (_, g) = modulus_error_gradient(x, m);
-        add_outer_product(&mut info, &g, 1.0 / var);
-    }
-    for i in 0..PARAM_COUNT {
-        for j in 0..i {
-            info[j][i] = info[i][j];
-        }
-    }
-    Some(info)
+        Some(1.0 / var)
+    };
+    normal_equations(x, set.norm, Some(&weight), info, &mut [0.0; PARAM_COUNT]);
+    true
 }
 
 /// Covariance of the deviation vector with the parameters in `held` fixed (their rows and columns 0):
@@ -235,8 +251,19 @@ pub fn deviation_covariance(
     set: &PoseSet<'_>,
     held: &[bool; PARAM_COUNT],
 ) -> Option<Matrix<PARAM_COUNT>> {
-    let mut info = information_matrix(x, frame, set, held, false)?;
-    covariance_holding_in_place(&mut info, held).then_some(info)
+    let mut cov = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
+    covariance_in_place(x, frame, set, held, &mut cov).then_some(cov)
+}
+
+/// [`deviation_covariance`] into `cov`; `false` where it gives `None`.
+fn covariance_in_place(
+    x: &Deviation,
+    frame: &Frame,
+    set: &PoseSet<'_>,
+    held: &[bool; PARAM_COUNT],
+    cov: &mut Matrix<PARAM_COUNT>,
+) -> bool {
+    information_in_place(x, frame, set, held, false, cov) && covariance_holding_in_place(cov, held)
 }
 
 /// Inverse of `info` with the `held` rows and columns replaced by the identity, then zeroed.
@@ -279,7 +306,10 @@ pub fn parameters_to_hold(
 ) -> [bool; PARAM_COUNT] {
     let structural = undetermined_parameters(x, set.norm);
     let mut held: [bool; PARAM_COUNT] = core::array::from_fn(|i| held[i] || structural[i]);
-    let Some(info) = information_matrix(x, frame, set, &held, false) else { return held };
+    let mut info = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
+    if !information_in_place(x, frame, set, &held, false, &mut info) {
+        return held;
+    }
     loop {
         let mut cov = info;
         if !covariance_holding_in_place(&mut cov, &held) {
@@ -304,11 +334,8 @@ pub fn parameters_to_hold(
 /// the ones before it and is flagged, then left out. With only axis-aligned poses, for example, the
 /// non-orthogonality terms are flagged.
 pub fn undetermined_parameters(x: &Deviation, norm: &[NormPose]) -> [bool; PARAM_COUNT] {
-    let mut info = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
-    for n in norm {
-        let (_, g) = modulus_error_gradient(x, n);
-        add_outer_product(&mut info, &g, 1.0);
-    }
+    let (mut info, mut unused) = ([[0.0f32; PARAM_COUNT]; PARAM_COUNT], [0.0; PARAM_COUNT]);
+    normal_equations(x, norm, None, &mut info, &mut unused);
     crate::linalg::weak_pivots(&info, crate::linalg::DETERMINED_PIVOT)
 }
 
@@ -328,39 +355,50 @@ pub fn param_std(frame: &Frame, covariance: &Matrix<PARAM_COUNT>) -> [f32; PARAM
     out
 }
 
+/// Sums over the poses used, in one pass: the squared modulus errors after (normalised, free of the
+/// cancellation of raw counts) and before (under the "before" model, output unit), and the
+/// variance of the modulus each pose's noise gives (`None` when a pose carries no variance).
+struct ModulusSums {
+    after: f32,
+    before: f32,
+    noise: Option<f32>,
+}
+
+impl ModulusSums {
+    fn of(x: &Deviation, frame: &Frame, set: &PoseSet<'_>, before: &Params) -> Self {
+        let mut sums = Self { after: 0.0, before: 0.0, noise: Some(0.0) };
+        let g = frame.gravity;
+        for (p, n) in set.pairs() {
+            let after = crate::linalg::sqrt_f32(larger(1.0 + crate::frame::modulus_error(x, n), 0.0));
+            sums.after += crate::model::square(after - 1.0);
+            let raw = crate::linalg::sqrt_f32(crate::model::norm_squared(before.apply(p.mean)));
+            sums.before += crate::model::square(raw - g);
+            // |f_b| / g = sqrt(1 + E): d|f_b|/g = dE / 2 near |f_b| = g.
+            sums.noise = sums.noise.zip(error_variance(x, frame, p, n)).map(|(s, v)| s + v / 4.0);
+        }
+        sums
+    }
+}
+
 /// RMSE (mg) expected at the optimum from the poses' own noise: `sqrt(mean(sigma_i^2) (N - p) / N)` with
 /// `p` the parameters fitted.
 pub fn noise_floor_mg(x: &Deviation, frame: &Frame, set: &PoseSet<'_>, fitted: usize) -> Option<f32> {
-    if set.len() <= fitted {
+    noise_floor_of(ModulusSums::of(x, frame, set, &Params::IDENTITY).noise, set.len(), fitted)
+}
+
+/// [`noise_floor_mg`] from the sum of the poses' modulus variances over `n` poses.
+fn noise_floor_of(noise: Option<f32>, n: usize, fitted: usize) -> Option<f32> {
+    let sum = noise?;
+    if n <= fitted {
         return None;
     }
-    let mut sum = 0.0;
-    for (p, n) in set.pairs() {
-        // |f_b| / g = sqrt(1 + E): d|f_b|/g = dE / 2 near |f_b| = g.
-        sum += error_variance(x, frame, p, n)? / 4.0;
-    }
-    let n = set.len() as f32;
+    let n = n as f32;
     Some(crate::linalg::sqrt_f32(sum / n * (n - fitted as f32) / n) * 1000.0)
 }
 
-/// Modulus RMSE (mg) of the normalised poses at `x`, free of the cancellation of raw counts.
-fn rmse_normalised_mg(x: &Deviation, norm: &[NormPose]) -> f32 {
-    let mut sum = 0.0;
-    for n in norm {
-        let m = crate::linalg::sqrt_f32(larger(1.0 + crate::frame::modulus_error(x, n), 0.0));
-        sum += crate::model::square(m - 1.0);
-    }
-    if norm.is_empty() { f32::NAN } else { crate::linalg::sqrt_f32(sum / norm.len() as f32) * 1000.0 }
-}
-
-/// Modulus RMSE (mg) of the poses used under `p`.
-fn rmse_mg(p: &Params, set: &PoseSet<'_>, g: f32) -> f32 {
-    let mut sum = 0.0;
-    for (pose, _) in set.pairs() {
-        let m = crate::linalg::sqrt_f32(crate::model::norm_squared(p.apply(pose.mean)));
-        sum += crate::model::square(m - g);
-    }
-    if set.is_empty() { f32::NAN } else { crate::linalg::sqrt_f32(sum / set.len() as f32) / g * 1000.0 }
+/// RMSE (mg) of a sum of squared modulus errors over `n` poses, in units of `g`; NaN for none.
+fn rmse_of_mg(sum: f32, n: usize, g: f32) -> f32 {
+    if n == 0 { f32::NAN } else { crate::linalg::sqrt_f32(sum / n as f32) / g * 1000.0 }
 }
 
 /// Judges `x` (deviation in `frame`) on the poses of `set` against `bounds`; `before` is the model the
@@ -375,20 +413,23 @@ pub fn judge(
     warnings: Warnings,
 ) -> Verdict {
     let params = frame.to_params(x);
-    let held = warnings.held;
+    let held = &warnings.held;
     let fitted = held.iter().filter(|&&h| !h).count();
-    let rmse_after_mg = rmse_normalised_mg(x, set.norm);
-    let noise_floor = noise_floor_mg(x, frame, set, fitted);
-    let mut std = match deviation_covariance(x, frame, set, &held) {
-        Some(cov) => param_std(frame, &cov),
-        None => [f32::INFINITY; PARAM_COUNT],
+    let sums = ModulusSums::of(x, frame, set, before);
+    let rmse_after_mg = rmse_of_mg(sums.after, set.len(), 1.0);
+    let noise_floor = noise_floor_of(sums.noise, set.len(), fitted);
+    let mut cov = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
+    let mut std = if covariance_in_place(x, frame, set, held, &mut cov) {
+        param_std(frame, &cov)
+    } else {
+        [f32::INFINITY; PARAM_COUNT]
     };
     let mut failures = Failures {
         rmse: !(rmse_after_mg <= bounds.max_rmse_mg),
         model_misfit: noise_floor.is_some_and(|f| f > 0.0 && rmse_after_mg > bounds.max_rmse_over_noise * f),
         implausible: !params.is_finite()
             || params.scale.iter().any(|&s| !(s > 0.0))
-            || x.iter().enumerate().any(|(i, v)| !(v.abs() <= PLAUSIBLE_DEVIATION[i])),
+            || x.iter().any(|v| !(v.abs() <= PLAUSIBLE_DEVIATION)),
         ..Failures::default()
     };
     let structurally_undetermined = undetermined_parameters(x, set.norm);
@@ -400,6 +441,6 @@ pub fn judge(
         }
         failures.undetermined[i] = structurally_undetermined[i] || !(std[i] <= limits[i]);
     }
-    let rmse_before_mg = rmse_mg(before, set, frame.gravity);
+    let rmse_before_mg = rmse_of_mg(sums.before, set.len(), frame.gravity);
     Verdict { rmse_before_mg, rmse_after_mg, noise_floor_mg: noise_floor, param_std: std, failures, warnings }
 }
