@@ -18,8 +18,12 @@
 //!    `colored-noise`). `heldout_gain = 1 - ln(ratio) / ln(nominal ratio)` is the fraction of the
 //!    withheld gap (in log ratio) the candidate removes; a ratio below 1 (more scatter predicted
 //!    than seen) counts [`OVERSHOOT_WEIGHT`] times its `|ln ratio|`.
+//!    Drift and temperature are also fitted on the pose means and the within-pose course together
+//!    (`family/joint.rs`: the segments fix the effect, the means the calibration), which tests them
+//!    on logs too short to withhold a pose and still fit 9 + k parameters.
 //!    The verdict is the candidate with the largest gain, if the gap is significant and the gain is
-//!    at least [`MIN_GAIN`]; `unexplained` (with where the gap lies) when the gap is significant
+//!    at least [`MIN_GAIN`] (the thermometer named before time when both explain alike; a noise
+//!    model before a value family only when far ahead of one that leaves half the gap); `unexplained` (with where the gap lies) when the gap is significant
 //!    and no family explains it; `none` when there is no significant gap.
 //! 4. **How far it shrinks.** The winner is added (to the model, or to the simulator for
 //!    `colored-noise`) and step 1 redone: `shrink = (before - after) / (before - 1)`, clipped to
@@ -33,10 +37,11 @@
 //! - `scale-nonlinearity`: `k2 a^2`, `k3 a^3` or both per axis;
 //! - `settling`: a transient proportional to the change from the previous pose, decaying over
 //!   `tau` from the start of each pose (only a `tau` that decays within the hold), or the transient measured in each pose (its mean minus the
-//!   mean of its last half) scaled per axis or by one factor;
+//!   mean of its last half) scaled per axis or by one factor, or a ringing mount (disturbed holds
+//!   oscillating at one common frequency, more early in the hold: `family/ringing.rs`) left out;
 //! - `motion`: poses whose own samples move slowly (chi-square of segment means after the first,
 //!   above 6 times the median pose's and 40) are dropped, each at the cost of an expected noise
-//!   variance plus the penalty;
+//!   variance plus the penalty (not when they decay or ring: that is settling);
 //! - `colored-noise`: a bias random walk or a bias-instability floor (whichever fits the Allan
 //!   variance better) measured on the longest rest (detrended quadratically in time and linearly in
 //!   temperature, overlapping Allan variance in excess of white noise); the simulator gets it.

@@ -20,6 +20,51 @@ pub(crate) struct Decision {
     pub(crate) probe_where: Option<String>,
 }
 
+/// Evidence by which a noise model must exceed every value-predicting family to be named before
+/// them.
+const NOISE_FAR_AHEAD: f64 = 0.2;
+
+/// Evidence within which the measured cause of a slow change (the thermometer) is named before
+/// its proxy (time): when the thermometer ramps steadily both explain the same change.
+const CAUSE_OVER_PROXY: f64 = 0.02;
+
+/// The evidence a family is ranked by among its kind.
+fn ranking(e: &Evaluation) -> f64 {
+    let cause = if e.candidate.effect == "temperature" { CAUSE_OVER_PROXY } else { 0.0 };
+    e.candidate.evidence() + cause
+}
+
+/// The strongest family: one that predicts the withheld values if it explains enough, else the
+/// better of those and the noise models.
+fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation]) -> Option<(usize, &'e Evaluation)> {
+    let usable = |e: &&Evaluation| e.candidate.applicable && e.candidate.evidence().is_finite();
+    let strongest = |noise: bool| {
+        evaluations
+            .iter()
+            .enumerate()
+            .filter(|(_, e)| usable(e) && e.predicts_values != noise)
+            .max_by(|a, b| ranking(a.1).total_cmp(&ranking(b.1)))
+    };
+    // A family that predicts the withheld values is stronger evidence than a noise model, which
+    // predicts only their spread: colored noise is named only when no other family explains, or
+    // when it explains far more on withheld poses while the value family leaves most of the gap in
+    // the poses it was fitted on.
+    let noise_far_ahead = |v: &Evaluation| {
+        let half_left = v.candidate.ratio_after - 1.0 > 0.5 * (m.gap.ratio_before - 1.0);
+        let e = v.candidate.evidence();
+        half_left && strongest(true).is_some_and(|(_, n)| n.candidate.evidence() >= e + NOISE_FAR_AHEAD)
+    };
+    let value = strongest(false).filter(|(_, e)| e.candidate.evidence() >= MIN_GAIN);
+    value.filter(|(_, e)| !noise_far_ahead(e)).or_else(|| {
+        let noise = strongest(true);
+        let other = strongest(false);
+        match (noise, other) {
+            (Some(n), Some(o)) => Some(if n.1.candidate.evidence() >= o.1.candidate.evidence() { n } else { o }),
+            (n, o) => n.or(o),
+        }
+    })
+}
+
 /// Picks the verdict among the evaluated families and measures the shrink.
 pub(crate) fn decide(m: &Measured, evaluations: &[Evaluation], probes: &[Probe]) -> Decision {
     let significant = m.gap.significant;
@@ -27,24 +72,7 @@ pub(crate) fn decide(m: &Measured, evaluations: &[Evaluation], probes: &[Probe])
         .iter()
         .filter(|p| p.heldout_gain.is_finite() && p.heldout_gain >= MIN_GAIN)
         .max_by(|a, b| a.heldout_gain.total_cmp(&b.heldout_gain));
-    let usable = |e: &&Evaluation| e.candidate.applicable && e.candidate.evidence().is_finite();
-    let strongest = |noise: bool| {
-        evaluations
-            .iter()
-            .enumerate()
-            .filter(|(_, e)| usable(e) && e.predicts_values != noise)
-            .max_by(|a, b| a.1.candidate.evidence().total_cmp(&b.1.candidate.evidence()))
-    };
-    // A family that predicts the withheld values is stronger evidence than a noise model, which
-    // predicts only their spread: colored noise is named only when no other family explains.
-    let best = strongest(false).filter(|(_, e)| e.candidate.evidence() >= MIN_GAIN).or_else(|| {
-        let noise = strongest(true);
-        let other = strongest(false);
-        match (noise, other) {
-            (Some(n), Some(o)) => Some(if n.1.candidate.evidence() >= o.1.candidate.evidence() { n } else { o }),
-            (n, o) => n.or(o),
-        }
-    });
+    let best = best_family(m, evaluations);
     // A family wins only if no out-of-catalogue probe explains the withheld poses better.
     let beaten = |gain: f64| best_probe.is_some_and(|p| p.heldout_gain > gain);
     let winner = best

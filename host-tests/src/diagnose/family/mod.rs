@@ -5,8 +5,10 @@
 
 mod colored_noise;
 mod drift;
+mod joint;
 mod motion;
 mod nonlinearity;
+mod ringing;
 mod settling;
 mod temperature;
 
@@ -90,10 +92,14 @@ pub(crate) fn standard_evaluation<F: Family + ?Sized>(family: &F, ctx: &Context<
         Some(f) => ctx.evaluate_fitted(family.name(), f),
         None => ctx.not_testable(family.name()),
     };
-    if let Some(w) = ctx.within.as_ref().filter(|w| w.significant)
-        && let Some(fit) = w.best_of(family.within_variants(ctx, w))
-    {
+    let Some(w) = ctx.within.as_ref().filter(|w| w.significant) else { return e };
+    let variants = family.within_variants(ctx, w);
+    let stacked = joint::best(ctx, w, &variants);
+    if let Some(fit) = w.best_of(variants) {
         ctx.add_within(&mut e, w, fit);
+    }
+    if let Some(fit) = stacked {
+        joint::add(ctx, &mut e, fit);
     }
     e
 }

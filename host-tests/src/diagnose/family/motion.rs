@@ -2,10 +2,11 @@
 //! the first third of the hold (a transient at the start is settling, not motion) is robustly
 //! compared with the median pose's; disturbed poses are dropped, each at the
 //! cost of an expected noise variance plus the penalty, and the gain is measured on the rest.
+//! Disturbed holds that decay, or ring at a common frequency (`ringing`), are settling.
 
 use accelcal::model::PARAM_COUNT;
 
-use super::{Context, Family, Fitted, Variant};
+use super::{Context, Family, Fitted, Variant, ringing};
 use crate::diagnose::SEGMENTS;
 use crate::diagnose::locate::{within_chi2_from, within_chi2_of};
 
@@ -25,25 +26,38 @@ impl Family for Motion {
     }
 
     fn fit(&self, ctx: &Context<'_>) -> Option<Fitted> {
-        let chi: Vec<f64> = ctx.poses.iter().map(|p| within_chi2_from(p, &ctx.m.white, SKIPPED_SEGMENTS)).collect();
-        let threshold = (6.0 * median(&chi)).max(40.0);
-        let dropped: Vec<bool> = chi.iter().map(|c| *c > threshold).collect();
-        let count = dropped.iter().filter(|d| **d).count();
-        if count == 0 || ctx.poses.len() - count < PARAM_COUNT + 3 || decays(ctx, &dropped) {
+        let dropped = disturbed(ctx)?;
+        if decays(ctx, &dropped) || ringing::rings(&ctx.table.samples, ctx.poses, &dropped, ctx.m.rate) {
             return None;
         }
-        let rows = ctx.base_rows.clone();
-        let ratio = ctx.heldout_ratio(&rows, &dropped, count)?;
-        let list: Vec<String> = dropped.iter().enumerate().filter(|(_, d)| **d).map(|(i, _)| i.to_string()).collect();
-        Some(Fitted {
-            rows,
-            dropped,
-            score_ratio: ratio,
-            params: count,
-            detail: format!("moving poses dropped: {}", list.join(" ")),
-            tried: Vec::new(),
-        })
+        without(ctx, dropped, "moving poses dropped")
     }
+}
+
+/// The poses whose samples move after the first third of their hold (`None`: none, or too many to
+/// leave enough for the fit).
+pub(crate) fn disturbed(ctx: &Context<'_>) -> Option<Vec<bool>> {
+    let chi: Vec<f64> = ctx.poses.iter().map(|p| within_chi2_from(p, &ctx.m.white, SKIPPED_SEGMENTS)).collect();
+    let threshold = (6.0 * median(&chi)).max(40.0);
+    let dropped: Vec<bool> = chi.iter().map(|c| *c > threshold).collect();
+    let count = dropped.iter().filter(|d| **d).count();
+    (count > 0 && ctx.poses.len() - count >= PARAM_COUNT + 3).then_some(dropped)
+}
+
+/// The nominal model without the `dropped` poses, each charged one parameter.
+pub(crate) fn without(ctx: &Context<'_>, dropped: Vec<bool>, what: &str) -> Option<Fitted> {
+    let count = dropped.iter().filter(|d| **d).count();
+    let rows = ctx.base_rows.clone();
+    let ratio = ctx.heldout_ratio(&rows, &dropped, count)?;
+    let list: Vec<String> = dropped.iter().enumerate().filter(|(_, d)| **d).map(|(i, _)| i.to_string()).collect();
+    Some(Fitted {
+        rows,
+        dropped,
+        score_ratio: ratio,
+        params: count,
+        detail: format!("{what}: {}", list.join(" ")),
+        tried: Vec::new(),
+    })
 }
 
 /// Most disturbed poses move far more in the first half of their hold than in the second: a

@@ -9,9 +9,10 @@
 //! Any transient, whatever its shape (a ringing mount, an exponential), is also tested by leaving
 //! out the start of every hold (its first sixth or third): if the pose means of the rest agree
 //! better with the model on withheld poses, the start of the holds carried the gap. Motion (a tap,
-//! a sway) happens anywhere in a hold and is not removed so.
+//! a sway) happens anywhere in a hold and is not removed so. A mount ringing through the hold is
+//! tested by leaving out the holds that ring (a damped oscillation at one common frequency).
 
-use super::{Context, Evaluation, Family, Variant, standard_evaluation};
+use super::{Context, Evaluation, Family, Variant, motion, ringing, standard_evaluation};
 use crate::diagnose::PARAMETER_PENALTY;
 use crate::diagnose::SEGMENTS;
 use crate::diagnose::math::{V3, cv_residuals, dot, fit_residuals, mean_of, median, norm, rms, sum_sq};
@@ -66,6 +67,16 @@ fn trimmed_start(ctx: &Context<'_>, drop: usize) -> Option<(f64, Vec<Option<f64>
     Some(((ms / expected).sqrt(), after, ratio_after))
 }
 
+/// The holds disturbed by a ringing mount (a damped oscillation at a common frequency) left out.
+fn ringing_holds_dropped(ctx: &Context<'_>) -> Option<Evaluation> {
+    let dropped = motion::disturbed(ctx)?;
+    if !ringing::rings(&ctx.table.samples, ctx.poses, &dropped, ctx.m.rate) {
+        return None;
+    }
+    let fitted = motion::without(ctx, dropped, "a ringing mount (damped, at one frequency): ringing holds dropped")?;
+    Some(ctx.evaluate_fitted("settling", fitted))
+}
+
 impl Family for Settling {
     fn name(&self) -> &'static str {
         "settling"
@@ -75,6 +86,11 @@ impl Family for Settling {
         let mut e = standard_evaluation(self, ctx);
         if !ctx.pose_level {
             return e;
+        }
+        if let Some(ring) = ringing_holds_dropped(ctx)
+            && ring.candidate.evidence() > e.candidate.evidence()
+        {
+            e = ring;
         }
         for drop in TRIMS {
             let Some((ratio, after, ratio_after)) = trimmed_start(ctx, drop) else { continue };

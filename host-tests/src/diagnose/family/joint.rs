@@ -1,0 +1,78 @@
+//! Both channels in one fit: a time-varying effect (drift, temperature) moves each pose's mean
+//! *and* its course during the hold. The pose means alone see the effect only where the
+//! calibration leaves room for it (a short log cannot withhold a pose and still fit 9 + k
+//! parameters); the within-pose channel alone sees each pose's change only along that pose's own
+//! direction. Stacked, the within-pose rows fix the effect's parameters and the pose means the
+//! calibration, and a withheld pose's mean is predicted from both, each row whitened by its
+//! noise. Cross-validated over the pose-level folds (a withheld pose loses both its mean and its
+//! segments); only the withheld means are scored, with the pose level's penalty.
+
+use super::{Context, Evaluation};
+use crate::diagnose::PARAMETER_PENALTY;
+use crate::diagnose::math::{cv_residuals, fit_residuals, rms, sum_sq};
+use crate::diagnose::within::{Within, WithinVariant};
+
+/// The best stacked parametrisation of a family.
+pub(crate) struct JointFit {
+    ratio: f64,
+    after: Vec<Option<f64>>,
+    params: usize,
+    detail: String,
+}
+
+/// Rows of the stacked design (pose means first, weighted by `1 / sqrt(e_white)`, then the
+/// within-pose segments, already whitened), their targets and folds.
+fn stacked(ctx: &Context<'_>, w: &Within, v: &WithinVariant) -> (Vec<Vec<f64>>, Vec<f64>, Vec<usize>) {
+    let weight = 1.0 / ctx.e_white.sqrt();
+    let base = ctx.base_rows.first().map_or(0, Vec::len);
+    let mut rows: Vec<Vec<f64>> =
+        ctx.base_rows.iter().zip(&v.pose_extra).map(|(b, e)| b.iter().chain(e).map(|x| x * weight).collect()).collect();
+    let mut r: Vec<f64> = ctx.m.r.iter().map(|x| x * weight).collect();
+    let mut fold = ctx.fold.clone();
+    for (i, row) in v.rows.iter().enumerate() {
+        rows.push(std::iter::repeat_n(0.0, base).chain(row.iter().copied()).collect());
+        r.push(w.d[i]);
+        fold.push(ctx.fold[w.pose[i]]);
+    }
+    (rows, r, fold)
+}
+
+/// Penalised held-out ratio of the withheld pose means (1 for white noise and the nominal model).
+fn heldout_ratio(ctx: &Context<'_>, w: &Within, v: &WithinVariant) -> Option<f64> {
+    let (rows, r, fold) = stacked(ctx, w, v);
+    let cv = cv_residuals(&rows, &r, &fold, ctx.folds, &vec![false; r.len()])?;
+    let n = ctx.poses.len();
+    let (ss, _) = sum_sq(&cv[..n]);
+    Some(((ss + PARAMETER_PENALTY * v.params as f64) / n as f64).sqrt())
+}
+
+/// The variant whose stacked fit predicts the withheld pose means best, with the pose residuals
+/// (output unit) of its fit on every pose.
+pub(crate) fn best(ctx: &Context<'_>, w: &Within, variants: &[WithinVariant]) -> Option<JointFit> {
+    if !ctx.pose_level || !(ctx.e_white > 0.0) {
+        return None;
+    }
+    let (ratio, v) =
+        variants.iter().filter_map(|v| heldout_ratio(ctx, w, v).map(|r| (r, v))).min_by(|a, b| a.0.total_cmp(&b.0))?;
+    let (rows, r, _) = stacked(ctx, w, v);
+    let fitted = fit_residuals(&rows, &r, &vec![false; r.len()])?;
+    let scale = ctx.e_white.sqrt();
+    let after = fitted[..ctx.poses.len()].iter().map(|x| x.map(|x| x * scale)).collect();
+    Some(JointFit { ratio, after, params: v.params, detail: v.detail.clone() })
+}
+
+/// Puts the stacked fit in the candidate's pose-level line when it predicts the withheld pose
+/// means better than the pose means alone.
+pub(crate) fn add(ctx: &Context<'_>, e: &mut Evaluation, fit: JointFit) {
+    let gain = ctx.gain(fit.ratio);
+    let c = &mut e.candidate;
+    if c.applicable && c.heldout_gain >= gain {
+        return;
+    }
+    let kept: Vec<f64> = fit.after.iter().flatten().copied().collect();
+    c.applicable = true;
+    (c.heldout_ratio, c.heldout_gain, c.extra_params) = (fit.ratio, gain, fit.params);
+    c.ratio_after = ctx.m.to_mg(rms(&kept)) / ctx.m.gap.sim_rmse_mg;
+    c.detail = format!("{} (pose means and within-pose course together)", fit.detail);
+    e.after = fit.after;
+}
