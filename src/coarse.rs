@@ -7,16 +7,19 @@
 //! width (the coarse bias can miss by ~10 % of the bias itself).
 //!
 //! ```
+//! use accelcal::accumulator::Pose;
 //! use accelcal::coarse::{CoarseCalibration, SearchWidths};
 //! let g = 9.80665;
 //! let means = [[g + 0.1, 0.0, 0.0], [-g + 0.1, 0.0, 0.0], [0.0, g, 0.0], [0.0, -g, 0.0],
 //!     [0.0, 0.0, g - 0.2], [0.0, 0.0, -g - 0.2]];
-//! let coarse = CoarseCalibration::from_means(&means, g).unwrap();
+//! let coarse = CoarseCalibration::from_poses(&means.map(|m| Pose::from_mean(m, 100)), &[true; 6], g).unwrap();
 //! assert!((coarse.params().bias[0] - 0.1).abs() < 1e-5);
 //! let intervals = coarse.intervals(&SearchWidths::DEFAULT);
 //! assert!(intervals[3].0 < 1.0 && intervals[3].1 > 1.0); // Sxx
 //! ```
 
+use crate::accumulator::Pose;
+use crate::ellipsoid::{EllipsoidError, check_input, half_axes_near, kept, largest, mid_range};
 use crate::frame::{Deviation, Frame, FrameError};
 use crate::ga::{GaError, SearchBox};
 use crate::model::{PARAM_COUNT, Params};
@@ -81,6 +84,13 @@ impl core::fmt::Display for CoarseError {
 
 impl core::error::Error for CoarseError {}
 
+/// The coarse calibration's name for an input error.
+impl From<EllipsoidError> for CoarseError {
+    fn from(e: EllipsoidError) -> Self {
+        if e == EllipsoidError::InvalidGravity { Self::InvalidGravity } else { Self::NonFinitePose }
+    }
+}
+
 impl From<FrameError> for CoarseError {
     fn from(e: FrameError) -> Self {
         match e {
@@ -110,22 +120,13 @@ impl SearchWidths {
 
     /// The box in the deviation coordinates of [`crate::frame`], centred on `center`.
     pub fn search_box(&self, center: &Deviation) -> Result<SearchBox<PARAM_COUNT>, GaError> {
-        let half = [
-            self.bias_g,
-            self.bias_g,
-            self.bias_g,
-            self.scale_rel,
-            self.scale_rel,
-            self.scale_rel,
-            self.nonorth,
-            self.nonorth,
-            self.nonorth,
-        ];
+        // Bias, scale, non-orthogonality: three parameters each.
+        let half = [self.bias_g, self.scale_rel, self.nonorth];
         let mut lower = [0.0; PARAM_COUNT];
         let mut upper = [0.0; PARAM_COUNT];
         for i in 0..PARAM_COUNT {
-            lower[i] = center[i] - half[i];
-            upper[i] = center[i] + half[i];
+            lower[i] = center[i] - half[i / 3];
+            upper[i] = center[i] + half[i / 3];
         }
         SearchBox::new(lower, upper)
     }
@@ -155,48 +156,43 @@ const MIN_SPAN_FRACTION: f32 = 0.75;
 const DOMINANCE: f32 = 0.906;
 
 impl CoarseCalibration {
-    /// Coarse calibration from pose means (input unit) against `gravity` (output unit).
-    pub fn from_means(means: &[[f32; 3]], gravity: f32) -> Result<Self, CoarseError> {
-        if !(gravity.is_finite() && gravity > 0.0) {
-            return Err(CoarseError::InvalidGravity);
-        }
-        if means.iter().flatten().any(|v| !v.is_finite()) {
-            return Err(CoarseError::NonFinitePose);
-        }
+    /// Coarse calibration from the means (input unit) of the poses flagged in `keep` (poses past its
+    /// end are not used) against `gravity` (output unit).
+    pub fn from_poses(poses: &[Pose], keep: &[bool], gravity: f32) -> Result<Self, CoarseError> {
+        check_input(poses, keep, gravity).map_err(CoarseError::from)?;
+        Self::from_valid_poses(poses, keep, gravity)
+    }
+
+    /// [`CoarseCalibration::from_poses`] of input [`check_input`] has accepted.
+    pub(crate) fn from_valid_poses(poses: &[Pose], keep: &[bool], gravity: f32) -> Result<Self, CoarseError> {
         // Centre and half-range per axis from the extremes: removes the large offsets of raw counts.
-        let mut lo = [f32::INFINITY; 3];
-        let mut hi = [f32::NEG_INFINITY; 3];
-        for m in means {
-            for a in 0..3 {
-                lo[a] = crate::linalg::smaller(lo[a], m[a]);
-                hi[a] = crate::linalg::larger(hi[a], m[a]);
-            }
-        }
+        let (mid, half) = mid_range(poses, keep);
         // An axis pointed up and down spans about twice gravity, like the widest one; one that spans
         // much less was never reversed, and its centre (hence its dominant poses) is unknown.
-        let widest = (0..3).map(|a| hi[a] - lo[a]).fold(0.0f32, crate::linalg::larger);
+        let widest = largest(half);
         for a in 0..3 {
-            let span = hi[a] - lo[a];
-            if widest > 0.0 && span < MIN_SPAN_FRACTION * widest {
-                let span_pct = (100.0 * span / widest).clamp(0.0, 99.0) as u8;
+            if widest > 0.0 && half[a] < MIN_SPAN_FRACTION * widest {
+                // In [0, 75): the cast needs no clamp.
+                let span_pct = (100.0 * half[a] / widest) as u8;
                 return Err(CoarseError::NotReversed { axis: a as u8, span_pct });
             }
         }
         let mut sums = [[0.0f32; 2]; 3];
         let mut counts = [[0u16; 2]; 3];
-        for m in means {
-            let mut normalized = [0.0; 3];
+        for m in kept(poses, keep) {
+            let mut u = [0.0; 3];
             for a in 0..3 {
-                let half_range = 0.5 * (hi[a] - lo[a]);
-                normalized[a] = if half_range > 0.0 { (m[a] - 0.5 * (hi[a] + lo[a])) / half_range } else { 0.0 };
-            }
-            let norm = crate::linalg::sqrt_f32(normalized.iter().map(|v| v * v).sum());
-            for a in 0..3 {
-                if norm > 0.0 && normalized[a].abs() >= DOMINANCE * norm {
-                    let side = usize::from(normalized[a] < 0.0);
-                    sums[a][side] += m[a];
-                    counts[a][side] = counts[a][side].saturating_add(1);
+                if half[a] > 0.0 {
+                    u[a] = (m[a] - mid[a]) / half[a];
                 }
+            }
+            let near = half_axes_near(u, DOMINANCE);
+            // At most one half-axis is within 25 deg (all six only for u = 0, which points nowhere).
+            if near != 0 && near != 0x3f {
+                let bit = near.trailing_zeros() as usize;
+                let (a, side) = (bit / 2, bit % 2);
+                sums[a][side] += m[a];
+                counts[a][side] = counts[a][side].saturating_add(1);
             }
         }
         let mut offset = [0.0; 3];

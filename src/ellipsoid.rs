@@ -15,26 +15,28 @@
 //!   first, and named in [`EllipsoidFit::excluded`].
 //!
 //! ```
+//! use accelcal::accumulator::Pose;
 //! use accelcal::ellipsoid::{fit_ellipsoid, OutlierRule};
 //! use accelcal::model::Params;
 //! let truth = Params { bias: [0.2, -0.1, 0.3], scale: [0.98, 1.01, 0.99], nonorth: [0.01, -0.02, 0.015] };
 //! let dirs = [[0.3f32, 0.9, 0.3], [-0.8, 0.5, 0.33], [0.1, -0.7, 0.7], [0.6, 0.0, -0.8], [-0.2, -0.3, -0.93],
 //!     [0.9, -0.4, 0.17], [-0.5, -0.8, 0.33], [0.0, 0.6, -0.8], [-0.7, 0.1, -0.7], [0.57, 0.57, 0.57],
 //!     [0.95, 0.3, -0.1], [-0.3, 0.95, -0.1]];
-//! let means = dirs.map(|d| {
+//! let poses = dirs.map(|d| {
 //!     let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-//!     truth.invert(d.map(|v| v / n * 9.80665)).unwrap()
+//!     Pose::from_mean(truth.invert(d.map(|v| v / n * 9.80665)).unwrap(), 500)
 //! });
 //! let mut keep = [true; 12];
-//! let fit = fit_ellipsoid(&means, &mut keep, 9.80665, &OutlierRule::DEFAULT).unwrap();
+//! let fit = fit_ellipsoid(&poses, &mut keep, 9.80665, &OutlierRule::DEFAULT).unwrap();
 //! assert!((fit.params.scale[1] - 1.01).abs() < 1e-3);
 //! assert!((fit.params.nonorth[1] + 0.02).abs() < 1e-3);
 //! ```
 
+use crate::accumulator::Pose;
 use crate::linalg::{
-    DETERMINED_PIVOT, Matrix, add_outer_product, larger, smaller, solve_spd_holding_in_place, weak_pivots,
+    DETERMINED_PIVOT, Matrix, add_outer_product, larger, smaller, solve_spd_holding_in_place, sqrt_f32, weak_pivots,
 };
-use crate::model::{PARAM_COUNT, Params};
+use crate::model::{PARAM_COUNT, Params, norm_squared};
 
 /// Quadric coefficients `[xx, yy, zz, x, y, z, xy, xz, yz]`: the cross terms last, so that in the
 /// factorisation that finds the undetermined ones they (not a scale or the centre) are held at 0.
@@ -179,6 +181,8 @@ impl PoseList {
 pub struct EllipsoidFit {
     /// The model in the paper's convention.
     pub params: Params,
+    /// The centre of the ellipsoid, `Ka^-1 B` (input unit): the reading at zero specific force.
+    pub center: [f32; 3],
     /// Poses left out as far off the ellipsoid.
     pub excluded: PoseList,
     /// Non-orthogonality terms held at 0 because the directions do not determine them
@@ -188,166 +192,246 @@ pub struct EllipsoidFit {
     pub rmse_g: f32,
 }
 
-/// Fits the ellipsoid to the pose means (input unit) flagged in `keep` (same length as `means`;
-/// poses found far off per `rule` are set to `false` there and listed in the result).
+/// `true` for a finite `v`: `v - v` is 0 for a finite `v`, NaN otherwise (on the FPU:
+/// `f32::is_finite` works on the bits).
+#[allow(clippy::eq_op)] // `v - v` is the test.
+pub(crate) fn finite(v: f32) -> bool {
+    v - v == 0.0
+}
+
+/// Checks gravity and the kept means, the same for both initialisations: `Ok` or which is wrong.
+#[allow(clippy::eq_op)] // `x - x` is the test.
+pub(crate) fn check_input(poses: &[Pose], keep: &[bool], gravity: f32) -> Result<(), EllipsoidError> {
+    if !(gravity > 0.0 && gravity < f32::INFINITY) {
+        return Err(EllipsoidError::InvalidGravity);
+    }
+    for m in kept(poses, keep) {
+        // `x - x` is 0 for a finite `x`, NaN otherwise.
+        if (m[0] - m[0]) + (m[1] - m[1]) + (m[2] - m[2]) != 0.0 {
+            return Err(EllipsoidError::NonFinitePose);
+        }
+    }
+    Ok(())
+}
+
+/// The means of the poses flagged in `keep` (poses past its end are not kept).
+pub(crate) fn kept<'a>(poses: &'a [Pose], keep: &'a [bool]) -> impl Iterator<Item = [f32; 3]> + 'a {
+    keep.iter().zip(poses).filter_map(|(&k, p)| k.then_some(p.mean))
+}
+
+/// Fits the ellipsoid to the means of the poses flagged in `keep` (same length as `poses`; poses
+/// found far off per `rule` are set to `false` there and listed in the result).
 pub fn fit_ellipsoid(
-    means: &[[f32; 3]],
+    poses: &[Pose],
     keep: &mut [bool],
     gravity: f32,
     rule: &OutlierRule,
 ) -> Result<EllipsoidFit, EllipsoidError> {
-    if !(gravity.is_finite() && gravity > 0.0) {
-        return Err(EllipsoidError::InvalidGravity);
-    }
-    if means.iter().zip(keep.iter()).any(|(m, &k)| k && m.iter().any(|v| !v.is_finite())) {
-        return Err(EllipsoidError::NonFinitePose);
-    }
-    let mut excluded = PoseList::default();
-    loop {
-        let kept = keep.iter().take(means.len()).filter(|&&k| k).count();
-        let room = usize::from(excluded.len) < MAX_EXCLUDED && kept > COEFFS + 1;
-        let fitted = fit_once(means, keep, gravity);
-        // A gross outlier can bend the quadric into a non-ellipsoid, or into an ellipsoid no
-        // accelerometer has: then look for the pose without which the rest fit.
-        let bent = match &fitted {
-            Ok(fit) => !plausible(&fit.0),
-            Err(e) => matches!(e, EllipsoidError::Degenerate { .. }),
-        };
-        if bent
-            && room
-            && rule.floor_g.is_finite()
-            && let Some(i) = best_left_out(means, keep, gravity)
-        {
-            if let Some(k) = keep.get_mut(i) {
-                *k = false;
+    check_input(poses, keep, gravity)?;
+    fit_valid(poses, keep, gravity, rule)
+}
+
+/// [`fit_ellipsoid`] of input [`check_input`] has accepted.
+pub(crate) fn fit_valid(
+    poses: &[Pose],
+    keep: &mut [bool],
+    gravity: f32,
+    rule: &OutlierRule,
+) -> Result<EllipsoidFit, EllipsoidError> {
+    // All zeros (one clear): the fit overwrites the model before anything reads it.
+    let fit = EllipsoidFit {
+        params: Params { bias: [0.0; 3], scale: [0.0; 3], nonorth: [0.0; 3] },
+        center: [0.0; 3],
+        excluded: PoseList::EMPTY,
+        held: [false; 3],
+        rmse_g: 0.0,
+    };
+    let mut fitting = Fitting { poses, keep, gravity, fit };
+    fitting.robust(rule)?;
+    Ok(fitting.fit)
+}
+
+/// The poses, the ones kept and gravity, and the fit: the state of the robust fit.
+struct Fitting<'a> {
+    poses: &'a [Pose],
+    keep: &'a mut [bool],
+    gravity: f32,
+    fit: EllipsoidFit,
+}
+
+impl Fitting<'_> {
+    /// Fits, leaving out poses per `rule`, until the fit stands.
+    fn robust(&mut self, rule: &OutlierRule) -> Result<(), EllipsoidError> {
+        loop {
+            let kept = kept(self.poses, self.keep).count();
+            if kept < COEFFS {
+                return Err(EllipsoidError::TooFewPoses { got: kept });
             }
-            excluded.push(i);
-            continue;
+            let room = usize::from(self.fit.excluded.len) < MAX_EXCLUDED && kept > COEFFS + 1;
+            let mut fitted = self.fit_once();
+            // A gross outlier can bend the quadric into a non-ellipsoid, or into an ellipsoid no
+            // accelerometer has: then look for the pose without which the rest fit.
+            if fitted != Some(true) && room && finite(rule.floor_g) {
+                if let Some(i) = self.best_left_out() {
+                    self.leave_out(i);
+                    continue;
+                }
+                fitted = self.fit_once();
+            }
+            if fitted.is_none() {
+                return Err(EllipsoidError::Degenerate { missing: missing_directions(self.poses, self.keep) });
+            }
+            let (worst, worst_abs, rmse_g) = self.worst_and_rms();
+            self.fit.rmse_g = rmse_g;
+            // The limit is at least the floor (or NaN): the median is needed only above the floor.
+            if !(worst_abs > rule.floor_g)
+                || !room
+                || !(worst_abs > larger(rule.floor_g, rule.robust_sigmas * 1.4826 * self.median_abs()))
+            {
+                return Ok(());
+            }
+            self.leave_out(worst);
         }
-        let (params, held) = fitted?;
-        let errors = ModulusErrors { means, keep, params: &params, gravity };
-        let (worst, worst_abs) = errors.worst();
-        let limit = crate::linalg::larger(rule.floor_g, rule.robust_sigmas * 1.4826 * errors.median_abs());
-        if !(worst_abs > limit) || !room {
-            return Ok(EllipsoidFit { params, excluded, held, rmse_g: errors.rms() });
-        }
-        if let Some(k) = keep.get_mut(worst) {
+    }
+
+    fn leave_out(&mut self, i: usize) {
+        if let Some(k) = self.keep.get_mut(i) {
             *k = false;
         }
-        excluded.push(worst);
+        self.fit.excluded.push(i);
     }
-}
 
-/// The kept pose without which the others fit an ellipsoid best (smallest modulus RMS).
-fn best_left_out(means: &[[f32; 3]], keep: &mut [bool], gravity: f32) -> Option<usize> {
-    let mut best: Option<(usize, f32)> = None;
-    for i in 0..means.len().min(keep.len()) {
-        if !keep[i] {
-            continue;
-        }
-        keep[i] = false;
-        if let Some((params, _)) = fit_once(means, keep, gravity).ok().filter(|f| plausible(&f.0)) {
-            let rms = ModulusErrors { means, keep, params: &params, gravity }.rms();
-            if best.is_none_or(|(_, b)| rms < b) {
-                best = Some((i, rms));
+    /// The kept pose without which the others fit an ellipsoid best (smallest modulus RMS).
+    fn best_left_out(&mut self) -> Option<usize> {
+        let mut best: Option<(usize, f32)> = None;
+        for i in 0..self.poses.len() {
+            // (`fit_once` takes `self` mutably: no index into `keep`, whose check could panic.)
+            match self.keep.get_mut(i) {
+                Some(k) if *k => *k = false,
+                _ => continue,
+            }
+            if self.fit_once() == Some(true) {
+                let rms = self.worst_and_rms().2;
+                if best.is_none_or(|(_, b)| rms < b) {
+                    best = Some((i, rms));
+                }
+            }
+            if let Some(k) = self.keep.get_mut(i) {
+                *k = true;
             }
         }
-        keep[i] = true;
+        best.map(|(i, _)| i)
     }
-    best.map(|(i, _)| i)
-}
 
-/// Smallest share of the total variance of the pose means that their thinnest direction must carry:
-/// poses in one plane, or in one cap narrower than about 30 deg, carry less and do not determine an
-/// ellipsoid (the fit would be an extrapolation).
-const MIN_THIN_VARIANCE: f32 = 0.01;
-
-/// Refuses poses in one plane or one narrow cap (the smallest eigenvalue of the covariance of the
-/// means below [`MIN_THIN_VARIANCE`] of its trace), naming the half-axes not visited.
-fn check_spread(means: &[[f32; 3]], keep: &[bool]) -> Result<(), EllipsoidError> {
-    let (m0, s, n) = reference(means, keep);
-    let mut cov: Matrix<3> = [[0.0; 3]; 3];
-    for (m, _) in means.iter().zip(keep).filter(|(_, k)| **k) {
-        let v = [(m[0] - m0[0]) / s, (m[1] - m0[1]) / s, (m[2] - m0[2]) / s];
-        for i in 0..3 {
-            for j in 0..3 {
-                cov[i][j] += v[i] * v[j] / n as f32;
+    /// Reference point (mean) and RMS spread of the kept means: the numbers the quadric is fitted in.
+    fn reference(&self) -> ([f32; 3], f32) {
+        let (mut sum, mut n) = ([0.0f32; 3], 0u32);
+        for m in kept(self.poses, self.keep) {
+            for a in 0..3 {
+                sum[a] += m[a];
             }
+            n += 1;
         }
+        let n = n.max(1) as f32;
+        let center = [sum[0] / n, sum[1] / n, sum[2] / n];
+        let spread: f32 = kept(self.poses, self.keep).map(|m| norm_squared(difference(m, center))).sum();
+        (center, sqrt_f32(spread / n))
     }
-    // Positive definite after removing tau * trace from the diagonal <=> smallest eigenvalue above it.
-    let shift = MIN_THIN_VARIANCE * (cov[0][0] + cov[1][1] + cov[2][2]);
-    for (i, row) in cov.iter_mut().enumerate() {
-        row[i] -= shift;
+
+    /// One least-squares fit of the quadric to the kept poses, factored into the model (in
+    /// `self.fit`): `None` when the poses do not determine an ellipsoid, else whether it is one an
+    /// accelerometer can have.
+    fn fit_once(&mut self) -> Option<bool> {
+        let (m0, s) = self.reference();
+        let mut ata: Matrix<COEFFS> = [[0.0; COEFFS]; COEFFS];
+        let mut atb = [0.0f32; COEFFS];
+        for m in kept(self.poses, self.keep) {
+            let v = [(m[0] - m0[0]) / s, (m[1] - m0[1]) / s, (m[2] - m0[2]) / s];
+            let row = [
+                v[0] * v[0],
+                v[1] * v[1],
+                v[2] * v[2],
+                v[0],
+                v[1],
+                v[2],
+                2.0 * v[0] * v[1],
+                2.0 * v[0] * v[2],
+                2.0 * v[1] * v[2],
+            ];
+            for i in 0..COEFFS {
+                atb[i] += row[i];
+            }
+            add_outer_product(&mut ata, &row, 1.0);
+        }
+        // The linear terms' block is `n` times the covariance of the means: its smallest eigenvalue
+        // must carry MIN_THIN_VARIANCE of its trace (positive definite after removing that much).
+        let shift = MIN_THIN_VARIANCE * (ata[3][3] + ata[4][4] + ata[5][5]);
+        lower_factor([ata[3][3] - shift, ata[4][4] - shift, ata[5][5] - shift], [ata[4][3], ata[5][3], ata[5][4]])?;
+        let held = weak_pivots(&ata, DETERMINED_PIVOT);
+        if held[..6].iter().any(|&h| h) {
+            return None;
+        }
+        // `atb` becomes the quadric coefficients.
+        solve_spd_holding_in_place(&mut ata, &mut atb, &held).ok()?;
+        // Quadric cross terms xy, xz, yz map to Mxx, Myy, Mzz.
+        self.fit.held = [held[6], held[7], held[8]];
+        self.factor(&atb, m0, s)?;
+        Some(plausible(&self.fit.params))
     }
-    match lower_factor(&cov) {
-        Some(_) => Ok(()),
-        None => Err(EllipsoidError::Degenerate { missing: missing_directions(means, keep) }),
+
+    /// The quadric `v^T A v + b^T v = 1` in `v = (m - m0) / s` to the paper's `Ka`, `B` and the
+    /// centre; `None` unless an ellipsoid.
+    fn factor(&mut self, theta: &[f32; COEFFS], m0: [f32; 3], s: f32) -> Option<()> {
+        // A = L^T L, L lower-triangular; the centre solves A v0 = -b / 2: L^T y = -b / 2, then L v0 = y.
+        let l = lower_factor([theta[0], theta[1], theta[2]], [theta[6], theta[7], theta[8]])?;
+        let ([sx, sy, sz], [mx, my, mz]) = (l.scale, l.nonorth);
+        let b = [theta[3], theta[4], theta[5]];
+        let y2 = -0.5 * b[2] / sz;
+        let y1 = (-0.5 * b[1] - mz * y2) / sy;
+        let y0 = (-0.5 * b[0] - mx * y1 - my * y2) / sx;
+        let v0 = y0 / sx;
+        let v1 = (y1 - mx * v0) / sy;
+        let v2 = (y2 - my * v0 - mz * v1) / sz;
+        // v^T A v + b^T v = 1 is |L (v - v0)|^2 = 1 + |y|^2 = k, and Ka^T Ka = g^2 A / (k s^2):
+        // Ka = L g / (s sqrt(k)).
+        let w = self.gravity / (s * sqrt_f32(1.0 + y0 * y0 + y1 * y1 + y2 * y2));
+        let ka = Params { bias: [0.0; 3], scale: [w * sx, w * sy, w * sz], nonorth: [w * mx, w * my, w * mz] };
+        self.fit.center = [m0[0] + s * v0, m0[1] + s * v1, m0[2] + s * v2];
+        self.fit.params = Params { bias: ka.ka_times(self.fit.center), ..ka };
+        self.fit.params.is_finite().then_some(())
     }
-}
 
-/// Bits of the half-axes of axis `a` that the direction `f` (of length `norm`) lies within 60 deg of.
-fn visited(f: [f32; 3], norm: f32, a: usize) -> u8 {
-    // cos 60 deg = 0.5.
-    let up = u8::from(f[a] >= 0.5 * norm) << (2 * a);
-    let down = u8::from(-f[a] >= 0.5 * norm) << (2 * a + 1);
-    up | down
-}
-
-/// Largest ratio between two axes' scale factors, and largest non-orthogonality relative to its
-/// scale, of any accelerometer: a fit beyond them has been bent by a bad pose.
-const PLAUSIBLE_SCALE_RATIO: f32 = 1.3;
-const PLAUSIBLE_NONORTH: f32 = 0.1;
-
-/// `true` for an ellipsoid an accelerometer can have.
-fn plausible(p: &Params) -> bool {
-    let s = p.scale;
-    let (lo, hi) = (smaller(smaller(s[0], s[1]), s[2]), larger(larger(s[0], s[1]), s[2]));
-    let m = p.nonorth;
-    hi <= PLAUSIBLE_SCALE_RATIO * lo
-        && m[0].abs() <= PLAUSIBLE_NONORTH * s[0]
-        && m[1].abs() <= PLAUSIBLE_NONORTH * s[0]
-        && m[2].abs() <= PLAUSIBLE_NONORTH * s[1]
-}
-
-/// The modulus errors `|f_b| / g - 1` of the kept poses under `params`.
-struct ModulusErrors<'a> {
-    means: &'a [[f32; 3]],
-    keep: &'a [bool],
-    params: &'a Params,
-    gravity: f32,
-}
-
-impl ModulusErrors<'_> {
-    /// The error of pose `i`; `None` when it is not kept. Out of line: every statistic below calls it.
+    /// `| |f_b| / g - 1 |` of pose `i` under the fit; `None` when it is not kept. Out of line: every
+    /// statistic below calls it.
     #[inline(never)]
-    fn of(&self, i: usize) -> Option<f32> {
-        let (m, &kept) = (self.means.get(i)?, self.keep.get(i)?);
-        let f = self.params.apply(*m);
-        kept.then(|| crate::linalg::sqrt_f32(crate::model::norm_squared(f)) / self.gravity - 1.0)
+    fn abs_error(&self, i: usize) -> Option<f32> {
+        let (pose, &kept) = (self.poses.get(i)?, self.keep.get(i)?);
+        kept.then(|| (sqrt_f32(norm_squared(self.fit.params.apply(pose.mean))) / self.gravity - 1.0).abs())
     }
 
-    fn iter(&self) -> impl Iterator<Item = (usize, f32)> + '_ {
-        (0..self.means.len()).filter_map(|i| self.of(i).map(|e| (i, e)))
+    /// The index and size of the largest modulus error of the kept poses, and their RMS.
+    fn worst_and_rms(&self) -> (usize, f32, f32) {
+        let (mut worst, mut worst_abs, mut sum, mut n) = (0, -1.0f32, 0.0f32, 0u32);
+        for i in 0..self.poses.len() {
+            if let Some(e) = self.abs_error(i) {
+                if e > worst_abs {
+                    (worst, worst_abs) = (i, e);
+                }
+                sum += e * e;
+                n += 1;
+            }
+        }
+        (worst, worst_abs, sqrt_f32(sum / n.max(1) as f32))
     }
 
-    fn worst(&self) -> (usize, f32) {
-        self.iter().map(|(i, e)| (i, e.abs())).fold((0, -1.0), |a, b| if b.1 > a.1 { b } else { a })
-    }
-
-    fn rms(&self) -> f32 {
-        let (sum, n) = self.iter().fold((0.0f32, 0u32), |(s, n), (_, e)| (s + e * e, n + 1));
-        crate::linalg::sqrt_f32(sum / n.max(1) as f32)
-    }
-
-    /// Lower median of `|e|` without a buffer: the smallest value with at least half the values at or
-    /// below it (quadratic in the pose count, which is small).
+    /// Lower median of the kept `|e|` without a buffer: the smallest value with at least half the
+    /// values at or below it (quadratic in the pose count, which is small).
     fn median_abs(&self) -> f32 {
-        let n = self.iter().count();
+        let errors = || (0..self.poses.len()).filter_map(|i| self.abs_error(i));
+        let n = errors().count();
         let mut best = f32::INFINITY;
-        for (_, e) in self.iter() {
-            let v = e.abs();
-            if v < best && 2 * self.iter().filter(|(_, o)| o.abs() <= v).count() >= n {
+        for v in errors() {
+            if v < best && 2 * errors().filter(|&o| o <= v).count() >= n {
                 best = v;
             }
         }
@@ -355,125 +439,91 @@ impl ModulusErrors<'_> {
     }
 }
 
-/// Reference point and spread of the kept means: the numbers the quadric is fitted in.
-fn reference(means: &[[f32; 3]], keep: &[bool]) -> ([f32; 3], f32, usize) {
-    let mut sum = [0.0f32; 3];
-    let mut n = 0usize;
-    for (m, _) in means.iter().zip(keep).filter(|(_, k)| **k) {
-        for a in 0..3 {
-            sum[a] += m[a];
-        }
-        n += 1;
-    }
-    let center = sum.map(|s| s / n.max(1) as f32);
-    let mut spread = 0.0f32;
-    for (m, _) in means.iter().zip(keep).filter(|(_, k)| **k) {
-        spread += crate::model::norm_squared([m[0] - center[0], m[1] - center[1], m[2] - center[2]]);
-    }
-    (center, crate::linalg::sqrt_f32(spread / n.max(1) as f32), n)
+/// `a - b`.
+fn difference(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
-/// One least-squares fit of the quadric to the kept poses, factored into the model.
-fn fit_once(means: &[[f32; 3]], keep: &[bool], gravity: f32) -> Result<(Params, [bool; 3]), EllipsoidError> {
-    let (m0, s, n) = reference(means, keep);
-    if n < COEFFS {
-        return Err(EllipsoidError::TooFewPoses { got: n });
-    }
-    check_spread(means, keep)?;
-    let degenerate = || EllipsoidError::Degenerate { missing: missing_directions(means, keep) };
-    if !(s > 0.0 && s.is_finite()) {
-        return Err(degenerate());
-    }
-    let mut ata: Matrix<COEFFS> = [[0.0; COEFFS]; COEFFS];
-    let mut atb = [0.0f32; COEFFS];
-    for (m, _) in means.iter().zip(keep).filter(|(_, k)| **k) {
-        let v = [(m[0] - m0[0]) / s, (m[1] - m0[1]) / s, (m[2] - m0[2]) / s];
-        let row = [
-            v[0] * v[0],
-            v[1] * v[1],
-            v[2] * v[2],
-            v[0],
-            v[1],
-            v[2],
-            2.0 * v[0] * v[1],
-            2.0 * v[0] * v[2],
-            2.0 * v[1] * v[2],
-        ];
-        for i in 0..COEFFS {
-            atb[i] += row[i];
-        }
-        add_outer_product(&mut ata, &row, 1.0);
-    }
-    let held = weak_pivots(&ata, DETERMINED_PIVOT);
-    if held[..6].iter().any(|&h| h) {
-        return Err(degenerate());
-    }
-    // `atb` becomes the quadric coefficients.
-    solve_spd_holding_in_place(&mut ata, &mut atb, &held).map_err(|_| degenerate())?;
-    let params = factor(&atb, m0, s, gravity).ok_or_else(degenerate)?;
-    // Quadric cross terms xy, xz, yz map to Mxx, Myy, Mzz.
-    Ok((params, [held[6], held[7], held[8]]))
-}
+/// Smallest share of the total variance of the pose means that their thinnest direction must carry:
+/// poses in one plane, or in one cap narrower than about 30 deg, carry less and do not determine an
+/// ellipsoid (the fit would be an extrapolation).
+const MIN_THIN_VARIANCE: f32 = 0.01;
 
-/// `v^T A v + b^T v = 1` in `v = (m - m0) / s` to the paper's `Ka`, `B`; `None` unless an ellipsoid.
-fn factor(theta: &[f32; COEFFS], m0: [f32; 3], s: f32, gravity: f32) -> Option<Params> {
-    let a = [[theta[0], theta[6], theta[7]], [theta[6], theta[1], theta[8]], [theta[7], theta[8], theta[2]]];
-    let b = [theta[3], theta[4], theta[5]];
-    // A = L^T L, L lower-triangular; the centre solves A v0 = -b / 2: L^T y = -b / 2, then L v0 = y.
-    let l = lower_factor(&a)?;
-    let (sx, sy, sz) = (l.scale[0], l.scale[1], l.scale[2]);
-    let (mx, my, mz) = (l.nonorth[0], l.nonorth[1], l.nonorth[2]);
-    let y2 = -0.5 * b[2] / sz;
-    let y1 = (-0.5 * b[1] - mz * y2) / sy;
-    let y0 = (-0.5 * b[0] - mx * y1 - my * y2) / sx;
-    let v0 = l.invert([y0, y1, y2])?;
-    let k = 1.0 - 0.5 * (b[0] * v0[0] + b[1] * v0[1] + b[2] * v0[2]);
-    if !(k > 0.0) {
-        return None;
-    }
-    // Ka^T Ka = g^2 A / (k s^2): Ka = L g / (s sqrt(k)).
-    let w = gravity / (s * crate::linalg::sqrt_f32(k));
-    let ka = Params { bias: [0.0; 3], scale: l.scale.map(|v| w * v), nonorth: l.nonorth.map(|v| w * v) };
-    let center = [m0[0] + s * v0[0], m0[1] + s * v0[1], m0[2] + s * v0[2]];
-    let params = Params { bias: ka.ka_times(center), ..ka };
-    params.is_finite().then_some(params)
+/// Largest ratio between two axes' scale factors, and largest non-orthogonality relative to its
+/// scale, of any accelerometer: a fit beyond them has been bent by a bad pose.
+const PLAUSIBLE_SCALE_RATIO: f32 = 1.3;
+const PLAUSIBLE_NONORTH: f32 = 0.1;
+
+/// `true` for an ellipsoid an accelerometer can have (its scales are positive).
+fn plausible(p: &Params) -> bool {
+    let (s, m) = (p.scale, p.nonorth);
+    let (lo, hi) = (smaller(smaller(s[0], s[1]), s[2]), larger(larger(s[0], s[1]), s[2]));
+    hi <= PLAUSIBLE_SCALE_RATIO * lo
+        && m[0].abs() <= PLAUSIBLE_NONORTH * s[0]
+        && m[1].abs() <= PLAUSIBLE_NONORTH * s[0]
+        && m[2].abs() <= PLAUSIBLE_NONORTH * s[1]
 }
 
 /// The lower-triangular `L` with `L^T L = a` (a Cholesky factorisation in reversed order, bottom row
-/// first), as the `Ka` of a model without bias; `None` unless `a` is positive definite.
-fn lower_factor(a: &Matrix<3>) -> Option<Params> {
-    let szz = sqrt_positive(a[2][2])?;
-    let mzz = a[1][2] / szz;
-    let myy = a[0][2] / szz;
-    let syy = sqrt_positive(a[1][1] - mzz * mzz)?;
-    let mxx = (a[0][1] - myy * mzz) / syy;
-    let sxx = sqrt_positive(a[0][0] - mxx * mxx - myy * myy)?;
-    Some(Params { bias: [0.0; 3], scale: [sxx, syy, szz], nonorth: [mxx, myy, mzz] })
+/// first) for the symmetric `a` given by its diagonal and its `xy, xz, yz` entries, as the `Ka` of a
+/// model without bias; `None` unless `a` is positive definite.
+fn lower_factor(diagonal: [f32; 3], off: [f32; 3]) -> Option<Params> {
+    // A pivot that is not positive gives a diagonal entry that is 0 or NaN, and NaN propagates to
+    // the entries after it; an infinite one makes the model infinite: one check at the end (and
+    // the caller's that the model is finite).
+    let szz = sqrt_f32(diagonal[2]);
+    let mzz = off[2] / szz;
+    let myy = off[1] / szz;
+    let syy = sqrt_f32(diagonal[1] - mzz * mzz);
+    let mxx = (off[0] - myy * mzz) / syy;
+    let sxx = sqrt_f32(diagonal[0] - mxx * mxx - myy * myy);
+    (sxx > 0.0 && syy > 0.0 && szz > 0.0).then_some(Params {
+        bias: [0.0; 3],
+        scale: [sxx, syy, szz],
+        nonorth: [mxx, myy, mzz],
+    })
 }
 
-fn sqrt_positive(v: f32) -> Option<f32> {
-    (v > 0.0 && v.is_finite()).then(|| crate::linalg::sqrt_f32(v))
+/// Per-axis centre and half-width of the range of the kept means.
+pub(crate) fn mid_range(poses: &[Pose], keep: &[bool]) -> ([f32; 3], [f32; 3]) {
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for m in kept(poses, keep) {
+        for a in 0..3 {
+            lo[a] = smaller(m[a], lo[a]);
+            hi[a] = larger(m[a], hi[a]);
+        }
+    }
+    for a in 0..3 {
+        (lo[a], hi[a]) = (0.5 * (hi[a] + lo[a]), 0.5 * (hi[a] - lo[a]));
+    }
+    (lo, hi)
+}
+
+/// The largest of `v` and 0.
+pub(crate) fn largest(v: [f32; 3]) -> f32 {
+    v.iter().fold(0.0f32, |x, &y| larger(y, x))
+}
+
+/// The half-axes ([`Directions`] bits) within `acos(cos)` of the direction of `u`; all six for `u = 0`.
+pub(crate) fn half_axes_near(u: [f32; 3], cos: f32) -> u8 {
+    let limit = cos * sqrt_f32(norm_squared(u));
+    let mut bits = 0;
+    for a in 0..3 {
+        bits |= u8::from(u[a] >= limit) << (2 * a) | u8::from(-u[a] >= limit) << (2 * a + 1);
+    }
+    bits
 }
 
 /// Half-axes with no kept pose within 60 deg, seen from the per-axis mid-range of the readings
 /// (the centre is unknown when the fit fails).
-pub fn missing_directions(means: &[[f32; 3]], keep: &[bool]) -> Directions {
-    let mut lo = [f32::INFINITY; 3];
-    let mut hi = [f32::NEG_INFINITY; 3];
-    for (m, _) in means.iter().zip(keep).filter(|(_, k)| **k) {
-        for a in 0..3 {
-            lo[a] = if m[a] < lo[a] { m[a] } else { lo[a] };
-            hi[a] = if m[a] > hi[a] { m[a] } else { hi[a] };
-        }
-    }
-    let half = (0..3).map(|a| 0.5 * (hi[a] - lo[a])).fold(0.0f32, |x, y| if y > x { y } else { x });
-    let mut seen = 0u8;
-    for (m, _) in means.iter().zip(keep).filter(|(_, k)| **k) {
-        let u: [f32; 3] = core::array::from_fn(|a| (m[a] - 0.5 * (hi[a] + lo[a])) / larger(half, f32::MIN_POSITIVE));
-        let norm = crate::linalg::sqrt_f32(crate::model::norm_squared(u));
-        for a in 0..3 {
-            seen |= visited(u, norm, a);
-        }
+pub fn missing_directions(poses: &[Pose], keep: &[bool]) -> Directions {
+    let (mid, half) = mid_range(poses, keep);
+    let widest = larger(largest(half), f32::MIN_POSITIVE);
+    // cos 60 deg = 0.5.
+    let mut seen = 0;
+    for m in kept(poses, keep) {
+        seen |= half_axes_near([(m[0] - mid[0]) / widest, (m[1] - mid[1]) / widest, (m[2] - mid[2]) / widest], 0.5);
     }
     Directions(!seen & 0x3f)
 }
@@ -509,8 +559,8 @@ mod tests {
         })
     }
 
-    fn means(p: &Params, dirs: impl Iterator<Item = [f32; 3]>) -> heapless::Vec<[f32; 3], 64> {
-        dirs.map(|d| p.invert(d.map(|v| v * G)).unwrap()).collect()
+    fn means(p: &Params, dirs: impl Iterator<Item = [f32; 3]>) -> heapless::Vec<Pose, 64> {
+        dirs.map(|d| Pose::from_mean(p.invert(d.map(|v| v * G)).unwrap(), 100)).collect()
     }
 
     #[test]
@@ -530,7 +580,7 @@ mod tests {
     fn a_stuck_pose_is_left_out_and_named() {
         let p = truth();
         let mut m = means(&p, sphere_dirs(16));
-        m[5] = [0.0, 0.0, 0.0];
+        m[5] = Pose::from_mean([0.0, 0.0, 0.0], 100);
         let mut keep = [true; 16];
         let fit = fit_ellipsoid(&m, &mut keep, G, &OutlierRule::DEFAULT).unwrap();
         assert_eq!(fit.excluded.as_slice(), &[5]);
@@ -580,16 +630,14 @@ mod tests {
     #[test]
     fn refuses_bad_input() {
         let mut keep = [true; 3];
+        let ones = [Pose::from_mean([1.0; 3], 100); 3];
         assert_eq!(
-            fit_ellipsoid(&[[1.0; 3]; 3], &mut keep, G, &OutlierRule::DEFAULT),
+            fit_ellipsoid(&ones, &mut keep, G, &OutlierRule::DEFAULT),
             Err(EllipsoidError::TooFewPoses { got: 3 })
         );
-        assert_eq!(
-            fit_ellipsoid(&[[1.0; 3]; 3], &mut keep, 0.0, &OutlierRule::DEFAULT),
-            Err(EllipsoidError::InvalidGravity)
-        );
-        let mut m = [[1.0f32; 3]; 10];
-        m[2][1] = f32::NAN;
+        assert_eq!(fit_ellipsoid(&ones, &mut keep, 0.0, &OutlierRule::DEFAULT), Err(EllipsoidError::InvalidGravity));
+        let mut m = [Pose::from_mean([1.0; 3], 100); 10];
+        m[2].mean[1] = f32::NAN;
         assert_eq!(fit_ellipsoid(&m, &mut [true; 10], G, &OutlierRule::DEFAULT), Err(EllipsoidError::NonFinitePose));
     }
 }

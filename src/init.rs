@@ -25,7 +25,7 @@
 
 use crate::accumulator::Pose;
 use crate::coarse::{CoarseCalibration, CoarseError};
-use crate::ellipsoid::{EllipsoidError, OutlierRule, PoseList, fit_ellipsoid, held_parameters};
+use crate::ellipsoid::{EllipsoidError, OutlierRule, PoseList, check_input, fit_valid, held_parameters};
 use crate::frame::{Deviation, Frame, NormPose};
 use crate::model::{PARAM_COUNT, Params};
 use crate::verdict::PoseSet;
@@ -137,14 +137,14 @@ impl<const MAX_POSES: usize> NormalizedPoses<MAX_POSES> {
         }
         let mut keep = [true; MAX_POSES];
         let keep = &mut keep[..poses.len()];
-        let (initial, frame) = estimate_of_poses::<MAX_POSES>(poses, keep, init, gravity, rule)?;
+        initial_estimate(&mut self.initial, &mut self.frame, poses, keep, init, gravity, rule)?;
+        let (frame, initial) = (self.frame, &self.initial);
         self.start = frame.to_deviation(&initial.params);
         for i in 0..PARAM_COUNT {
             if initial.held[i] {
                 self.start[i] = 0.0;
             }
         }
-        (self.frame, self.initial) = (frame, initial);
         self.poses.clear();
         self.source.clear();
         for (i, (p, _)) in poses.iter().zip(keep.iter()).enumerate().filter(|(_, (_, k))| **k) {
@@ -186,59 +186,46 @@ impl<const MAX_POSES: usize> NormalizedPoses<MAX_POSES> {
     }
 }
 
-/// [`initial_estimate`] of the poses' means. Out of line: the means and the ellipsoid's matrices need
-/// not share a stack frame with the normalised poses (nor, in the calibration, with the GA).
-#[inline(never)]
-fn estimate_of_poses<const MAX_POSES: usize>(
+/// The estimate `init` asks for (see [`Init`]) and its frame, written into `initial` and `frame`;
+/// `keep` marks the poses it uses.
+fn initial_estimate(
+    initial: &mut Initial,
+    frame: &mut Frame,
     poses: &[Pose],
     keep: &mut [bool],
     init: Init,
     gravity: f32,
     rule: &OutlierRule,
-) -> Result<(Initial, Frame), InitError> {
-    let mut means = [[0.0f32; 3]; MAX_POSES];
-    for (m, p) in means.iter_mut().zip(poses) {
-        *m = p.mean;
+) -> Result<(), InitError> {
+    // The same checks for both (as the six faces' error when they are asked for).
+    if let Err(e) = check_input(poses, keep, gravity) {
+        return Err(if init == Init::SixPosition { InitError::Coarse(e.into()) } else { InitError::Ellipsoid(e) });
     }
-    initial_estimate(&means[..poses.len().min(MAX_POSES)], keep, init, gravity, rule)
-}
-
-/// The estimate `init` asks for (see [`Init`]) and its frame; `keep` marks the poses it uses.
-fn initial_estimate(
-    means: &[[f32; 3]],
-    keep: &mut [bool],
-    init: Init,
-    gravity: f32,
-    rule: &OutlierRule,
-) -> Result<(Initial, Frame), InitError> {
-    // The six faces' own frame, exactly (the paper's path).
-    let six = |means: &[[f32; 3]]| {
-        CoarseCalibration::from_means(means, gravity).map(|c| {
-            let held = [false; PARAM_COUNT];
-            let initial = Initial { kind: Init::SixPosition, params: c.params(), excluded: PoseList::default(), held };
-            (initial, *c.frame())
-        })
-    };
-    match init {
-        Init::SixPosition => six(means).map_err(InitError::Coarse),
-        Init::Ellipsoid | Init::Auto => match fit_ellipsoid(means, keep, gravity, rule) {
+    let mut ellipsoid_error = None;
+    if init != Init::SixPosition {
+        match fit_valid(poses, keep, gravity, rule) {
             Ok(fit) => {
+                // The normalising frame of the fit: its centre and gains `1 / S`.
+                let s = fit.params.scale;
+                let gain = [1.0 / s[0], 1.0 / s[1], 1.0 / s[2]];
+                *frame = Frame::new(fit.center, gain, gravity).map_err(|e| InitError::Coarse(e.into()))?;
                 let held = held_parameters(&fit.held);
-                let initial = Initial { kind: Init::Ellipsoid, params: fit.params, excluded: fit.excluded, held };
-                Ok((initial, frame_of(&fit.params, gravity)?))
+                *initial = Initial { kind: Init::Ellipsoid, params: fit.params, excluded: fit.excluded, held };
+                return Ok(());
             }
-            Err(e) if init == Init::Auto => {
-                keep.iter_mut().for_each(|k| *k = true);
-                six(means).map_err(|_| InitError::Ellipsoid(e))
+            Err(e) if init == Init::Ellipsoid => return Err(InitError::Ellipsoid(e)),
+            Err(e) => {
+                keep.fill(true);
+                ellipsoid_error = Some(e);
             }
-            Err(e) => Err(InitError::Ellipsoid(e)),
-        },
+        }
     }
-}
-
-/// The normalising frame of a model: its centre `Ka^-1 B` and gains `1 / S`.
-fn frame_of(params: &Params, gravity: f32) -> Result<Frame, InitError> {
-    let center = params.invert([0.0; 3]).unwrap_or([f32::NAN; 3]);
-    let gain = params.scale.map(|s| 1.0 / s);
-    Frame::new(center, gain, gravity).map_err(|e| InitError::Coarse(e.into()))
+    // The six faces' own frame, exactly (the paper's path); when they are the fallback, the
+    // ellipsoid's error is the one reported.
+    let c = CoarseCalibration::from_valid_poses(poses, keep, gravity)
+        .map_err(|e| ellipsoid_error.map_or(InitError::Coarse(e), InitError::Ellipsoid))?;
+    *frame = *c.frame();
+    *initial =
+        Initial { kind: Init::SixPosition, params: c.params(), excluded: PoseList::EMPTY, held: [false; PARAM_COUNT] };
+    Ok(())
 }
