@@ -13,8 +13,8 @@
 //!
 //! Every [`Session::push`] returns a [`Progress`]: the state, poses captured, rejections, duplicates,
 //! and a [`Guidance`] computed once per captured pose (the per-sample path is the accumulator's plus a
-//! few comparisons; the guidance is some ten thousand `f64` operations, software-emulated on a
-//! Cortex-M4F, done while the person is already turning the board):
+//! few comparisons; the guidance is some ten thousand `f32` operations, done while the person is
+//! already turning the board):
 //!
 //! - the poses are normalised in the frame of the initial estimate ([`crate::init`]: the ellipsoid fit,
 //!   or the six faces), or, before one can be made (fewer than 9 poses, too narrow a spread), in a
@@ -22,7 +22,7 @@
 //!   any order, with no face required;
 //! - each of the 26 cube directions ([`CubeDirection`]: faces, edges, vertices) is scored by the
 //!   parameter standard deviations the information matrix predicts if that orientation were added
-//!   next (with the noise measured so far). The standard deviations are normalised by the [`VerdictBounds`] of the
+//!   next (with the noise measured so far). The standard deviations are normalised by the [`VerdictBounds`](crate::verdict::VerdictBounds) of the
 //!   calibration (1 = at the bound); the best candidate minimises the worst one, ties broken by the
 //!   sum of squares (A-optimal); while some parameter is still above its bound, the candidate that adds
 //!   the most information wins instead (D-optimal), which asks for new directions first. A weak prior (standard deviation 0.5 in every deviation coordinate
@@ -81,11 +81,14 @@ use crate::accumulator::{
 };
 use crate::blob::{BLOB_LEN, encode};
 use crate::calibrate::{Calibration, CalibrationConfig, CalibrationError, Calibrator, calibrate};
-use crate::frame::{Frame, NormPose, modulus_error_gradient};
+use crate::frame::Frame;
 use crate::init::{Init, NormalizedPoses};
 use crate::model::PARAM_COUNT;
 use crate::sensor::AccelSensor;
-use crate::verdict::{Failures, VerdictBounds, Warnings};
+use crate::verdict::{Failures, Warnings};
+
+mod guidance;
+use guidance::information_guidance;
 
 // ---------------------------------------------------------------------------------------------
 // Orientations
@@ -939,28 +942,21 @@ impl<const POSES: usize, const BLOCK: usize, const POP: usize> Session<i16, POSE
 // Guidance
 // ---------------------------------------------------------------------------------------------
 
-/// Prior standard deviation of every deviation coordinate (bias 0.5 g, scale 50 %, non-orthogonality
-/// 0.5 rad): keeps the information matrix invertible before every term is determined.
-const PRIOR_STD: f64 = 0.5;
-
-/// Smallest per-axis noise variance assumed, relative to `(k g)^2` (a standard deviation of 1e-7 g,
-/// the resolution of the normalised `f32` pose).
-const NOISE_FLOOR: f64 = 1e-14;
-
-/// Relative tolerance under which two candidates' worst variances tie.
-const TIE: f64 = 1e-6;
-
 /// The guidance for `poses`: in the frame of the initial estimate ([`Init::Auto`]: ellipsoid, or the
 /// six faces) when one can be made, else in a provisional frame (zero offset, the mean reading
 /// magnitude as 1 g on every axis), so that it works from the first pose, in any order.
 fn guidance_for<const POSES: usize>(poses: &[Pose], calibration: &CalibrationConfig) -> Guidance {
+    let (frame, basis) = guidance_frame::<POSES>(poses, calibration);
+    Guidance { basis, ..information_guidance(&frame, poses, &calibration.bounds) }
+}
+
+/// The frame the guidance works in, and which one it is (see [`guidance_for`]).
+fn guidance_frame<const POSES: usize>(poses: &[Pose], calibration: &CalibrationConfig) -> (Frame, GuidanceBasis) {
     let g = calibration.gravity;
-    let fitted = NormalizedPoses::<POSES>::prepare(poses, Init::Auto, g, &calibration.outliers);
-    let (frame, basis) = match fitted {
+    match NormalizedPoses::<POSES>::prepare(poses, Init::Auto, g, &calibration.outliers) {
         Ok(n) => (*n.frame(), GuidanceBasis::Information),
         Err(_) => (provisional_frame(poses, g), GuidanceBasis::Provisional),
-    };
-    Guidance { basis, ..information_guidance(&frame, poses, &calibration.bounds) }
+    }
 }
 
 /// Cosine of the largest angle between a raw pose mean and a face for the pose to count as that face
@@ -1014,251 +1010,6 @@ fn dot3(a: [f32; 3], b: [f32; 3]) -> f32 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
-type Matrix64 = [[f64; PARAM_COUNT]; PARAM_COUNT];
-type Vector64 = [f64; PARAM_COUNT];
-
-/// Variance of the normalised modulus error `E / g^2` of a pose along `u` at the coarse estimate:
-/// `4 sum u_a^2 sigma_a^2 / (n (k_a g)^2)`; `relative` holds `sigma_a^2 / (n (k_a g)^2)`.
-fn error_variance(u: [f32; 3], relative: [f64; 3]) -> f64 {
-    let mut v = 0.0;
-    for a in 0..3 {
-        v += 4.0 * f64::from(u[a]) * f64::from(u[a]) * relative[a];
-    }
-    v.max(4.0 * NOISE_FLOOR)
-}
-
-/// Gradient of `E / g^2` with respect to the deviation vector at the coarse estimate.
-fn gradient(u: [f32; 3]) -> Vector64 {
-    let q = u[0] * u[0] + u[1] * u[1] + u[2] * u[2] - 1.0;
-    modulus_error_gradient(&[0.0; PARAM_COUNT], &NormPose { u, q }).1.map(f64::from)
-}
-
-/// One paper-convention parameter divided by its verdict bound, as a sparse combination of the
-/// deviation coordinates (at most four terms: the bias couples to `Ka c`).
-#[derive(Clone, Copy)]
-struct SparseRow {
-    index: [u8; PARAM_COUNT],
-    value: [f64; PARAM_COUNT],
-    len: usize,
-}
-
-impl SparseRow {
-    fn terms(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
-        self.index.iter().zip(&self.value).take(self.len).map(|(&i, &v)| (usize::from(i), v))
-    }
-
-    fn dot(&self, v: &Vector64) -> f64 {
-        self.terms().map(|(i, r)| r * v.get(i).copied().unwrap_or(0.0)).sum()
-    }
-
-    /// `r^T m r`.
-    fn quadratic(&self, m: &Matrix64) -> f64 {
-        let at = |i: usize, j: usize| m.get(i).and_then(|row| row.get(j)).copied().unwrap_or(0.0);
-        self.terms().map(|(i, r)| r * self.terms().map(|(j, q)| at(i, j) * q).sum::<f64>()).sum()
-    }
-}
-
-/// The parameters divided by their verdict bounds (as [`crate::verdict::judge`] sets them), at the
-/// coarse estimate.
-fn normalised_rows(frame: &Frame, bounds: &VerdictBounds) -> [SparseRow; PARAM_COUNT] {
-    let x0 = [0.0; PARAM_COUNT];
-    let t = frame.params_jacobian();
-    let params = frame.to_params(&x0);
-    let g = frame.gravity;
-    let limits = crate::verdict::param_limits(&params, bounds, g);
-    let mut rows = [SparseRow { index: [0; PARAM_COUNT], value: [0.0; PARAM_COUNT], len: 0 }; PARAM_COUNT];
-    for (i, row) in rows.iter_mut().enumerate() {
-        let limit = limits[i];
-        for j in 0..PARAM_COUNT {
-            if t[i][j] == 0.0 {
-                continue;
-            }
-            let v = f64::from(t[i][j]) / f64::from(limit);
-            if let (true, Some(index), Some(value)) =
-                (v.is_finite() && v != 0.0, row.index.get_mut(row.len), row.value.get_mut(row.len))
-            {
-                *index = j as u8;
-                *value = v;
-                row.len += 1;
-            }
-        }
-    }
-    rows
-}
-
-/// The information matrix of the poses (with the prior; lower triangle, which is all
-/// `spd_inverse_f64` reads) and the noise to expect of one more pose (per axis, relative to
-/// `(k g)^2`, for the mean number of samples).
-fn pose_information(frame: &Frame, poses: &[Pose]) -> (Matrix64, [f64; 3]) {
-    let scale_sq: [f64; 3] = core::array::from_fn(|a| {
-        let s = f64::from(frame.gain[a]) * f64::from(frame.gravity);
-        s * s
-    });
-    let mut info = [[0.0f64; PARAM_COUNT]; PARAM_COUNT];
-    for (i, row) in info.iter_mut().enumerate() {
-        row[i] = 1.0 / (PRIOR_STD * PRIOR_STD);
-    }
-    let mut noise_sum = [0.0f64; 3];
-    let mut n_sum = 0.0f64;
-    for p in poses {
-        let n = f64::from(p.n.max(1));
-        let mut relative = [0.0; 3];
-        for a in 0..3 {
-            let v = (f64::from(p.variance[a]) / scale_sq[a]).max(NOISE_FLOOR);
-            noise_sum[a] += v;
-            relative[a] = v / n;
-        }
-        n_sum += n;
-        let u = frame.normalize(p.mean).u;
-        let g = gradient(u);
-        let w = 1.0 / error_variance(u, relative);
-        for i in 0..PARAM_COUNT {
-            let gi = g[i] * w;
-            for j in 0..=i {
-                info[i][j] += gi * g[j];
-            }
-        }
-    }
-    let count = poses.len().max(1) as f64;
-    let n_mean = (n_sum / count).max(1.0);
-    (info, noise_sum.map(|v| (v / count).max(NOISE_FLOOR) / n_mean))
-}
-
-/// A candidate orientation and what adding it would give.
-#[derive(Clone, Copy)]
-struct Candidate {
-    direction: CubeDirection,
-    /// What the choice minimises (see [`best_candidate`]).
-    key: f64,
-    /// Largest normalised variance after adding it.
-    worst: f64,
-    /// Sum of the normalised variances after adding it.
-    sum: f64,
-}
-
-/// The best of the 26 cube directions, by a rank-one update of the covariance. While some parameter
-/// is above its bound (`d_optimal`) the candidate adding the most information wins (D-optimal: the
-/// largest determinant growth, `1 + g^T C g / var`), which always prefers a new direction; near the
-/// bound, the one that minimises the worst normalised variance; ties by the sum.
-fn best_candidate(cov: &Matrix64, rows: &[SparseRow; PARAM_COUNT], noise: [f64; 3], d_optimal: bool) -> Candidate {
-    let current = rows.map(|r| r.quadratic(cov));
-    let infinite = f64::INFINITY;
-    let mut best = Candidate { direction: CubeDirection::face(2, true), key: infinite, worst: infinite, sum: infinite };
-    for direction in CubeDirection::ALL {
-        let u = direction.unit();
-        let g = gradient(u);
-        let w = mat_vec(cov, &g);
-        let pose_noise = error_variance(u, noise);
-        let denominator = pose_noise + dot(&g, &w);
-        let (mut worst, mut sum) = (0.0f64, 0.0f64);
-        for (row, now) in rows.iter().zip(current) {
-            let tw = row.dot(&w);
-            let v = now - tw * tw / denominator;
-            worst = if v > worst { v } else { worst };
-            sum += v;
-        }
-        let key = if d_optimal { -denominator / pose_noise } else { worst };
-        let tie = (key - best.key).abs() <= TIE * best.key.abs();
-        if (key < best.key && !tie) || (tie && sum < best.sum) {
-            best = Candidate { direction, key, worst, sum };
-        }
-    }
-    best
-}
-
-/// Scores the 26 cube directions by the predicted normalised parameter variances after adding each
-/// and returns the best with the current state.
-fn information_guidance(frame: &Frame, poses: &[Pose], bounds: &VerdictBounds) -> Guidance {
-    let (info, candidate_noise) = pose_information(frame, poses);
-    let Some(cov) = spd_inverse_f64(&info) else {
-        let unknown = f32::INFINITY;
-        return Guidance {
-            next: CubeDirection::face(2, true),
-            basis: GuidanceBasis::Provisional,
-            poorly_determined: [true; PARAM_COUNT],
-            worst_std: unknown,
-            worst_std_after_next: unknown,
-        };
-    };
-    let rows = normalised_rows(frame, bounds);
-    let current = rows.map(|r| r.quadratic(&cov));
-    let worst_now = current.iter().fold(0.0f64, |m, &v| if v > m { v } else { m });
-    let best = best_candidate(&cov, &rows, candidate_noise, worst_now > 1.0);
-    Guidance {
-        next: best.direction,
-        basis: GuidanceBasis::Information,
-        poorly_determined: current.map(|v| !(v <= 1.0)),
-        worst_std: libm::sqrt(worst_now) as f32,
-        worst_std_after_next: libm::sqrt(best.worst) as f32,
-    }
-}
-
-fn dot(a: &Vector64, b: &Vector64) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-fn mat_vec(m: &Matrix64, v: &Vector64) -> Vector64 {
-    let mut out = [0.0; PARAM_COUNT];
-    for (o, row) in out.iter_mut().zip(m) {
-        *o = dot(row, v);
-    }
-    out
-}
-
-/// Inverse of a symmetric positive definite matrix in `f64` (Jacobi-scaled Cholesky): the information
-/// matrix spans about ten decades between determined terms and the prior, too many for `f32`.
-fn spd_inverse_f64(a: &Matrix64) -> Option<Matrix64> {
-    const N: usize = PARAM_COUNT;
-    let mut d = [0.0; N];
-    for i in 0..N {
-        if !(a[i][i] > 0.0 && a[i][i].is_finite()) {
-            return None;
-        }
-        d[i] = 1.0 / libm::sqrt(a[i][i]);
-    }
-    let mut l = [[0.0f64; N]; N];
-    for i in 0..N {
-        for j in 0..=i {
-            let mut s = a[i][j] * d[i] * d[j];
-            for k in 0..j {
-                s -= l[i][k] * l[j][k];
-            }
-            if i == j {
-                if !(s > 0.0 && s.is_finite()) {
-                    return None;
-                }
-                l[i][i] = libm::sqrt(s);
-            } else {
-                l[i][j] = s / l[j][j];
-            }
-        }
-    }
-    let mut inv = [[0.0; N]; N];
-    for col in 0..N {
-        // Solve L L^T x = e_col.
-        let mut y = [0.0; N];
-        for i in 0..N {
-            let mut s = if i == col { 1.0 } else { 0.0 };
-            for k in 0..i {
-                s -= l[i][k] * y[k];
-            }
-            y[i] = s / l[i][i];
-        }
-        let mut x = [0.0; N];
-        for i in (0..N).rev() {
-            let mut s = y[i];
-            for k in i + 1..N {
-                s -= l[k][i] * x[k];
-            }
-            x[i] = s / l[i][i];
-        }
-        for i in 0..N {
-            inv[i][col] = x[i] * d[i] * d[col];
-        }
-    }
-    Some(inv)
-}
-
 #[cfg(test)]
 mod tests {
     extern crate std;
@@ -1266,6 +1017,7 @@ mod tests {
 
     use super::*;
     use crate::model::Params;
+    use crate::verdict::VerdictBounds;
     use rand_core::SeedableRng;
 
     const G: f32 = 9.80665;
