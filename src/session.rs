@@ -445,6 +445,17 @@ pub struct Guidance {
     pub worst_std_after_next: f32,
 }
 
+impl Guidance {
+    /// No information yet (or none that can be inverted): ask for +z, every parameter poorly determined.
+    pub const UNKNOWN: Self = Self {
+        next: CubeDirection::face(2, true),
+        basis: GuidanceBasis::Provisional,
+        poorly_determined: [true; PARAM_COUNT],
+        worst_std: f32::INFINITY,
+        worst_std_after_next: f32::INFINITY,
+    };
+}
+
 /// The session's report after every sample.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

@@ -206,14 +206,7 @@ pub(super) fn information_guidance(frame: &Frame, poses: &[Pose], bounds: &Verdi
 fn square_root_guidance(frame: &Frame, poses: &[Pose], bounds: &VerdictBounds) -> Guidance {
     let (r, candidate_noise) = square_root_information(frame, poses);
     if !r.iter().enumerate().all(|(i, row)| row[i].is_finite()) {
-        let unknown = f32::INFINITY;
-        return Guidance {
-            next: CubeDirection::face(2, true),
-            basis: GuidanceBasis::Provisional,
-            poorly_determined: [true; PARAM_COUNT],
-            worst_std: unknown,
-            worst_std_after_next: unknown,
-        };
+        return Guidance::UNKNOWN;
     }
     let ys = normalised_rows(frame, bounds).map(|t| solve_transposed(&r, &t));
     let current = ys.map(|y| dot(&y, &y));

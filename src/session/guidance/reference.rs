@@ -207,14 +207,7 @@ fn best_candidate(cov: &Matrix64, rows: &[SparseRow; PARAM_COUNT], noise: [f64; 
 pub(super) fn information_guidance(frame: &Frame, poses: &[Pose], bounds: &VerdictBounds) -> Guidance {
     let (info, candidate_noise) = pose_information(frame, poses);
     let Some(cov) = spd_inverse_f64(&info) else {
-        let unknown = f32::INFINITY;
-        return Guidance {
-            next: CubeDirection::face(2, true),
-            basis: GuidanceBasis::Provisional,
-            poorly_determined: [true; PARAM_COUNT],
-            worst_std: unknown,
-            worst_std_after_next: unknown,
-        };
+        return Guidance::UNKNOWN;
     };
     let rows = normalised_rows(frame, bounds);
     let current = rows.map(|r| r.quadratic(&cov));
