@@ -292,6 +292,28 @@ mod tests {
         assert!(seen.windows(2).all(|w| w[1].1 <= w[0].1), "elitism: the best never worsens: {seen:?}");
     }
 
+    /// The device's population (24, the bench's and the firmware report's) reaches the optimum of the
+    /// host's and the paper's 40 on the paper's 24-position simulation: TAGA seeds the LM polish, which
+    /// lands on the same least-squares optimum.
+    #[test]
+    fn population_24_reaches_the_objective_of_population_40() {
+        for run in 0..12u64 {
+            let cfg = SimConfig::paper(run);
+            let poses = simulate_pose_means(&cfg);
+            let config = CalibrationConfig { gravity: cfg.gravity as f32, ..CalibrationConfig::DEFAULT };
+            let rng = || Xoshiro128PlusPlus::seed_from_u64(run);
+            let device = calibrate::<_, 24, MAX_POSES>(&poses, &config, rng()).unwrap();
+            let host = calibrate::<_, 40, MAX_POSES>(&poses, &config, rng()).unwrap();
+            let relative = (device.objective - host.objective).abs() / host.objective;
+            eprintln!(
+                "run {run}: population 24 {:e}, 40 {:e}, relative {relative:.1e}",
+                device.objective, host.objective
+            );
+            assert!(relative <= 1e-6, "run {run}: objective {} (24) vs {} (40)", device.objective, host.objective);
+            assert_eq!(device.verdict.pass(), host.verdict.pass(), "run {run}");
+        }
+    }
+
     #[test]
     fn breaking_stops_the_run_and_gradient_methods_show_no_ga() {
         let (poses, gravity) = paper_poses();
