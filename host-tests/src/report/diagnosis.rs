@@ -133,28 +133,11 @@ impl Diagnosis {
             &[Series { name: "nominal", points: before }, Series { name: &after_name, points: after }],
             Scale::Linear,
         )?;
-        let mut by_time: Vec<(f64, f64)> = self.poses.iter().map(|p| (p.t_mid_s, p.residual_mg)).collect();
-        by_time.sort_by(|a, b| a.0.total_cmp(&b.0));
-        line_chart(
-            &dir.join("residual_vs_time.svg"),
-            "Modulus residual against time",
-            "time (s)",
-            "residual (mg)",
-            &[Series { name: "nominal", points: by_time }],
-            Scale::Linear,
-        )?;
-        let mut by_temp: Vec<(f64, f64)> =
-            self.poses.iter().filter_map(|p| p.temp_c.map(|t| (t, p.residual_mg))).collect();
+        let by_time: Vec<(f64, f64)> = self.poses.iter().map(|p| (p.t_mid_s, p.residual_mg)).collect();
+        residual_against(&dir.join("residual_vs_time.svg"), "time", "time (s)", by_time)?;
+        let by_temp: Vec<(f64, f64)> = self.poses.iter().filter_map(|p| p.temp_c.map(|t| (t, p.residual_mg))).collect();
         if by_temp.len() == self.poses.len() && !by_temp.is_empty() {
-            by_temp.sort_by(|a, b| a.0.total_cmp(&b.0));
-            line_chart(
-                &dir.join("residual_vs_temperature.svg"),
-                "Modulus residual against temperature",
-                "temperature (C)",
-                "residual (mg)",
-                &[Series { name: "nominal", points: by_temp }],
-                Scale::Linear,
-            )?;
+            residual_against(&dir.join("residual_vs_temperature.svg"), "temperature", "temperature (C)", by_temp)?;
         }
         let tau = |v: &[f64]| -> Vec<(f64, f64)> { self.allan.tau_s.iter().copied().zip(v.iter().copied()).collect() };
         line_chart(
@@ -169,4 +152,11 @@ impl Diagnosis {
             Scale::LogLog,
         )
     }
+}
+
+/// The nominal modulus residual (mg) against `what` (the x axis, sorted), one line chart.
+fn residual_against(path: &Path, what: &str, x_label: &str, mut points: Vec<(f64, f64)>) -> Result<(), String> {
+    points.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let title = format!("Modulus residual against {what}");
+    line_chart(path, &title, x_label, "residual (mg)", &[Series { name: "nominal", points }], Scale::Linear)
 }
