@@ -1,6 +1,7 @@
 //! The session's guidance as it was computed in `f64` (a Jacobi-scaled Cholesky inverse of the
 //! information matrix, rank-one updates of the covariance): the oracle the `f32` square-root form is
-//! tested against. Test-only; kept as it was, plus [`reference`] which also returns every candidate.
+//! tested against. Test-only; computed as it was (the candidate score now one function, [`score`]), plus
+//! [`reference`] which also returns every candidate.
 
 use crate::accumulator::Pose;
 use crate::frame::{Frame, NormPose, modulus_error_gradient};
@@ -32,19 +33,7 @@ pub(super) fn reference(frame: &Frame, poses: &[Pose], bounds: &VerdictBounds) -
     let worst_now = current.iter().fold(0.0f64, |m, &v| if v > m { v } else { m });
     let d_optimal = worst_now > 1.0;
     let candidates = CubeDirection::ALL.map(|direction| {
-        let u = direction.unit();
-        let g = gradient(u);
-        let w = mat_vec(&cov, &g);
-        let pose_noise = error_variance(u, noise);
-        let denominator = pose_noise + dot(&g, &w);
-        let (mut worst, mut sum) = (0.0f64, 0.0f64);
-        for (row, now) in rows.iter().zip(current) {
-            let tw = row.dot(&w);
-            let v = now - tw * tw / denominator;
-            worst = if v > worst { v } else { worst };
-            sum += v;
-        }
-        let key = if d_optimal { -denominator / pose_noise } else { worst };
+        let (key, worst, sum) = score(direction, &cov, &rows, &current, noise, d_optimal);
         (direction, key, worst, sum)
     });
     Some(Reference { guidance, current, candidates })
@@ -181,25 +170,39 @@ fn best_candidate(cov: &Matrix64, rows: &[SparseRow; PARAM_COUNT], noise: [f64; 
     let infinite = f64::INFINITY;
     let mut best = Candidate { direction: CubeDirection::face(2, true), key: infinite, worst: infinite, sum: infinite };
     for direction in CubeDirection::ALL {
-        let u = direction.unit();
-        let g = gradient(u);
-        let w = mat_vec(cov, &g);
-        let pose_noise = error_variance(u, noise);
-        let denominator = pose_noise + dot(&g, &w);
-        let (mut worst, mut sum) = (0.0f64, 0.0f64);
-        for (row, now) in rows.iter().zip(current) {
-            let tw = row.dot(&w);
-            let v = now - tw * tw / denominator;
-            worst = if v > worst { v } else { worst };
-            sum += v;
-        }
-        let key = if d_optimal { -denominator / pose_noise } else { worst };
+        let (key, worst, sum) = score(direction, cov, rows, &current, noise, d_optimal);
         let tie = (key - best.key).abs() <= TIE * best.key.abs();
         if (key < best.key && !tie) || (tie && sum < best.sum) {
             best = Candidate { direction, key, worst, sum };
         }
     }
     best
+}
+
+/// `(key, worst, sum)` of adding a pose along `direction`: the worst and the sum of the normalised
+/// variances after a rank-one update of `cov`; the key is the worst, or, `d_optimal`, minus the
+/// information gained.
+fn score(
+    direction: CubeDirection,
+    cov: &Matrix64,
+    rows: &[SparseRow; PARAM_COUNT],
+    current: &[f64; PARAM_COUNT],
+    noise: [f64; 3],
+    d_optimal: bool,
+) -> (f64, f64, f64) {
+    let u = direction.unit();
+    let g = gradient(u);
+    let w = mat_vec(cov, &g);
+    let pose_noise = error_variance(u, noise);
+    let denominator = pose_noise + dot(&g, &w);
+    let (mut worst, mut sum) = (0.0f64, 0.0f64);
+    for (row, &now) in rows.iter().zip(current) {
+        let tw = row.dot(&w);
+        let v = now - tw * tw / denominator;
+        worst = if v > worst { v } else { worst };
+        sum += v;
+    }
+    (if d_optimal { -denominator / pose_noise } else { worst }, worst, sum)
 }
 
 /// Scores the 26 cube directions by the predicted normalised parameter variances after adding each
