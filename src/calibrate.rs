@@ -128,7 +128,7 @@ impl CalibrationConfig {
     };
 
     /// The paper's method alone: TAGA with 200 generations at most (30-generation stall stop), no
-    /// polish: 7 641 cost evaluations with population 40.
+    /// polish: about 7 640 cost evaluations with population 40.
     pub const TAGA_ALONE: Self = Self {
         method: Method::Taga,
         ga: GaConfig { max_generations: 200, stall_generations: 30, ..GaConfig::DEFAULT },
