@@ -17,7 +17,7 @@
 //! ```
 
 use crate::frame::{Deviation, NormPose, modulus_error_gradient, objective, residual_jacobian};
-use crate::linalg::{Matrix, add_outer_product, ldlt_solve_holding_in_place, solve_lu};
+use crate::linalg::{Matrix, add_outer_product, larger, ldlt_solve_holding_in_place, solve_lu};
 use crate::model::PARAM_COUNT;
 
 /// Why a solve could not produce parameters.
@@ -191,6 +191,14 @@ fn add(x: &Deviation, step: &Deviation) -> Deviation {
     out
 }
 
+fn sub(x: &Deviation, step: &Deviation) -> Deviation {
+    let mut out = *x;
+    for (o, s) in out.iter_mut().zip(step) {
+        *o -= s;
+    }
+    out
+}
+
 /// Levenberg-Marquardt on the per-pose modulus errors, from `x0`.
 ///
 /// Damped Gauss-Newton with Marquardt's diagonal scaling; the 9x9 system is solved by the library's
@@ -236,49 +244,48 @@ pub fn levenberg_marquardt_holding(
     let mut jte = [0.0; PARAM_COUNT];
     // The normal equations are built (in place) at the start and after each accepted step.
     let mut rebuild = true;
-    for iteration in 1..=config.max_iterations {
+    let mut iterations = 0;
+    // One exit (one report written): 100 bytes fewer on a Cortex-M4F than a return per reason.
+    let termination = loop {
+        if iterations == config.max_iterations {
+            break SolveTermination::MaxIterations;
+        }
+        iterations += 1;
         if rebuild {
             normal_equations(&x, poses, None, &mut jtj, &mut jte);
             rebuild = false;
         }
         let mut damped = jtj;
-        for i in 0..PARAM_COUNT {
-            let d = jtj[i][i];
-            damped[i][i] += lambda * if d > 1e-12 { d } else { 1e-12 };
+        for (i, row) in damped.iter_mut().enumerate() {
+            row[i] += lambda * larger(jtj[i][i], 1e-12);
         }
-        let mut step = jte.map(|v| -v);
-        let step = match ldlt_solve_holding_in_place(&mut damped, &mut step, held) {
-            Ok(()) => step,
-            Err(_) if lambda < 1e10 => {
+        // Solved for `J^T e`, the step is its negative (exactly: rounding is symmetric).
+        let mut step = jte;
+        if ldlt_solve_holding_in_place(&mut damped, &mut step, held).is_err() {
+            if lambda < 1e10 {
                 lambda *= 10.0;
                 continue;
             }
-            Err(_) => return Err(SolveError::Singular),
-        };
-        let candidate = add(&x, &step);
+            return Err(SolveError::Singular);
+        }
+        let candidate = sub(&x, &step);
         let candidate_cost = objective(&candidate, poses);
         // (`cost` is finite: not above it means finite, NaN excluded.)
         if candidate_cost <= cost {
-            x = candidate;
-            cost = candidate_cost;
-            lambda = if lambda * 0.3 > 1e-9 { lambda * 0.3 } else { 1e-9 };
+            (x, cost) = (candidate, candidate_cost);
+            lambda = larger(lambda * 0.3, 1e-9);
             if max_abs(&step) < config.step_tolerance {
-                return Ok(SolveReport { x, cost, iterations: iteration, termination: SolveTermination::Converged });
+                break SolveTermination::Converged;
             }
             rebuild = true;
         } else {
             lambda *= 10.0;
             if lambda > 1e10 {
-                return Ok(SolveReport {
-                    x,
-                    cost,
-                    iterations: iteration,
-                    termination: SolveTermination::NoFurtherDecrease,
-                });
+                break SolveTermination::NoFurtherDecrease;
             }
         }
-    }
-    Ok(SolveReport { x, cost, iterations: config.max_iterations, termination: SolveTermination::MaxIterations })
+    };
+    Ok(SolveReport { x, cost, iterations, termination })
 }
 
 /// The classical Newton iteration on `fE` (the paper's baseline): full Hessian
