@@ -104,8 +104,9 @@ pub fn sqrt_f32(x: f32) -> f32 {
 /// Adds `w g g^T` to the lower triangle of `m` (`m[i][j]`, `j <= i`): the one place the library builds
 /// an information matrix or normal equations (the 9 model parameters, or the 9 quadric coefficients of
 /// the ellipsoid fit) from per-row gradients. In blocks of three rows (`add_block_rows`), measured on
-/// the bench (Cortex-M4F): 496 bytes and LM 90.9 k cycles; straight-line 798 bytes and 83.9 k; one loop
-/// over the triangle 82 bytes and 121 k; rows in pairs 210 bytes and 106 k (budget 100 k).
+/// the bench (Cortex-M4F, with today's `factor`): 400 bytes and LM 89.7 k cycles; straight-line 798
+/// bytes and 88.2 k; one loop over the triangle 82 bytes and 121 k (before); rows in pairs 210 bytes and
+/// 106 k (budget 100 k).
 #[inline(never)]
 pub fn add_outer_product(m: &mut Matrix<9>, g: &[f32; 9], w: f32) {
     let [r0, r1, r2, r3, r4, r5, r6, r7, r8] = m;
@@ -115,23 +116,20 @@ pub fn add_outer_product(m: &mut Matrix<9>, g: &[f32; 9], w: f32) {
     add_block_rows([r6, r7, r8], [w * g6, w * g7, w * g8], g, 6);
 }
 
-/// Rows `start..start + 3` of [`add_outer_product`] (`wg` their `w g[i]`): the entries left of the
-/// diagonal block in a loop (each `g[j]` loaded once for the three rows), the block's lower triangle
-/// straight.
+/// Rows `start..start + 3` of [`add_outer_product`] (`wg` their `w g[i]`): the entries up to the
+/// diagonal block's first column in a loop (each `g[j]` loaded once for the three rows), the three
+/// left of the block's lower triangle straight.
 #[inline(always)]
 fn add_block_rows([a, b, c]: [&mut [f32; 9]; 3], wg: [f32; 3], g: &[f32; 9], start: usize) {
-    for (((x, y), z), gj) in a.iter_mut().zip(b.iter_mut()).zip(c.iter_mut()).zip(g).take(start) {
+    for (((x, y), z), gj) in a.iter_mut().zip(b.iter_mut()).zip(c.iter_mut()).zip(g).take(start + 1) {
         *x += wg[0] * gj;
         *y += wg[1] * gj;
         *z += wg[2] * gj;
     }
-    if let (Some([a0, ..]), Some([b0, b1, ..]), Some([c0, c1, c2, ..]), Some([g0, g1, g2, ..])) =
-        (a.get_mut(start..), b.get_mut(start..), c.get_mut(start..), g.get(start..))
+    if let (Some([_, b1, ..]), Some([_, c1, c2, ..]), Some([_, g1, g2, ..])) =
+        (b.get_mut(start..), c.get_mut(start..), g.get(start..))
     {
-        *a0 += wg[0] * g0;
-        *b0 += wg[1] * g0;
         *b1 += wg[1] * g1;
-        *c0 += wg[2] * g0;
         *c1 += wg[2] * g1;
         *c2 += wg[2] * g2;
     }
@@ -195,7 +193,7 @@ fn factor<const N: usize>(a: &mut Matrix<N>, held: &mut [bool; N], min_pivot: f3
 /// `x > 0.0 && x.is_finite()` in one integer comparison of the bits (the float comparisons took 136
 /// bytes in [`factor`] on a Cortex-M4F).
 #[inline]
-fn positive_finite(x: f32) -> bool {
+pub(crate) fn positive_finite(x: f32) -> bool {
     // Positive zero wraps to the top; negatives have the sign bit; infinity and NaN are at or above it.
     x.to_bits().wrapping_sub(1) < f32::INFINITY.to_bits() - 1
 }

@@ -186,7 +186,7 @@ fn error_variance(x: &Deviation, frame: &Frame, pose: &Pose, norm: &NormPose) ->
         let s = frame.gain[i] * frame.gravity;
         var += 4.0 * atr[i] * atr[i] * pose.variance[i] / (pose.n as f32 * s * s);
     }
-    (var > 0.0 && var.is_finite()).then_some(var)
+    crate::linalg::positive_finite(var).then_some(var)
 }
 
 /// Information matrix `sum g g^T / var(E)` of the deviation vector, with each pose's noise from its
