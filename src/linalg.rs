@@ -103,10 +103,10 @@ pub fn sqrt_f32(x: f32) -> f32 {
 
 /// Adds `w g g^T` to the lower triangle of `m` (`m[i][j]`, `j <= i`): the one place the library builds
 /// an information matrix or normal equations (the 9 model parameters, or the 9 quadric coefficients of
-/// the ellipsoid fit) from per-row gradients. In blocks of three rows (`add_block_rows`), measured on
-/// the bench (Cortex-M4F, with today's `factor`): 400 bytes and LM 89.7 k cycles; straight-line 798
-/// bytes and 88.2 k; one loop over the triangle 82 bytes and 121 k (before); rows in pairs 210 bytes and
-/// 106 k (budget 100 k).
+/// the ellipsoid fit) from per-row gradients. In blocks of three rows (`add_block_rows`): 400 bytes and
+/// LM 89.7 k cycles on the bench (Cortex-M4F). Measured with the former factorisation: straight-line 798
+/// bytes and 83.9 k, one loop over the triangle 82 bytes and 121 k, rows in pairs 210 bytes and 106 k
+/// (budget 100 k).
 #[inline(never)]
 pub fn add_outer_product(m: &mut Matrix<9>, g: &[f32; 9], w: f32) {
     let [r0, r1, r2, r3, r4, r5, r6, r7, r8] = m;
