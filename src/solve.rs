@@ -17,7 +17,7 @@
 //! ```
 
 use crate::frame::{Deviation, NormPose, modulus_error_gradient, objective, residual_jacobian};
-use crate::linalg::{Matrix, add_outer_product, larger, ldlt_solve_holding_in_place, solve_lu};
+use crate::linalg::{Matrix, add_normal_row, larger, ldlt_solve_holding_in_place, solve_lu};
 use crate::model::PARAM_COUNT;
 
 /// Why a solve could not produce parameters.
@@ -160,14 +160,7 @@ pub(crate) fn normal_equations(
             },
         };
         let (e, g) = modulus_error_gradient(x, pose);
-        // Straight-line: the loop the compiler keeps costs the LM about 5 k cycles on a Cortex-M4F.
-        let we = w * e;
-        let [g0, g1, g2, g3, g4, g5, g6, g7, g8] = g;
-        let [r0, r1, r2, r3, r4, r5, r6, r7, r8] = jte;
-        (*r0, *r1, *r2) = (*r0 + g0 * we, *r1 + g1 * we, *r2 + g2 * we);
-        (*r3, *r4, *r5) = (*r3 + g3 * we, *r4 + g4 * we, *r5 + g5 * we);
-        (*r6, *r7, *r8) = (*r6 + g6 * we, *r7 + g7 * we, *r8 + g8 * we);
-        add_outer_product(jtj, &g, w);
+        add_normal_row(jtj, jte, &g, w, e);
     }
 }
 
