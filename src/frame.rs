@@ -117,11 +117,11 @@ impl Frame {
             return Err(FrameError::InvalidGravity);
         }
         for (axis, &k) in gain.iter().enumerate() {
-            if !(k.is_finite() && k != 0.0) {
+            if !crate::linalg::nonzero_finite(k) {
                 return Err(FrameError::DegenerateGain { axis: axis as u8 });
             }
         }
-        if offset.iter().any(|c| !c.is_finite()) {
+        if !offset.iter().all(|&c| crate::linalg::finite(c)) {
             return Err(FrameError::NonFiniteOffset);
         }
         Ok(Self { offset, gain, gravity })

@@ -67,7 +67,7 @@ pub fn solve_lu<const N: usize>(mut a: Matrix<N>, mut b: [f32; N]) -> Result<[f3
         }
         x[row] = s / a[row][row];
     }
-    if x.iter().all(|v| v.is_finite()) { Ok(x) } else { Err(LinalgError::Singular) }
+    if x.iter().all(|&v| finite(v)) { Ok(x) } else { Err(LinalgError::Singular) }
 }
 
 /// The larger of `a` and `b`; `b` when either is NaN. Inline comparisons: `f32::max` and `f32::min`
@@ -222,6 +222,19 @@ pub(crate) fn positive_finite(x: f32) -> bool {
     x.to_bits().wrapping_sub(1) < f32::INFINITY.to_bits() - 1
 }
 
+/// `x.is_finite()` as one integer comparison of the bits (the library's float classification calls
+/// otherwise compile to several comparisons each on a Cortex-M4F).
+#[inline]
+pub(crate) fn finite(x: f32) -> bool {
+    x.to_bits() & 0x7FFF_FFFF < f32::INFINITY.to_bits()
+}
+
+/// `x != 0.0 && x.is_finite()` in one integer comparison (see [`finite`]).
+#[inline]
+pub(crate) fn nonzero_finite(x: f32) -> bool {
+    (x.to_bits() & 0x7FFF_FFFF).wrapping_sub(1) < f32::INFINITY.to_bits() - 1
+}
+
 /// `b` becomes `D (L L^T)^-1 D b` (or `(L P L^T)^-1 b`) for the factors in `l` and the scaling `d` of
 /// [`factor`] in the same form (0 where `d` is 0).
 #[inline(never)]
@@ -278,7 +291,7 @@ fn solve_in_place<const N: usize>(
         return Err(LinalgError::Singular);
     }
     factor_solve(a, &d, b, cholesky);
-    if b.iter().all(|v| v.is_finite()) { Ok(()) } else { Err(LinalgError::Singular) }
+    if b.iter().all(|&v| finite(v)) { Ok(()) } else { Err(LinalgError::Singular) }
 }
 
 /// Inverse of a symmetric positive definite matrix (lower triangle read), Jacobi-scaled for
@@ -312,7 +325,7 @@ pub fn spd_inverse_holding_in_place<const N: usize>(a: &mut Matrix<N>, held: &[b
             a[i][j] = col[i];
         }
     }
-    if a.iter().flatten().all(|v| v.is_finite()) { Ok(()) } else { Err(LinalgError::Singular) }
+    if a.iter().flatten().all(|&v| finite(v)) { Ok(()) } else { Err(LinalgError::Singular) }
 }
 
 /// `true` when the factorisation flagged an entry that was not held (elementwise: an array comparison

@@ -17,7 +17,7 @@
 //! ```
 
 use crate::frame::{Deviation, NormPose, modulus_error_gradient, objective, residual_jacobian};
-use crate::linalg::{Matrix, add_normal_row, larger, ldlt_solve_holding_in_place, solve_lu};
+use crate::linalg::{Matrix, add_normal_row, finite, larger, ldlt_solve_holding_in_place, solve_lu};
 use crate::model::PARAM_COUNT;
 
 /// Why a solve could not produce parameters.
@@ -127,8 +127,8 @@ fn check_input(x: &Deviation, poses: &[NormPose], held: &[bool; PARAM_COUNT]) ->
     if poses.len() < held.iter().filter(|&&h| !h).count() || poses.is_empty() {
         return Err(SolveError::TooFewPoses { got: poses.len() });
     }
-    let poses_finite = poses.iter().all(|p| p.q.is_finite() && p.u.iter().all(|v| v.is_finite()));
-    if !poses_finite || x.iter().any(|v| !v.is_finite()) {
+    let poses_finite = poses.iter().all(|p| finite(p.q) && p.u.iter().all(|&v| finite(v)));
+    if !poses_finite || !x.iter().all(|&v| finite(v)) {
         return Err(SolveError::NonFiniteInput);
     }
     Ok(())
