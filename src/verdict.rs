@@ -324,14 +324,17 @@ pub fn parameters_to_hold(
         if !covariance_holding_in_place(&mut cov, &held) {
             break;
         }
-        let worst = (0..PARAM_COUNT)
-            .filter(|&i| !held[i])
-            .map(|i| (i, crate::linalg::sqrt_f32(larger(cov[i][i], 0.0)) / HOLD_STD[i]))
-            .fold(None, |a: Option<(usize, f32)>, b| if a.is_none_or(|a| !(b.1 <= a.1)) { Some(b) } else { a });
-        match worst {
-            // (`i < PARAM_COUNT` always; said so the bounds check goes.)
-            Some((i, ratio)) if !(ratio <= 1.0) && i < PARAM_COUNT => held[i] = true,
-            _ => break,
+        // The largest ratio above 1 (or NaN), `PARAM_COUNT` for none.
+        let mut worst = (PARAM_COUNT, 1.0f32);
+        for i in 0..PARAM_COUNT {
+            let ratio = crate::linalg::sqrt_f32(larger(cov[i][i], 0.0)) / HOLD_STD[i];
+            if !held[i] && !(ratio <= worst.1) {
+                worst = (i, ratio);
+            }
+        }
+        match held.get_mut(worst.0) {
+            Some(h) => *h = true,
+            None => break,
         }
     }
     held
