@@ -184,12 +184,14 @@ fn add(x: &Deviation, step: &Deviation) -> Deviation {
     out
 }
 
-fn sub(x: &Deviation, step: &Deviation) -> Deviation {
-    let mut out = *x;
+/// `x - step` and the largest `|step|` ([`max_abs`]), in one loop.
+fn sub(x: &Deviation, step: &Deviation) -> (Deviation, f32) {
+    let (mut out, mut largest) = (*x, 0.0f32);
     for (o, s) in out.iter_mut().zip(step) {
         *o -= s;
+        largest = if s.abs() > largest { s.abs() } else { largest };
     }
-    out
+    (out, largest)
 }
 
 /// Levenberg-Marquardt on the per-pose modulus errors, from `x0`.
@@ -261,13 +263,13 @@ pub fn levenberg_marquardt_holding(
             }
             return Err(SolveError::Singular);
         }
-        let candidate = sub(&x, &step);
+        let (candidate, largest_step) = sub(&x, &step);
         let candidate_cost = objective(&candidate, poses);
         // (`cost` is finite: not above it means finite, NaN excluded.)
         if candidate_cost <= cost {
             (x, cost) = (candidate, candidate_cost);
             lambda = larger(lambda * 0.3, 1e-9);
-            if max_abs(&step) < config.step_tolerance {
+            if largest_step < config.step_tolerance {
                 break SolveTermination::Converged;
             }
             rebuild = true;
