@@ -49,10 +49,12 @@ def run_one(cli, d, entry, timeout):
     except json.JSONDecodeError as e:
         return dict(entry, refused=True, message=f"unparsable JSON: {e}", seconds=secs)
     verdict = js.get("verdict")
-    ratio = get(js, "gap.ratio_before")
     shrink = js.get("shrink")
-    if isinstance(shrink, dict):  # tolerate a structured shrink
-        shrink = shrink.get("value", shrink.get("ratio"))
+    if isinstance(verdict, dict):  # {"effect": ..., "shrink": ..., ...}
+        if shrink is None:
+            shrink = verdict.get("shrink")
+        verdict = verdict.get("effect")
+    ratio = get(js, "gap.ratio_before")
     return dict(entry, refused=False, verdict=verdict, ratio_before=ratio, shrink=shrink, seconds=secs)
 
 
@@ -98,7 +100,7 @@ def fmt_row(name, s):
     oo = f"{s['ooc_honest']}/{s['ooc_logs']}" if s["ooc_logs"] else "-"
     ms = f"{s['median_shrink']:.3g}" if s["median_shrink"] is not None else "-"
     return (f"{name:<20}{s['logs']:>5}{s['visible']:>8}{s['right_visible']:>5}/{s['visible']:<4}"
-            f"{fa:>8}{oo:>9}{s['refusals']:>6}{ms:>9}{s['slowest_s']:>9.2f}")
+            f"{fa:>8}{oo:>9}{s['refusals']:>8}{ms:>9}{s['slowest_s']:>9.2f}")
 
 
 def main(argv=None):
@@ -128,7 +130,7 @@ def main(argv=None):
         print()
         return
     print(f"{'family':<20}{'logs':>5}{'visible':>8}{'right/vis':>10}{'f.alarm':>8}{'ooc ok':>9}"
-          f"{'refuse':>6}{'shrink':>9}{'slowest':>9}")
+          f"{'refused':>8}{'shrink':>9}{'slowest':>9}")
     for f in fams:
         print(fmt_row(f, per[f]))
     print(fmt_row("overall", overall))
