@@ -53,12 +53,17 @@ def thermal_lag(s, T, tau):
     """First-order lag: the MEMS element follows the logged (board) temperature through a
     thermal resistance-capacitance with time constant tau seconds."""
     a = math.exp(-1 / (s.fs * tau))
-    out = np.empty_like(T)
-    acc = T[0]
-    for i in range(len(T)):  # simple IIR; N <= 250k
-        acc = a * acc + (1 - a) * T[i]
-        out[i] = acc
-    return out
+    return ar1((1 - a) * np.asarray(T, float), a, T[0])
+
+
+def ar1(w, phi, x0):
+    """x[n] = phi x[n-1] + w[n], x[-1] = x0 (a scalar loop over Python floats)."""
+    out = []
+    acc = float(x0)
+    for v in w.tolist():
+        acc = phi * acc + v
+        out.append(acc)
+    return np.array(out)
 
 
 def temperature_bias(s, rng, T_die, tc_mg_per_c):
@@ -174,32 +179,37 @@ def settling_ringing(s, rng, amp_mg):
 
 # ---------------------------------------------------------------- motion during holds
 def motion_taps(s, rng, amp_mg):
-    """Taps / knocks on the table during holds: Poisson events (0.03-0.3 per s of hold),
-    each a half-sine acceleration pulse 5-30 ms long, peak amp_mg x U(0.3, 1.5), random
-    direction, followed by mount ringing (20-60 Hz, capped at 0.4 fs, decay 30-100 ms)."""
+    """Taps / knocks on the table during holds: Poisson events (0.03-0.3 per s of hold, at
+    least one per session) at uniform times within the holds, each a half-sine
+    acceleration pulse 5-30 ms long, peak amp_mg x U(0.3, 1.5), random direction, followed
+    by mount ringing (20-60 Hz, capped at 0.4 fs, 0.3 x the peak, decay 30-100 ms)."""
     rate = loguniform(rng, 0.03, 0.3)
-    count = 0
-    for (a, b) in s.holds:
-        dur = (b - a) / s.fs
-        k = rng.poisson(rate * dur)
-        for _ in range(k):
-            t0 = rng.uniform(0, dur)
-            i0 = a + int(t0 * s.fs)
-            width = rng.uniform(0.005, 0.03)
-            nw = max(1, int(round(width * s.fs)))
-            pk = amp_mg * MG * rng.uniform(0.3, 1.5)
-            v = random_unit(rng)
-            n_ring = int(0.4 * s.fs)
-            tt = np.arange(nw + n_ring) / s.fs
-            pulse = np.where(tt < width, np.sin(np.pi * np.minimum(tt / width, 1)), 0.0)
-            fr = min(rng.uniform(20, 60), 0.4 * s.fs)
-            ring = np.where(tt >= width, 0.3 * np.exp(-(tt - width) / rng.uniform(0.03, 0.1))
-                            * np.sin(2 * math.pi * fr * (tt - width)), 0.0)
-            seg = (pulse + ring) * pk
-            e = min(b, i0 + len(seg))
-            s.f[i0:e] += np.outer(seg[: e - i0], v)
-            count += 1
-    return dict(rate_per_s=round(rate, 3), taps=count)
+    lens = np.array([b - a for a, b in s.holds])
+    total = lens.sum() / s.fs
+    k = max(1, int(rng.poisson(rate * total)))
+    for _ in range(k):
+        h = int(rng.choice(len(lens), p=lens / lens.sum()))
+        a, b = s.holds[h]
+        i0 = a + int(rng.integers(0, b - a))
+        width = rng.uniform(0.005, 0.03)
+        nw = int(math.ceil(width * s.fs))
+        pk = amp_mg * MG * rng.uniform(0.3, 1.5)
+        v = random_unit(rng)
+        n_ring = int(0.4 * s.fs)
+        dt = 1 / s.fs
+        tt = np.arange(nw + 1 + n_ring) * dt - rng.uniform(0, dt)  # pulse starts between samples
+        # each sample is the mean of the half-sine over its interval (the sensor's
+        # anti-alias filter integrates), so pulses shorter than dt are not lost
+        t1 = np.clip(tt, 0, width)
+        t2 = np.clip(tt + dt, 0, width)
+        pulse = width / np.pi * (np.cos(np.pi * t1 / width) - np.cos(np.pi * t2 / width)) / dt
+        fr = min(rng.uniform(20, 60), 0.4 * s.fs)
+        ring = np.where(tt >= width, 0.3 * np.exp(-(tt - width) / rng.uniform(0.03, 0.1))
+                        * np.sin(2 * math.pi * fr * (tt - width)), 0.0)
+        seg = (pulse + ring) * pk
+        e = min(b, i0 + len(seg))
+        s.f[i0:e] += np.outer(seg[: e - i0], v)
+    return dict(rate_per_s=round(rate, 3), taps=k)
 
 
 def rotate_small(vecs, axis, ang):
@@ -262,13 +272,13 @@ def colored_random_walk(s, rng, k_ug):
 
 
 def colored_flicker(s, rng, b_ug):
-    """Flicker (1/f) noise: one-sided PSD S(f) = B^2 / (2 pi f) (IEEE 952 bias instability
-    B, Allan floor ~0.664 B), synthesised by FFT shaping of white noise; consumer MEMS B
-    ~ 20-500 ug."""
+    """Flicker (1/f) noise: two-sided PSD B^2 / (2 pi f) as in IEEE 952 (one-sided
+    B^2 / (pi f)), whose Allan deviation plateau is sqrt(2 ln 2 / pi) B = 0.664 B (bias
+    instability B), synthesised by FFT shaping of white noise; consumer MEMS B ~ 20-500 ug."""
     N = s.N
     f = np.fft.rfftfreq(N, 1 / s.fs)
     f[0] = f[1]
-    S = (b_ug * 1e-6) ** 2 / (2 * math.pi * f)
+    S = (b_ug * 1e-6) ** 2 / (math.pi * f)  # one-sided
     h = np.sqrt(S * s.fs / 2)
     for i in range(3):
         w = np.fft.rfft(rng.normal(size=N))
@@ -285,13 +295,8 @@ def colored_gauss_markov(s, rng, sigma_ug):
     phi = math.exp(-1 / (s.fs * tau))
     sig = sigma_ug * 1e-6
     w = rng.normal(0, sig * math.sqrt(1 - phi ** 2), (s.N, 3))
-    x = np.empty((s.N, 3))
-    acc = rng.normal(0, sig, 3)
-    # AR(1) via a loop on blocks is slow in Python for 250k x 3; use lfilter-free recursion
-    for i in range(s.N):
-        acc = phi * acc + w[i]
-        x[i] = acc
-    s.noise += x
+    x0 = rng.normal(0, sig, 3)
+    s.noise += np.stack([ar1(w[:, i], phi, x0[i]) for i in range(3)], 1)
     return dict(tau_s=round(tau, 3))
 
 
