@@ -175,9 +175,9 @@ def motion_taps(s, rng, u):
 
 
 def motion_sway(s, rng, u):
-    m = lu(u, 0.5, 30.0)
+    m = lu(u, 0.01, 0.5)
     ambient_column(s, rng)
-    return m, "mg rms tangential", inj.motion_sway(s, rng, m)
+    return m, "deg rms tilt", inj.motion_sway(s, rng, m)
 
 
 def motion_tremor(s, rng, u):
@@ -295,7 +295,8 @@ def generate_one(out, family, shape, lseed, u, small, idx=0):
     t, vals, header, fmt = render(s, unit, timestamp_jitter=bool(rng.random() < 0.5))
     name = f"{family}_{shape.replace('+', '-')}_{idx:03d}.csv"
     write_csv(os.path.join(out, name), t, vals, header, fmt, s.temp_log)
-    return dict(file=name, family=family, shape=shape, seed=int(lseed), magnitude=round(magnitude, 5),
+    return dict(file=name, family=family, shape=shape, seed=int(lseed), u=round(float(u), 6),
+                magnitude=round(magnitude, 5),
                 magnitude_unit=mag_unit, unit=unit, expected=expected, part=s.part["name"],
                 rate_hz=s.fs, poses=s.n_poses, hold_s=round(s.hold_nominal, 2),
                 duration_s=round(s.duration, 1), rows=int(s.N), temp_column=s.temp_log is not None,

@@ -219,16 +219,15 @@ def rotate_small(vecs, axis, ang):
     return vecs * c + np.cross(k, vecs) * sn + k * (vecs @ axis)[:, None] * (1 - c)
 
 
-def motion_sway(s, rng, amp_mg):
-    """Sway of the support during holds (device on a flexible arm, a desk that rocks): the
-    device tilts by theta(t) about a random axis (narrow-band 0.3-3 Hz) at a lever arm
-    r = 5-30 cm from the pivot.  Sensed: gravity rotated by theta, plus tangential
-    acceleration r theta'' and centripetal r theta'^2.  amp_mg is the rms of the tangential
-    acceleration r theta''; the tilt follows from it.  60-100 % of holds sway."""
-    f0 = loguniform(rng, 0.3, 3.0)
+def motion_sway(s, rng, tilt_deg):
+    """Sway of the support during holds (device on a flexible arm or a desk that rocks):
+    the device tilts by theta(t) about a random axis, narrow-band around f0 = 0.5-5 Hz,
+    rms tilt_deg x U(0.5, 1.5) per hold (a rocking desk or arm: 0.01-0.5 deg), at a lever
+    arm r = 5-30 cm from the pivot.  Sensed: gravity rotated by theta, plus tangential
+    acceleration r theta'' and centripetal r theta'^2.  60-100 % of holds sway."""
+    f0 = loguniform(rng, 0.5, 5.0)
     r = rng.uniform(0.05, 0.30)
-    w0 = 2 * math.pi * f0
-    th_rms = amp_mg * MG * 9.80665 / (r * w0 ** 2)
+    th_rms = math.radians(tilt_deg)
     frac = rng.uniform(0.6, 1.0)
     for (a, b) in s.holds:
         if rng.random() > frac:
@@ -244,7 +243,8 @@ def motion_sway(s, rng, amp_mg):
         tang_dir /= np.linalg.norm(tang_dir)
         rad_dir = np.cross(axis, tang_dir)
         s.f[a:b] = g + np.outer(r * thdd / 9.80665, tang_dir) + np.outer(r * thd ** 2 / 9.80665, rad_dir)
-    return dict(f0_hz=round(f0, 3), lever_m=round(r, 3), tilt_rms_deg=round(math.degrees(th_rms), 4))
+    tang_mg = 1e3 * r * th_rms * (2 * math.pi * f0) ** 2 / 9.80665
+    return dict(f0_hz=round(f0, 3), lever_m=round(r, 3), tangential_rms_mg=round(tang_mg, 4))
 
 
 def motion_tremor(s, rng, amp_mg):

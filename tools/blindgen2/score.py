@@ -110,6 +110,7 @@ def main(argv=None):
     ap.add_argument("--json", action="store_true", help="machine output on stdout")
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--timeout", type=float, default=600.0)
+    ap.add_argument("--logs", action="store_true", help="also print one line per log")
     a = ap.parse_args(argv)
     if not os.path.exists(a.accelcal):
         sys.exit(f"no CLI at {a.accelcal}: build it with `cargo build --release -p accelcal-host` or pass --accelcal")
@@ -137,6 +138,15 @@ def main(argv=None):
     print()
     for f in fams:
         print(f"{f}: verdicts {per[f]['verdicts']}")
+    if a.logs:
+        for r in rows:
+            rb = r.get("ratio_before")
+            rb = f"{rb:7.2f}" if isinstance(rb, (int, float)) else "      -"
+            v = "REFUSED" if r["refused"] else r["verdict"]
+            mark = "ok" if is_right(r) else "--"
+            print(f"{mark} {r['file']:<44} {r['magnitude']:>9.4g} {r.get('magnitude_unit', ''):<12.12} "
+                  f"ratio {rb}  {v:<18} exp {r['expected']:<18} {r['seconds']:6.2f} s")
+        print()
     refused = [r for r in rows if r["refused"]]
     for r in refused:
         print(f"refused {r['file']}: {r['message']}")
