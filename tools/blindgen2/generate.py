@@ -295,7 +295,7 @@ def generate_one(out, family, shape, lseed, u, small, idx=0):
     t, vals, header, fmt = render(s, unit, timestamp_jitter=bool(rng.random() < 0.5))
     name = f"{family}_{shape.replace('+', '-')}_{idx:03d}.csv"
     write_csv(os.path.join(out, name), t, vals, header, fmt, s.temp_log)
-    return dict(file=name, family=family, shape=shape, seed=int(lseed), u=round(float(u), 6),
+    return dict(file=name, family=family, shape=shape, seed=int(lseed), u=float(u),
                 magnitude=round(magnitude, 5),
                 magnitude_unit=mag_unit, unit=unit, expected=expected, part=s.part["name"],
                 rate_hz=s.fs, poses=s.n_poses, hold_s=round(s.hold_nominal, 2),
@@ -312,8 +312,26 @@ def main(argv=None):
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--small", action="store_true", help="12-16 poses at 100 Hz, 3-8 s holds")
     ap.add_argument("--families", default=",".join(FAMILIES), help="comma list (default: all)")
+    ap.add_argument("--replay", metavar="MANIFEST", help="regenerate the logs of a manifest.json into --out "
+                    "(all, or those named by --files)")
+    ap.add_argument("--files", default="", help="with --replay: comma list of file names")
     a = ap.parse_args(argv)
     os.makedirs(a.out, exist_ok=True)
+    if a.replay:
+        with open(a.replay) as fh:
+            old = json.load(fh)
+        want = set(f for f in a.files.split(",") if f)
+        again = []
+        for idx, e in enumerate(old):
+            if want and e["file"] not in want:
+                continue
+            m = generate_one(a.out, e["family"], e["shape"], e["seed"], e["u"], e.get("small", False),
+                             int(e["file"].rsplit("_", 1)[1].split(".")[0]))
+            again.append(m)
+        with open(os.path.join(a.out, "manifest.json"), "w") as fh:
+            json.dump(again, fh, indent=1)
+        print(f"{len(again)} logs replayed into {a.out}")
+        return
     fams = [f for f in a.families.split(",") if f]
     for f in fams:
         if f not in FAMILIES:
