@@ -177,7 +177,7 @@ class Session:
         self.fs, self.n_poses, self.hold_nominal = fs, n, hold
         self.u = plan_directions(rng, n)
         dt = 1 / fs
-        holds = hold * rng.uniform(0.75, 1.3, n)
+        holds = hold * rng.uniform(0.75, 1.3, n)  # floored at 2 s below
         trans = rng.uniform(1.2, 3.5, n - 1)
         lead = rng.uniform(0.0, 1.0)
         # sample index layout
@@ -185,7 +185,7 @@ class Session:
         if lead > 0:
             segs.append(("lead", 0, int(lead * fs)))
         for k in range(n):
-            segs.append(("hold", k, max(int(holds[k] * fs), int(1.5 * fs))))
+            segs.append(("hold", k, max(int(holds[k] * fs), int(2.0 * fs))))
             if k < n - 1:
                 segs.append(("move", k, int(trans[k] * fs)))
         N = sum(s[2] for s in segs)

@@ -111,6 +111,7 @@ def main(argv=None):
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--timeout", type=float, default=600.0)
     ap.add_argument("--logs", action="store_true", help="also print one line per log")
+    ap.add_argument("--by-shape", action="store_true", help="also a table per family/shape")
     a = ap.parse_args(argv)
     if not os.path.exists(a.accelcal):
         sys.exit(f"no CLI at {a.accelcal}: build it with `cargo build --release -p accelcal-host` or pass --accelcal")
@@ -136,6 +137,15 @@ def main(argv=None):
         print(fmt_row(f, per[f]))
     print(fmt_row("overall", overall))
     print()
+    if a.by_shape:
+        keys = []
+        for r in rows:
+            k = f"{r['family'][:12]}/{r['shape']}"
+            if k not in keys:
+                keys.append(k)
+        for k in keys:
+            print(fmt_row(k[:19], summarise([r for r in rows if f"{r['family'][:12]}/{r['shape']}" == k])))
+        print()
     for f in fams:
         print(f"{f}: verdicts {per[f]['verdicts']}")
     if a.logs:
