@@ -95,11 +95,11 @@ def _count(it):
     return c
 
 
-def fmt_row(name, s):
+def fmt_row(name, s, w=20):
     fa = f"{s['false_alarms']}/{s['clean_logs']}" if s["clean_logs"] else "-"
     oo = f"{s['ooc_honest']}/{s['ooc_logs']}" if s["ooc_logs"] else "-"
     ms = f"{s['median_shrink']:.3g}" if s["median_shrink"] is not None else "-"
-    return (f"{name:<20}{s['logs']:>5}{s['visible']:>8}{s['right_visible']:>5}/{s['visible']:<4}"
+    return (f"{name:<{w}}{s['logs']:>5}{s['visible']:>8}{s['right_visible']:>5}/{s['visible']:<4}"
             f"{fa:>8}{oo:>9}{s['refusals']:>8}{ms:>9}{s['slowest_s']:>9.2f}")
 
 
@@ -140,11 +140,11 @@ def main(argv=None):
     if a.by_shape:
         keys = []
         for r in rows:
-            k = f"{r['family'][:12]}/{r['shape']}"
+            k = f"{r['family']}/{r['shape']}"
             if k not in keys:
                 keys.append(k)
         for k in keys:
-            print(fmt_row(k[:19], summarise([r for r in rows if f"{r['family'][:12]}/{r['shape']}" == k])))
+            print(fmt_row(k, summarise([r for r in rows if f"{r['family']}/{r['shape']}" == k]), 36))
         print()
     for f in fams:
         print(f"{f}: verdicts {per[f]['verdicts']}")
