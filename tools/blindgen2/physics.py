@@ -169,7 +169,8 @@ class Session:
             # keep the log to a size a laptop logger would write in one session
             while n * (hold + 2.5) * fs > max_samples:
                 if hold > 4.0:
-                    hold = max(4.0, max_samples / (n * fs) - 2.5)
+                    # 0.999: a strict decrease (at the exact limit, rounding could loop forever)
+                    hold = max(4.0, 0.999 * max_samples / (n * fs) - 2.5)
                 else:
                     fs = max(r for r in RATES if r < fs) if fs > RATES[0] else fs
                     if fs == RATES[0]:
