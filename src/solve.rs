@@ -240,7 +240,7 @@ pub fn levenberg_marquardt_holding(
     // The normal equations are built (in place) at the start and after each accepted step.
     let mut rebuild = true;
     let mut iterations = 0;
-    // One exit (one report written): 100 bytes fewer on a Cortex-M4F than a return per reason.
+    // One exit (one report written): about 100 bytes fewer on a Cortex-M4F than a return per reason.
     let termination = loop {
         if iterations == config.max_iterations {
             break SolveTermination::MaxIterations;
