@@ -162,15 +162,17 @@ impl Verdict {
 /// scale 50 %, non-orthogonality 0.5 rad.
 const PLAUSIBLE_DEVIATION: f32 = 0.5;
 
-/// [`crate::frame::modulus_error`], out of line: the verdict's passes over the poses share one copy
-/// (the objective, which the optimisers call, keeps it inline).
+/// The normalised modulus error of a pose ([`crate::frame::modulus_error`]) and its variance
+/// ([`error_variance`]), out of line: every pass of the verdict over the poses shares one copy of both
+/// (and of the residual they start from).
 #[inline(never)]
-fn modulus_error(x: &Deviation, pose: &NormPose) -> f32 {
-    crate::frame::modulus_error(x, pose)
+fn error_and_variance(x: &Deviation, frame: &Frame, pose: &Pose, norm: &NormPose) -> (f32, Option<f32>) {
+    (crate::frame::modulus_error(x, norm), error_variance(x, frame, pose, norm))
 }
 
 /// Variance of one pose's normalised modulus error `E / g^2` due to its averaging noise; `None` if the
 /// pose carries no variance.
+#[inline]
 fn error_variance(x: &Deviation, frame: &Frame, pose: &Pose, norm: &NormPose) -> Option<f32> {
     if pose.n == 0 || pose.variance.iter().all(|&v| v == 0.0) {
         return None;
@@ -224,9 +226,10 @@ fn information_in_place(
     // One pass for the residual variance, the chi-square and whether every pose carries its noise.
     let (mut sum, mut chi2, mut all_noisy) = (0.0f32, 0.0f32, true);
     for (p, m) in set.pairs() {
-        let e2 = crate::model::square(modulus_error(x, m));
+        let (e, variance) = error_and_variance(x, frame, p, m);
+        let e2 = crate::model::square(e);
         sum += e2;
-        match error_variance(x, frame, p, m) {
+        match variance {
             Some(var) => chi2 += e2 / var,
             None => all_noisy = false,
         }
@@ -244,7 +247,7 @@ fn information_in_place(
     };
     let weight = |i: usize| {
         let (pose, m) = set.pair(i)?;
-        let var = if all_noisy { scale * error_variance(x, frame, pose, m)? } else { scale };
+        let var = if all_noisy { scale * error_and_variance(x, frame, pose, m).1? } else { scale };
         Some(1.0 / var)
     };
     normal_equations(x, set.norm, Some(&weight), info, &mut [0.0; PARAM_COUNT]);
@@ -381,12 +384,13 @@ impl ModulusSums {
         let mut sums = Self { after: 0.0, before: 0.0, noise: Some(0.0) };
         let g = frame.gravity;
         for (p, n) in set.pairs() {
-            let after = crate::linalg::sqrt_f32(larger(1.0 + modulus_error(x, n), 0.0));
+            let (e, variance) = error_and_variance(x, frame, p, n);
+            let after = crate::linalg::sqrt_f32(larger(1.0 + e, 0.0));
             sums.after += crate::model::square(after - 1.0);
             let raw = crate::linalg::sqrt_f32(crate::model::norm_squared(before.apply(p.mean)));
             sums.before += crate::model::square(raw - g);
             // |f_b| / g = sqrt(1 + E): d|f_b|/g = dE / 2 near |f_b| = g.
-            sums.noise = sums.noise.zip(error_variance(x, frame, p, n)).map(|(s, v)| s + v / 4.0);
+            sums.noise = sums.noise.zip(variance).map(|(s, v)| s + v / 4.0);
         }
         sums
     }
