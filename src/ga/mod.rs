@@ -113,10 +113,10 @@ impl<const DIM: usize> SearchBox<DIM> {
 
     /// The box `center - half ..= center + half`, gene by gene (checked as by [`SearchBox::new`]).
     pub fn around(center: &[f32; DIM], half: &[f32; DIM]) -> Result<Self, GaError> {
-        let mut out = Self { lower: *center, upper: *center };
+        let mut out = Self { lower: [0.0; DIM], upper: [0.0; DIM] };
         for i in 0..DIM {
-            out.lower[i] -= half[i];
-            out.upper[i] += half[i];
+            out.lower[i] = center[i] - half[i];
+            out.upper[i] = center[i] + half[i];
         }
         out.checked()
     }
@@ -155,9 +155,9 @@ impl<const DIM: usize> SearchBox<DIM> {
     }
 }
 
-/// `v` reflected at `lo` and `hi`, then clamped into `[lo, hi]`. Inlined: out of line it saves 80 bytes
-/// and costs 5 % of a generation's cycles (two calls per gene in the crossover loop).
-#[inline(always)]
+/// `v` reflected at `lo` and `hi`, then clamped into `[lo, hi]`. Out of line: three callers (flash
+/// first; it costs a few % of a generation's cycles, two calls per gene in the crossover loop).
+#[inline(never)]
 fn reflect(v: f32, lo: f32, hi: f32) -> f32 {
     let r = if v < lo {
         2.0 * lo - v
@@ -410,25 +410,21 @@ impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O
         self.stall = if best < previous_best - 1e-6 * previous_best.abs() { 0 } else { self.stall.saturating_add(1) };
     }
 
-    /// Copies the `elites` best into the first offspring slots (repeatedly the best not yet taken: POP
-    /// is small; no sort, no allocation) and their costs into `costs`.
+    /// Copies the `elites` best into the first offspring slots (repeatedly the first smallest cost not
+    /// yet taken, taken ones set to infinity in a copy: costs are finite; no sort, no allocation) and
+    /// their costs into `costs`.
     #[inline(always)]
     fn keep_elites(&mut self, costs: &mut [f32; POP]) {
-        let mut taken = [false; POP];
+        let mut left = self.costs;
         for e in 0..self.config.elites {
-            let mut best = usize::MAX;
-            for i in 0..POP {
-                if !taken[i] && (best == usize::MAX || self.costs[i] < self.costs[best]) {
-                    best = i;
-                }
-            }
-            if let (Some(flag), Some(slot), Some(cost), Some(genes)) =
-                (taken.get_mut(best), self.offspring.get_mut(e), costs.get_mut(e), self.population.get(best))
+            let best = argmin(&left);
+            if let (Some(cost), Some(kept), Some(slot), Some(genes)) =
+                (left.get_mut(best), costs.get_mut(e), self.offspring.get_mut(e), self.population.get(best))
             {
-                *flag = true;
                 // `copy_from_slice` is a non-overlapping copy; an assignment here linked `memmove` (1.5 KB).
                 slot.copy_from_slice(genes);
-                *cost = self.costs[best];
+                *kept = *cost;
+                *cost = f32::INFINITY;
             }
         }
     }
@@ -466,7 +462,7 @@ impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O
     fn mutate_child(&mut self, i: usize, pm: f32, parent: usize, spread: &[f32; DIM]) {
         let mut mutated = false;
         for d in 0..DIM {
-            if hot_uniform(&mut self.rng) < pm {
+            if uniform(&mut self.rng) < pm {
                 self.mutate(i, d, spread);
                 mutated = true;
             }
@@ -605,17 +601,11 @@ fn draw<R: Rng>(rng: &mut R) -> u32 {
     rng.next_u32()
 }
 
-/// Uniform in `[0, 1)`. Out of line: seven callers.
+/// Uniform in `[0, 1)`. Out of line: eight callers (flash first: in the per-gene mutation loop a call
+/// per draw costs a few % of a generation's cycles).
 #[inline(never)]
 fn uniform<R: Rng>(rng: &mut R) -> f32 {
     to_unit(draw(rng))
-}
-
-/// [`uniform`] with the generator inlined, for the per-gene loops (two thirds of the draws): a call per
-/// draw there costs some 10 % of a generation's cycles.
-#[inline(always)]
-fn hot_uniform<R: Rng>(rng: &mut R) -> f32 {
-    to_unit(rng.next_u32())
 }
 
 /// The top 24 bits of `r` as a fraction in `[0, 1)`.
@@ -624,11 +614,10 @@ fn to_unit(r: u32) -> f32 {
 }
 
 /// Two uniform draws in `[0, 1)` of 16-bit resolution from one 32-bit output (the hot loops need many;
-/// 1/65536 of a crossover interval or of the population is resolution enough). The generator inlined,
-/// as in [`hot_uniform`].
+/// 1/65536 of a crossover interval or of the population is resolution enough).
 #[inline(always)]
 fn two_uniforms<R: Rng>(rng: &mut R) -> (f32, f32) {
-    let r = rng.next_u32();
+    let r = draw(rng);
     let scale = 1.0 / 65_536.0;
     ((r & 0xFFFF) as f32 * scale, (r >> 16) as f32 * scale)
 }
