@@ -679,6 +679,27 @@ fn argmax(v: &[f32]) -> usize {
 mod tests {
     extern crate std;
     use super::*;
+    use rand_core::SeedableRng;
+
+    #[test]
+    fn elites_are_the_best_in_cost_order_the_first_index_on_ties() {
+        // Four cost levels over the box: ties are the rule, so the order among equals is exercised.
+        let cost = |x: &[f32; 1]| (x[0] * 2.0).floor().abs();
+        let bounds = SearchBox::new([-2.0], [2.0]).unwrap();
+        let config = GaConfig { elites: 3, ..GaConfig::DEFAULT };
+        let rng = rand_xoshiro::Xoshiro128PlusPlus::seed_from_u64(5);
+        let mut ga: Ga<_, 10, 1> = Ga::new(config, bounds, rng, &cost).unwrap();
+        for _ in 0..20 {
+            let (population, costs) = (ga.population, ga.costs);
+            let mut order: [usize; 10] = core::array::from_fn(|i| i);
+            order.sort_unstable_by(|&a, &b| costs[a].total_cmp(&costs[b]).then(a.cmp(&b)));
+            ga.step(&cost);
+            for e in 0..3 {
+                assert_eq!(ga.population[e], population[order[e]], "elite {e}");
+                assert_eq!(ga.costs[e], costs[order[e]], "elite {e}");
+            }
+        }
+    }
 
     #[test]
     fn lg_count_is_within_three_ulps_of_log10_for_every_count_to_a_million() {
