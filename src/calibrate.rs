@@ -374,13 +374,13 @@ impl<const MAX_POSES: usize> Prepared<MAX_POSES> {
         let normalized = &mut self.normalized;
         normalized.refill(poses, config.init, config.gravity, &config.outliers)?;
         let set = normalized.pose_set(poses);
-        let held = parameters_to_hold(&normalized.start(), normalized.frame(), &set, normalized.initial().held);
+        let mut start = normalized.start();
+        let held = parameters_to_hold(&start, normalized.frame(), &set, normalized.initial().held);
         // One pose per parameter fitted (six faces fit the biases and scale factors).
         let norm = normalized.poses();
         if norm.len() < held.iter().filter(|&&h| !h).count() {
             return Err(SolveError::TooFewPoses { got: norm.len() }.into());
         }
-        let mut start = normalized.start();
         for i in 0..PARAM_COUNT {
             if held[i] {
                 start[i] = 0.0;
