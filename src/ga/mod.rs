@@ -115,17 +115,18 @@ impl<const DIM: usize> SearchBox<DIM> {
     pub fn around(center: &[f32; DIM], half: &[f32; DIM]) -> Result<Self, GaError> {
         let mut out = Self { lower: [0.0; DIM], upper: [0.0; DIM] };
         for i in 0..DIM {
-            out.lower[i] = center[i] - half[i];
-            out.upper[i] = center[i] + half[i];
+            (out.lower[i], out.upper[i]) = (center[i] - half[i], center[i] + half[i]);
+            if !valid_width(out.upper[i] - out.lower[i]) {
+                return Err(GaError::InvalidInterval { dim: i as u8 });
+            }
         }
-        out.checked()
+        Ok(out)
     }
 
     /// `self` if every width `upper - lower` is positive and finite (so no bound is infinite or NaN).
     fn checked(self) -> Result<Self, GaError> {
         for i in 0..DIM {
-            let width = self.upper[i] - self.lower[i];
-            if !(width > 0.0 && width < f32::INFINITY) {
+            if !valid_width(self.upper[i] - self.lower[i]) {
                 return Err(GaError::InvalidInterval { dim: i as u8 });
             }
         }
@@ -153,6 +154,11 @@ impl<const DIM: usize> SearchBox<DIM> {
     fn clamp(&self, i: usize, v: f32) -> f32 {
         clamp(v, self.lower[i], self.upper[i])
     }
+}
+
+/// A search interval's width is positive and finite (so neither bound is infinite or NaN).
+fn valid_width(width: f32) -> bool {
+    width > 0.0 && width < f32::INFINITY
 }
 
 /// `v` reflected at `lo` and `hi`, then clamped into `[lo, hi]`. Out of line: three callers (flash
