@@ -446,19 +446,28 @@ impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O
             let (a, b) = (self.tournament().min(POP - 1), self.tournament().min(POP - 1));
             let (fa, fb) = (-self.costs[a], -self.costs[b]);
             let pc = O::probability(crossover, if fa >= fb { fa } else { fb }, stats);
-            let mut second = self.population[b];
-            let first = &mut self.offspring[slot];
+            // The parents copied into their children's slots; the second child into `spare` (bred for the
+            // draws, then dropped) when the last slot is taken.
+            let mut spare = self.population[b];
+            let Some((first, rest)) = self.offspring.get_mut(slot..).and_then(|s| s.split_first_mut()) else {
+                break;
+            };
+            let second = match rest.first_mut() {
+                Some(second) => {
+                    second.copy_from_slice(&spare);
+                    second
+                }
+                None => &mut spare,
+            };
             first.copy_from_slice(&self.population[a]);
             if uniform(&mut self.rng) < pc {
-                blend(&mut self.rng, &self.bounds, self.config.blend_alpha, first, &mut second);
+                blend(&mut self.rng, &self.bounds, self.config.blend_alpha, first, second);
             }
             (fitness[slot], parent[slot]) = (fa, a as u16);
-            slot += 1;
-            if slot < POP {
-                self.offspring[slot] = second;
-                (fitness[slot], parent[slot]) = (fb, b as u16);
-                slot += 1;
+            if let (Some(f), Some(p)) = (fitness.get_mut(slot + 1), parent.get_mut(slot + 1)) {
+                (*f, *p) = (fb, b as u16);
             }
+            slot += 2;
         }
     }
 
