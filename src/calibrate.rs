@@ -484,8 +484,8 @@ pub enum Step {
 
 /// [`calibrate`] in bounded steps, to run beside a control loop or in an async task: [`Calibrator::new`]
 /// makes the initial estimate and the first population, each [`Calibrator::step`] runs one GA
-/// generation (about 60 k cycles on a Cortex-M4F at population 40 and 24 poses), and the last step
-/// polishes (LM, some 100 k cycles) and judges. The same seeds give the same result as [`calibrate`].
+/// generation (about 66 k cycles on a Cortex-M4F at population 24 and 24 poses, `cargo xtask report`), and
+/// the last step polishes (LM, some 100 k cycles) and judges. The same seeds give the same result as [`calibrate`].
 ///
 /// ```
 /// use accelcal::accumulator::Pose;
