@@ -419,7 +419,7 @@ impl<const MAX_POSES: usize> Prepared<MAX_POSES> {
     fn conclude(&self, poses: &[Pose], run: &Optimised, config: &CalibrationConfig) -> Calibration {
         let frame = self.normalized.frame();
         let set = self.normalized.pose_set(poses);
-        let initial = *self.normalized.initial();
+        let initial = self.normalized.initial();
         // The GA moves held genes within its smallest interval; they are held exactly.
         let x: Deviation = core::array::from_fn(|i| if self.held.contains(i) { self.start[i] } else { run.x[i] });
         let before = config.before.unwrap_or_else(|| frame.to_params(&[0.0; PARAM_COUNT]));
@@ -427,7 +427,7 @@ impl<const MAX_POSES: usize> Prepared<MAX_POSES> {
         verdict.failures.not_converged = run.solver_termination == Some(SolveTermination::MaxIterations);
         Calibration {
             params: frame.to_params(&x),
-            initial,
+            initial: *initial,
             method: config.method,
             objective: objective_value(&x, set.norm, config.gravity),
             generations: run.generations,
