@@ -171,18 +171,20 @@ fn ratio_to_f32(total: i64, n: u32) -> f32 {
 }
 
 /// Raw sums `(sum x, sum x^2)` of one axis of a block of `i16` samples (at most `2^16`: the `i32` sum
-/// is exact, `2^16 * 2^15 = 2^31`, and so is every partial sum), eight samples per step, loaded before
-/// they are used (back-to-back loads pipeline on a Cortex-M4); each square (at most `2^30`, an `i32`) is
+/// is exact, `2^16 * 2^15 = 2^31`, and so is every partial sum), eight samples per step (their loads
+/// pipeline on a Cortex-M4); each square (at most `2^30`, an `i32`) is
 /// one multiply-accumulate into the `i64` (`smlalbb`). Raw sums of a pose stay exact in `i64`: at most
 /// `2^31` samples, `2^31 * 2^30 = 2^61`.
 #[inline(always)]
 fn raw_i16_axis_sums(values: &[i16]) -> (i32, i64) {
     let (mut sum, mut sum_sq) = (0i32, 0i64);
-    let (quads, rest) = values.as_chunks::<4>();
-    for &[a, b, c, d] in quads {
+    let (eights, rest) = values.as_chunks::<8>();
+    for &[a, b, c, d, e, f, g, h] in eights {
         let (a, b, c, d) = (i64::from(a), i64::from(b), i64::from(c), i64::from(d));
-        sum += ((a + b) + (c + d)) as i32;
+        let (e, f, g, h) = (i64::from(e), i64::from(f), i64::from(g), i64::from(h));
+        sum += (((a + b) + (c + d)) + ((e + f) + (g + h))) as i32;
         sum_sq += a * a + b * b + c * c + d * d;
+        sum_sq += e * e + f * f + g * g + h * h;
     }
     for &v in rest {
         let x = i64::from(v);
@@ -205,6 +207,30 @@ fn i16_axis(values: &[i16], limit: i32) -> (i32, i64, u64, bool) {
     let margin = n as i64 * i64::from(limit.min(i32::from(i16::MAX))) - i64::from(sum).abs();
     let clear = margin > 0 && spread.checked_mul(n).is_some_and(|t| t < (margin * margin) as u64);
     (sum, sum_sq, spread, !clear && values.iter().any(|v| v.saturated(limit)))
+}
+
+/// One axis of a full block: its raw sums written to `sum` and `sum_sq`, its `n^2` variance
+/// `n sum_sq - sum^2` returned (exact, at most `2^62`). Out of line, once per axis: nothing else is
+/// live, so its loop keeps every value in a register.
+#[inline(never)]
+fn i16_block_axis(values: &[i16], sum: &mut i64, sum_sq: &mut i64) -> u64 {
+    let (s, sq) = raw_i16_axis_sums(values);
+    (*sum, *sum_sq) = (i64::from(s), sq);
+    (values.len() as i64 * sq - i64::from(s) * i64::from(s)) as u64
+}
+
+/// `false` when no sample of a block can be saturated, from its statistics: every sample lies within
+/// `sqrt(n variance)` of its axis mean, so none reaches `min(limit, i16::MAX)` (nor a rail) when
+/// `(min(limit, i16::MAX) - |mean| - 1)^2 > 1.01 n variance + 1` on every axis (the 1 and the 1 % cover the
+/// `f32` rounding of the mean, below `2^-8`, and of the variance, below `2^-20` relative). Only otherwise
+/// are the samples checked.
+#[inline(always)]
+fn i16_may_saturate(mean: &[f32; 3], variance: f32, n: usize, limit: i32) -> bool {
+    let (reach, spread) = (limit.min(i32::from(i16::MAX)) as f32 - 1.0, 1.01 * n as f32 * variance + 1.0);
+    mean.iter().any(|m| {
+        let room = reach - m.abs();
+        !(room > 0.0 && room * room > spread)
+    })
 }
 
 impl Reading for i16 {
@@ -234,15 +260,16 @@ impl Reading for i16 {
     ) -> ([f32; 3], f32, bool) {
         let n_inverse = 1.0 / N as f32;
         // The three axes' n^2 variances (each at most 2^62) fit a u64.
-        let (mut mean, mut n_squared_variance, mut saturated) = ([0.0; 3], 0u64, false);
+        let (mut mean, mut n_squared_variance) = ([0.0; 3], 0u64);
         for a in 0..3 {
-            let (s, sq, spread, clipped) = i16_axis(&axes[a], limit);
-            (sum[a], sum_sq[a]) = (i64::from(s), sq);
-            mean[a] = s as f32 * n_inverse;
-            n_squared_variance = n_squared_variance.wrapping_add(spread);
-            saturated |= clipped;
+            n_squared_variance += i16_block_axis(&axes[a], &mut sum[a], &mut sum_sq[a]);
+            // A block's raw sum fits an i32 (at most 2^16 samples of at most 2^15).
+            mean[a] = sum[a] as i32 as f32 * n_inverse;
         }
-        (mean, u64_to_f32_halves(n_squared_variance) * n_inverse * n_inverse, saturated)
+        let variance = u64_to_f32_halves(n_squared_variance) * n_inverse * n_inverse;
+        let saturated =
+            i16_may_saturate(&mean, variance, N, limit) && axes.iter().flatten().any(|v| v.saturated(limit));
+        (mean, variance, saturated)
     }
     fn mean_and_variance(reference: i16, sum: i64, sum_sq: i64, n: u32) -> (f32, f32) {
         let count = n.max(1);
