@@ -750,7 +750,10 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
             (BLOCK as u32, start_index, self.counted, saturated);
         for ((m, reference), values) in mean.iter_mut().zip(&mut sums.reference).zip(buffer) {
             *reference = R::block_reference(values[0]);
-            *m += reference.to_f32();
+            // Raw sums have a zero reference (no `+ 0.0` at run time).
+            if R::RELATIVE {
+                *m += reference.to_f32();
+            }
         }
         (block.mean, block.variance) = (mean, variance);
         (mean, variance)
