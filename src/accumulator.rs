@@ -172,9 +172,8 @@ fn ratio_to_f32(total: i64, n: u32) -> f32 {
 
 /// Raw sums `(sum x, sum x^2)` of one axis of a block of `i16` samples (at most `2^16`: the `i32` sum
 /// is exact, `2^16 * 2^15 = 2^31`, and so is every partial sum), eight samples per step (their loads
-/// pipeline on a Cortex-M4); each square (at most `2^30`, an `i32`) is
-/// one multiply-accumulate into the `i64` (`smlalbb`). Raw sums of a pose stay exact in `i64`: at most
-/// `2^31` samples, `2^31 * 2^30 = 2^61`.
+/// pipeline on a Cortex-M4); each square (at most `2^30`) is one multiply-accumulate into the `i64`
+/// (`smlal`). Raw sums of a pose stay exact in `i64`: at most `2^31` samples, `2^31 * 2^30 = 2^61`.
 #[inline(always)]
 fn raw_i16_axis_sums(values: &[i16]) -> (i32, i64) {
     let (mut sum, mut sum_sq) = (0i32, 0i64);
