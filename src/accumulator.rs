@@ -979,6 +979,38 @@ mod tests {
     }
 
     #[test]
+    fn the_f32_saturation_bound_never_clears_a_saturated_block() {
+        // Blocks near the rails and near a limit: whenever a sample is saturated, the bound must send the
+        // block to the sample-by-sample check (it may also do so for a clear block).
+        let mut x = 0x2545_F491_4F6C_DD1Du64;
+        let (mut saturated_blocks, mut cleared) = (0, 0);
+        for round in 0..4000 {
+            let limit = [32_769, 32_767, 30_000, 16_384][round % 4];
+            let centre = [32_760i32, -32_760, 29_990, 16_380, 0][round % 5];
+            let spread = [1u64, 3, 12, 400][round % 4];
+            let mut axes = [[0i16; 32]; 3];
+            for axis in &mut axes {
+                for v in axis.iter_mut() {
+                    x = x.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+                    let offset = (x >> 33) % (2 * spread + 1);
+                    *v = (centre + offset as i32 - spread as i32).clamp(-32_768, 32_767) as i16;
+                }
+            }
+            let (mut sum, mut sum_sq) = ([0i64; 3], [0i64; 3]);
+            let (mean, variance, saturated) = i16::full_block(&axes, limit, &mut sum, &mut sum_sq);
+            let truth = axes.iter().flatten().any(|v| v.saturated(limit));
+            assert_eq!(saturated, truth, "round {round}");
+            if truth {
+                saturated_blocks += 1;
+                assert!(i16_may_saturate(&mean, variance, 32, limit), "round {round}");
+            } else if !i16_may_saturate(&mean, variance, 32, limit) {
+                cleared += 1;
+            }
+        }
+        assert!(saturated_blocks > 500 && cleared > 500, "{saturated_blocks} saturated, {cleared} cleared");
+    }
+
+    #[test]
     fn large_sums_convert_to_f32_within_an_ulp() {
         for v in [0u64, 3, 1 << 31, (1 << 32) - 1, 3 << 40, (5 << 50) + 12_345, u64::MAX] {
             let exact = v as f64;
