@@ -254,14 +254,17 @@ pub(crate) fn fit_valid(
     rule: &OutlierRule,
 ) -> Result<EllipsoidFit, EllipsoidError> {
     // All zeros (one clear): the fit overwrites the model before anything reads it.
-    let fit = EllipsoidFit {
-        params: Params { bias: [0.0; 3], scale: [0.0; 3], nonorth: [0.0; 3] },
-        center: [0.0; 3],
-        excluded: PoseList::EMPTY,
-        held: [false; 3],
-        rmse_g: 0.0,
+    let mut fitting = Fitting {
+        poses,
+        gravity,
+        fit: EllipsoidFit {
+            params: Params { bias: [0.0; 3], scale: [0.0; 3], nonorth: [0.0; 3] },
+            center: [0.0; 3],
+            excluded: PoseList::EMPTY,
+            held: [false; 3],
+            rmse_g: 0.0,
+        },
     };
-    let mut fitting = Fitting { poses, gravity, fit };
     fitting.robust(kept, rule)?;
     Ok(fitting.fit)
 }
@@ -310,7 +313,9 @@ impl Fitting<'_> {
         }
     }
 
-    /// `kept` without its entry at `at` (moved to its end and listed as excluded).
+    /// `kept` without its entry at `at` (moved to its end and listed as excluded). Out of line: two
+    /// callers.
+    #[inline(never)]
     fn leave_out<'k>(&mut self, kept: &'k mut [u16], at: usize) -> &'k mut [u16] {
         move_to_end(kept, at);
         let Some((&mut last, rest)) = kept.split_last_mut() else { return &mut [] };
