@@ -300,7 +300,7 @@ impl Fitting<'_> {
             if fitted.is_none() {
                 return Err(EllipsoidError::Degenerate { missing: missing_directions(self::kept(self.poses, kept)) });
             }
-            let (worst, worst_abs, rmse_g) = self.worst_and_rms(kept);
+            let (worst, worst_abs, rmse_g, _) = self.statistics(kept, 0.0);
             self.fit.rmse_g = rmse_g;
             // The limit is at least the floor (or NaN): the median is needed only above the floor.
             if !(worst_abs > rule.floor_g)
@@ -333,7 +333,7 @@ impl Fitting<'_> {
         for at in 0..=last {
             let others = kept.get(..last).unwrap_or(&[]);
             if self.fit_once(others) == Some(true) {
-                let rms = self.worst_and_rms(others).2;
+                let rms = self.statistics(others, 0.0).2;
                 if best.is_none_or(|(_, b)| rms < b) {
                     best = Some((at, rms));
                 }
@@ -428,26 +428,29 @@ impl Fitting<'_> {
         (sqrt_f32(norm_squared(self.fit.params.apply(*m))) / self.gravity - 1.0).abs()
     }
 
-    /// The position in `kept` and size of the largest modulus error of the poses it lists, and their RMS.
-    fn worst_and_rms(&self, kept: &[u16]) -> (usize, f32, f32) {
-        let (mut worst, mut worst_abs, mut sum) = (0, -1.0f32, 0.0f32);
+    /// Over the poses listed in `kept`: the position and size of the largest modulus error, their RMS,
+    /// and how many errors are at most `limit`. Out of line: the median calls it once per pose.
+    #[inline(never)]
+    fn statistics(&self, kept: &[u16], limit: f32) -> (usize, f32, f32, usize) {
+        let (mut worst, mut worst_abs, mut sum, mut at_most) = (0, -1.0f32, 0.0f32, 0);
         for (at, m) in self::kept(self.poses, kept).enumerate() {
             let e = self.abs_error(m);
             if e > worst_abs {
                 (worst, worst_abs) = (at, e);
             }
             sum += e * e;
+            at_most += usize::from(e <= limit);
         }
-        (worst, worst_abs, sqrt_f32(sum / kept.len().max(1) as f32))
+        (worst, worst_abs, sqrt_f32(sum / kept.len().max(1) as f32), at_most)
     }
 
     /// Lower median of the `|e|` of the poses listed in `kept` without a buffer: the smallest value with
     /// at least half the values at or below it (quadratic in the pose count, which is small).
     fn median_abs(&self, kept: &[u16]) -> f32 {
-        let errors = || self::kept(self.poses, kept).map(|m| self.abs_error(m));
         let mut best = f32::INFINITY;
-        for v in errors() {
-            if v < best && 2 * errors().filter(|&o| o <= v).count() >= kept.len() {
+        for m in self::kept(self.poses, kept) {
+            let v = self.abs_error(m);
+            if v < best && 2 * self.statistics(kept, v).3 >= kept.len() {
                 best = v;
             }
         }
