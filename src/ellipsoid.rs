@@ -243,50 +243,50 @@ pub fn fit_ellipsoid(
         return Err(EllipsoidError::NonFinitePose);
     }
     check_input(self::kept(poses, kept), gravity)?;
-    fit_valid(poses, kept, gravity, rule)
-}
-
-/// [`fit_ellipsoid`] of input [`check_input`] has accepted.
-pub(crate) fn fit_valid(
-    poses: &[Pose],
-    kept: &mut [u16],
-    gravity: f32,
-    rule: &OutlierRule,
-) -> Result<EllipsoidFit, EllipsoidError> {
-    // All zeros (one clear): the fit overwrites the model before anything reads it.
-    let mut fitting = Fitting {
-        poses,
-        gravity,
-        fit: EllipsoidFit {
-            params: Params { bias: [0.0; 3], scale: [0.0; 3], nonorth: [0.0; 3] },
-            center: [0.0; 3],
-            excluded: PoseList::EMPTY,
-            held: [false; 3],
-            rmse_g: 0.0,
-        },
-    };
+    let (mut params, mut excluded) = (Params::IDENTITY, PoseList::EMPTY);
+    let mut fitting = Fitting::new(poses, gravity, &mut params, &mut excluded);
     fitting.robust(kept, rule)?;
-    Ok(fitting.fit)
+    let (center, held, rmse_g) = (fitting.center, fitting.held, fitting.rmse_g);
+    Ok(EllipsoidFit { params, center, excluded, held, rmse_g })
 }
 
-/// The poses and gravity, and the fit: the state of the robust fit (the poses it uses are a list of
-/// indices, passed along).
-struct Fitting<'a> {
+/// The state of the robust fit: the poses and gravity, and the fit so far, its model and the poses
+/// left out written where the caller keeps them (the poses it uses are a list of indices, passed
+/// along).
+pub(crate) struct Fitting<'a> {
     poses: &'a [Pose],
     gravity: f32,
-    fit: EllipsoidFit,
+    /// The model in the paper's convention.
+    params: &'a mut Params,
+    /// Poses left out as far off the ellipsoid.
+    excluded: &'a mut PoseList,
+    /// The centre of the ellipsoid (see [`EllipsoidFit::center`]).
+    pub(crate) center: [f32; 3],
+    /// Non-orthogonality terms held at 0 (see [`EllipsoidFit::held`]).
+    pub(crate) held: [bool; 3],
+    /// Modulus RMSE of the poses kept, fraction of gravity.
+    rmse_g: f32,
+}
+
+impl<'a> Fitting<'a> {
+    /// A fit of `poses` against `gravity` writing its model into `params` and the poses it leaves out
+    /// into `excluded` (cleared here).
+    pub(crate) fn new(poses: &'a [Pose], gravity: f32, params: &'a mut Params, excluded: &'a mut PoseList) -> Self {
+        *excluded = PoseList::EMPTY;
+        Self { poses, gravity, params, excluded, center: [0.0; 3], held: [false; 3], rmse_g: 0.0 }
+    }
 }
 
 impl Fitting<'_> {
     /// Fits the poses listed in `kept`, leaving out poses per `rule` (moved to its end), until the
     /// fit stands.
-    fn robust(&mut self, mut kept: &mut [u16], rule: &OutlierRule) -> Result<(), EllipsoidError> {
+    pub(crate) fn robust(&mut self, mut kept: &mut [u16], rule: &OutlierRule) -> Result<(), EllipsoidError> {
         loop {
             let count = kept.len();
             if count < COEFFS {
                 return Err(EllipsoidError::TooFewPoses { got: count });
             }
-            let room = usize::from(self.fit.excluded.len) < MAX_EXCLUDED && count > COEFFS + 1;
+            let room = usize::from(self.excluded.len) < MAX_EXCLUDED && count > COEFFS + 1;
             let mut fitted = self.fit_once(kept);
             // A gross outlier can bend the quadric into a non-ellipsoid, or into an ellipsoid no
             // accelerometer has: then look for the pose without which the rest fit.
@@ -301,7 +301,7 @@ impl Fitting<'_> {
                 return Err(EllipsoidError::Degenerate { missing: missing_directions(self::kept(self.poses, kept)) });
             }
             let (worst, worst_abs, rmse_g, _) = self.statistics(kept, 0.0);
-            self.fit.rmse_g = rmse_g;
+            self.rmse_g = rmse_g;
             // The limit is at least the floor (or NaN): the median is needed only above the floor.
             if !(worst_abs > rule.floor_g)
                 || !room
@@ -319,7 +319,7 @@ impl Fitting<'_> {
     fn leave_out<'k>(&mut self, kept: &'k mut [u16], at: usize) -> &'k mut [u16] {
         move_to_end(kept, at);
         let Some((&mut last, rest)) = kept.split_last_mut() else { return &mut [] };
-        self.fit.excluded.push(last);
+        self.excluded.push(last);
         rest
     }
 
@@ -360,7 +360,7 @@ impl Fitting<'_> {
     }
 
     /// One least-squares fit of the quadric to the poses listed in `kept`, factored into the model (in
-    /// `self.fit`): `None` when the poses do not determine an ellipsoid, else whether it is one an
+    /// `self`): `None` when the poses do not determine an ellipsoid, else whether it is one an
     /// accelerometer can have.
     fn fit_once(&mut self, kept: &[u16]) -> Option<bool> {
         let (m0, s) = self.reference(kept);
@@ -395,9 +395,9 @@ impl Fitting<'_> {
         // `atb` becomes the quadric coefficients.
         solve_spd_holding_in_place(&mut ata, &mut atb, &held).ok()?;
         // Quadric cross terms xy, xz, yz map to Mxx, Myy, Mzz.
-        self.fit.held = [held[6], held[7], held[8]];
+        self.held = [held[6], held[7], held[8]];
         self.factor(&atb, m0, s)?;
-        Some(plausible(&self.fit.params))
+        Some(plausible(self.params))
     }
 
     /// The quadric `v^T A v + b^T v = 1` in `v = (m - m0) / s` to the paper's `Ka`, `B` and the
@@ -417,15 +417,15 @@ impl Fitting<'_> {
         // Ka = L g / (s sqrt(k)).
         let w = self.gravity / (s * sqrt_f32(1.0 + y0 * y0 + y1 * y1 + y2 * y2));
         let ka = Params { bias: [0.0; 3], scale: [w * sx, w * sy, w * sz], nonorth: [w * mx, w * my, w * mz] };
-        self.fit.center = [m0[0] + s * v0, m0[1] + s * v1, m0[2] + s * v2];
-        self.fit.params = Params { bias: ka.ka_times(self.fit.center), ..ka };
-        self.fit.params.is_finite().then_some(())
+        self.center = [m0[0] + s * v0, m0[1] + s * v1, m0[2] + s * v2];
+        *self.params = Params { bias: ka.ka_times(self.center), ..ka };
+        self.params.is_finite().then_some(())
     }
 
     /// `| |f_b| / g - 1 |` of the mean `m` under the fit. Out of line: every statistic below calls it.
     #[inline(never)]
     fn abs_error(&self, m: &[f32; 3]) -> f32 {
-        (sqrt_f32(norm_squared(self.fit.params.apply(*m))) / self.gravity - 1.0).abs()
+        (sqrt_f32(norm_squared(self.params.apply(*m))) / self.gravity - 1.0).abs()
     }
 
     /// Over the poses listed in `kept`: the position and size of the largest modulus error, their RMS,

@@ -25,7 +25,7 @@
 
 use crate::accumulator::Pose;
 use crate::coarse::{CoarseError, face_means};
-use crate::ellipsoid::{EllipsoidError, OutlierRule, PoseList, check_input, fit_valid, held_parameters, kept};
+use crate::ellipsoid::{EllipsoidError, Fitting, OutlierRule, PoseList, check_input, held_parameters, kept};
 use crate::frame::{Deviation, Frame, NormPose};
 use crate::model::{PARAM_COUNT, Params};
 use crate::verdict::PoseSet;
@@ -207,11 +207,14 @@ fn initial_estimate(
     if let Err(e) = check_input(kept(poses, list), gravity) {
         return Err(if init == Init::SixPosition { InitError::Coarse(e.into()) } else { InitError::Ellipsoid(e) });
     }
-    let mut fit = None;
+    // The ellipsoid's model and the poses it leaves out are written in place; its centre and held
+    // terms kept here.
+    let mut fitted = None;
     let mut ellipsoid_error = None;
     if init != Init::SixPosition {
-        match fit_valid(poses, list, gravity, rule) {
-            Ok(f) => fit = Some(f),
+        let mut fitting = Fitting::new(poses, gravity, &mut initial.params, &mut initial.excluded);
+        match fitting.robust(list, rule) {
+            Ok(()) => fitted = Some((fitting.center, fitting.held)),
             Err(e) if init == Init::Ellipsoid => return Err(InitError::Ellipsoid(e)),
             Err(e) => {
                 // Every pose again, in order.
@@ -226,21 +229,24 @@ fn initial_estimate(
     let error = |e: CoarseError| ellipsoid_error.map_or(InitError::Coarse(e), InitError::Ellipsoid);
     // The normalising frame: the ellipsoid's centre and gains `1 / S`, or the six faces' own
     // (exactly: the paper's path).
-    let (offset, gain) = match &fit {
-        Some(f) => (f.center, f.params.scale.map(|s| 1.0 / s)),
+    let (offset, gain) = match fitted {
+        Some((center, _)) => (center, initial.params.scale.map(|s| 1.0 / s)),
         None => face_means(kept(poses, list), gravity).map(|(offset, gain, _)| (offset, gain)).map_err(error)?,
     };
     *frame = Frame::new(offset, gain, gravity).map_err(|e| error(e.into()))?;
-    *initial = match fit {
-        Some(f) => {
-            Initial { kind: Init::Ellipsoid, params: f.params, excluded: f.excluded, held: held_parameters(&f.held) }
+    match fitted {
+        Some((_, held)) => {
+            initial.kind = Init::Ellipsoid;
+            initial.held = held_parameters(&held);
         }
-        None => Initial {
-            kind: Init::SixPosition,
-            params: frame.to_params(&[0.0; PARAM_COUNT]),
-            excluded: PoseList::EMPTY,
-            held: [false; PARAM_COUNT],
-        },
-    };
+        None => {
+            *initial = Initial {
+                kind: Init::SixPosition,
+                params: frame.to_params(&[0.0; PARAM_COUNT]),
+                excluded: PoseList::EMPTY,
+                held: [false; PARAM_COUNT],
+            }
+        }
+    }
     Ok(list.len() - initial.excluded.as_slice().len())
 }
