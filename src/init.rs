@@ -234,19 +234,15 @@ fn initial_estimate(
         None => face_means(kept(poses, list), gravity).map(|(offset, gain, _)| (offset, gain)).map_err(error)?,
     };
     *frame = Frame::new(offset, gain, gravity).map_err(|e| error(e.into()))?;
-    match fitted {
-        Some((_, held)) => {
-            initial.kind = Init::Ellipsoid;
-            initial.held = held_parameters(&held);
-        }
+    let (kind, held) = match fitted {
+        Some((_, held)) => (Init::Ellipsoid, held),
         None => {
-            *initial = Initial {
-                kind: Init::SixPosition,
-                params: frame.to_params(&[0.0; PARAM_COUNT]),
-                excluded: PoseList::EMPTY,
-                held: [false; PARAM_COUNT],
-            }
+            initial.params = frame.to_params(&[0.0; PARAM_COUNT]);
+            initial.excluded = PoseList::EMPTY;
+            (Init::SixPosition, [false; 3])
         }
-    }
+    };
+    initial.kind = kind;
+    initial.held = held_parameters(&held);
     Ok(list.len() - initial.excluded.as_slice().len())
 }
