@@ -204,7 +204,7 @@ fn initial_estimate(
     rule: &OutlierRule,
 ) -> Result<usize, InitError> {
     // The same checks for both (as the six faces' error when they are asked for).
-    if let Err(e) = check_input(kept(poses, list), gravity) {
+    if let Err(e) = check_input(poses.iter().map(|p| &p.mean), gravity) {
         return Err(if init == Init::SixPosition { InitError::Coarse(e.into()) } else { InitError::Ellipsoid(e) });
     }
     // The ellipsoid's model and the poses it leaves out are written in place; its centre and held
