@@ -241,11 +241,12 @@ pub(crate) fn face_means<'a>(
     let mut offset = [0.0; 3];
     let mut gain = [0.0; 3];
     for a in 0..3 {
-        if let Some(side) = counts[a].iter().position(|&c| c == 0) {
-            return Err(CoarseError::MissingAxisPair { axis: a as u8, up: side == 0 });
+        let [up, down] = counts[a];
+        if up == 0 || down == 0 {
+            return Err(CoarseError::MissingAxisPair { axis: a as u8, up: up == 0 });
         }
-        let v_up = sums[a][0] / f32::from(counts[a][0]);
-        let v_down = sums[a][1] / f32::from(counts[a][1]);
+        let v_up = sums[a][0] / f32::from(up);
+        let v_down = sums[a][1] / f32::from(down);
         if !(v_up > v_down) {
             return Err(CoarseError::DegenerateAxis { axis: a as u8 });
         }
