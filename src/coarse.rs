@@ -197,6 +197,21 @@ impl CoarseCalibration {
     }
 }
 
+/// Whether every axis, by the half-range `half` of its readings, was pointed both up and down: it then
+/// spans about twice gravity, like the widest one; one that spans much less was never reversed, and
+/// its centre (hence its dominant poses) is unknown.
+fn check_reversed(half: [f32; 3]) -> Result<(), CoarseError> {
+    let widest = largest(half);
+    for a in 0..3 {
+        if widest > 0.0 && half[a] < MIN_SPAN_FRACTION * widest {
+            // In [0, 75): the cast to `u8` needs no clamp (`u32` is one instruction).
+            let span_pct = (100.0 * half[a] / widest) as u32 as u8;
+            return Err(CoarseError::NotReversed { axis: a as u8, span_pct });
+        }
+    }
+    Ok(())
+}
+
 /// The six-position offset `b` and gain `k` per axis from pose means [`check_input`] has accepted, and
 /// how many poses were averaged into `V_up` / `V_down` per axis.
 #[allow(clippy::type_complexity)] // Three arrays, named in the doc.
@@ -206,16 +221,7 @@ pub(crate) fn face_means<'a>(
 ) -> Result<([f32; 3], [f32; 3], [[u16; 2]; 3]), CoarseError> {
     // Centre and half-range per axis from the extremes: removes the large offsets of raw counts.
     let (mid, half) = mid_range(means.clone());
-    // An axis pointed up and down spans about twice gravity, like the widest one; one that spans
-    // much less was never reversed, and its centre (hence its dominant poses) is unknown.
-    let widest = largest(half);
-    for a in 0..3 {
-        if widest > 0.0 && half[a] < MIN_SPAN_FRACTION * widest {
-            // In [0, 75): the cast to `u8` needs no clamp (`u32` is one instruction).
-            let span_pct = (100.0 * half[a] / widest) as u32 as u8;
-            return Err(CoarseError::NotReversed { axis: a as u8, span_pct });
-        }
-    }
+    check_reversed(half)?;
     let mut sums = [[0.0f32; 2]; 3];
     let mut counts = [[0u16; 2]; 3];
     for m in means {
