@@ -12,14 +12,14 @@
 //! let g = 9.80665;
 //! let means = [[g + 0.1, 0.0, 0.0], [-g + 0.1, 0.0, 0.0], [0.0, g, 0.0], [0.0, -g, 0.0],
 //!     [0.0, 0.0, g - 0.2], [0.0, 0.0, -g - 0.2]];
-//! let coarse = CoarseCalibration::from_poses(&means.map(|m| Pose::from_mean(m, 100)), &[true; 6], g).unwrap();
+//! let coarse = CoarseCalibration::from_poses(&means.map(|m| Pose::from_mean(m, 100)), g).unwrap();
 //! assert!((coarse.params().bias[0] - 0.1).abs() < 1e-5);
 //! let intervals = coarse.intervals(&SearchWidths::DEFAULT);
 //! assert!(intervals[3].0 < 1.0 && intervals[3].1 > 1.0); // Sxx
 //! ```
 
 use crate::accumulator::Pose;
-use crate::ellipsoid::{EllipsoidError, check_input, half_axes_near, kept, largest, mid_range};
+use crate::ellipsoid::{EllipsoidError, check_input, half_axes_near, largest, mid_range};
 use crate::frame::{Deviation, Frame, FrameError};
 use crate::ga::{GaError, SearchBox};
 use crate::model::{PARAM_COUNT, Params};
@@ -154,60 +154,12 @@ const MIN_SPAN_FRACTION: f32 = 0.75;
 const DOMINANCE: f32 = 0.906;
 
 impl CoarseCalibration {
-    /// Coarse calibration from the means (input unit) of the poses flagged in `keep` (poses past its
-    /// end are not used) against `gravity` (output unit).
-    pub fn from_poses(poses: &[Pose], keep: &[bool], gravity: f32) -> Result<Self, CoarseError> {
-        check_input(poses, keep, gravity).map_err(CoarseError::from)?;
-        Self::from_valid_poses(poses, keep, gravity)
-    }
-
-    /// [`CoarseCalibration::from_poses`] of input [`check_input`] has accepted.
-    pub(crate) fn from_valid_poses(poses: &[Pose], keep: &[bool], gravity: f32) -> Result<Self, CoarseError> {
-        // Centre and half-range per axis from the extremes: removes the large offsets of raw counts.
-        let (mid, half) = mid_range(poses, keep);
-        // An axis pointed up and down spans about twice gravity, like the widest one; one that spans
-        // much less was never reversed, and its centre (hence its dominant poses) is unknown.
-        let widest = largest(half);
-        for a in 0..3 {
-            if widest > 0.0 && half[a] < MIN_SPAN_FRACTION * widest {
-                // In [0, 75): the cast needs no clamp.
-                let span_pct = (100.0 * half[a] / widest) as u8;
-                return Err(CoarseError::NotReversed { axis: a as u8, span_pct });
-            }
-        }
-        let mut sums = [[0.0f32; 2]; 3];
-        let mut counts = [[0u16; 2]; 3];
-        for m in kept(poses, keep) {
-            let mut u = [0.0; 3];
-            for a in 0..3 {
-                if half[a] > 0.0 {
-                    u[a] = (m[a] - mid[a]) / half[a];
-                }
-            }
-            let near = half_axes_near(u, DOMINANCE);
-            // At most one half-axis is within 25 deg (all six only for u = 0, which points nowhere).
-            if near != 0 && near != 0x3f {
-                let bit = near.trailing_zeros() as usize;
-                let (a, side) = (bit / 2, bit % 2);
-                sums[a][side] += m[a];
-                counts[a][side] = counts[a][side].saturating_add(1);
-            }
-        }
-        let mut offset = [0.0; 3];
-        let mut gain = [0.0; 3];
-        for a in 0..3 {
-            if let Some(side) = counts[a].iter().position(|&c| c == 0) {
-                return Err(CoarseError::MissingAxisPair { axis: a as u8, up: side == 0 });
-            }
-            let v_up = sums[a][0] / f32::from(counts[a][0]);
-            let v_down = sums[a][1] / f32::from(counts[a][1]);
-            if !(v_up > v_down) {
-                return Err(CoarseError::DegenerateAxis { axis: a as u8 });
-            }
-            gain[a] = (v_up - v_down) / (2.0 * gravity);
-            offset[a] = 0.5 * (v_up + v_down);
-        }
-        Ok(Self { frame: Frame::new(offset, gain, gravity)?, poses_used: counts })
+    /// Coarse calibration from the means (input unit) of the poses against `gravity` (output unit).
+    pub fn from_poses(poses: &[Pose], gravity: f32) -> Result<Self, CoarseError> {
+        let means = poses.iter().map(|p| &p.mean);
+        check_input(means.clone(), gravity).map_err(CoarseError::from)?;
+        let (offset, gain, poses_used) = face_means(means, gravity)?;
+        Ok(Self { frame: Frame::new(offset, gain, gravity)?, poses_used })
     }
 
     /// The normalising frame (offset `b`, gain `k`, gravity).
@@ -243,4 +195,69 @@ impl CoarseCalibration {
         }
         out
     }
+}
+
+/// Whether every axis, by the half-range `half` of its readings, was pointed both up and down: it then
+/// spans about twice gravity, like the widest one; one that spans much less was never reversed, and
+/// its centre (hence its dominant poses) is unknown.
+fn check_reversed(half: [f32; 3]) -> Result<(), CoarseError> {
+    let widest = largest(half);
+    for a in 0..3 {
+        if widest > 0.0 && half[a] < MIN_SPAN_FRACTION * widest {
+            // In [0, 75): the cast to `u8` needs no clamp (`u32` is one instruction).
+            let span_pct = (100.0 * half[a] / widest) as u32 as u8;
+            return Err(CoarseError::NotReversed { axis: a as u8, span_pct });
+        }
+    }
+    Ok(())
+}
+
+/// The six-position offset `b` and gain `k` per axis from pose means [`check_input`] has accepted, and
+/// how many poses were averaged into `V_up` / `V_down` per axis.
+#[allow(clippy::type_complexity)] // Three arrays, named in the doc.
+pub(crate) fn face_means<'a>(
+    means: impl Iterator<Item = &'a [f32; 3]> + Clone,
+    gravity: f32,
+) -> Result<([f32; 3], [f32; 3], [[u16; 2]; 3]), CoarseError> {
+    // Centre and half-range per axis from the extremes: removes the large offsets of raw counts.
+    let (mid, half) = mid_range(means.clone());
+    check_reversed(half)?;
+    let mut sums = [[0.0f32; 2]; 3];
+    let mut counts = [[0u16; 2]; 3];
+    for m in means {
+        let mut u = [0.0; 3];
+        for a in 0..3 {
+            if half[a] > 0.0 {
+                u[a] = (m[a] - mid[a]) / half[a];
+            }
+        }
+        let near = half_axes_near(u, DOMINANCE);
+        // At most one half-axis is within 25 deg (all six only for u = 0, which points nowhere).
+        if near != 0 && near != 0x3f {
+            // Half-axis `bit`: axis `bit / 2`, up (even) or down (odd).
+            let bit = near.trailing_zeros() as usize;
+            if let (Some(sum), Some(count), Some(v)) =
+                (sums.as_flattened_mut().get_mut(bit), counts.as_flattened_mut().get_mut(bit), m.get(bit / 2))
+            {
+                *sum += v;
+                *count = count.saturating_add(1);
+            }
+        }
+    }
+    let mut offset = [0.0; 3];
+    let mut gain = [0.0; 3];
+    for a in 0..3 {
+        let [up, down] = counts[a];
+        if up == 0 || down == 0 {
+            return Err(CoarseError::MissingAxisPair { axis: a as u8, up: up == 0 });
+        }
+        let v_up = sums[a][0] / f32::from(up);
+        let v_down = sums[a][1] / f32::from(down);
+        if !(v_up > v_down) {
+            return Err(CoarseError::DegenerateAxis { axis: a as u8 });
+        }
+        gain[a] = (v_up - v_down) / (2.0 * gravity);
+        offset[a] = 0.5 * (v_up + v_down);
+    }
+    Ok((offset, gain, counts))
 }

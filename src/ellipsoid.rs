@@ -26,8 +26,8 @@
 //!     let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
 //!     Pose::from_mean(truth.invert(d.map(|v| v / n * 9.80665)).unwrap(), 500)
 //! });
-//! let mut keep = [true; 12];
-//! let fit = fit_ellipsoid(&poses, &mut keep, 9.80665, &OutlierRule::DEFAULT).unwrap();
+//! let mut kept: [u16; 12] = core::array::from_fn(|i| i as u16); // every pose
+//! let fit = fit_ellipsoid(&poses, &mut kept, 9.80665, &OutlierRule::DEFAULT).unwrap();
 //! assert!((fit.params.scale[1] - 1.01).abs() < 1e-3);
 //! assert!((fit.params.nonorth[1] + 0.02).abs() < 1e-3);
 //! ```
@@ -86,7 +86,7 @@ pub enum EllipsoidError {
     },
     /// Gravity must be finite and positive.
     InvalidGravity,
-    /// A pose mean is not finite.
+    /// A pose mean is not finite (or an index in the list of poses to fit names no pose).
     NonFinitePose,
     /// The directions do not determine an ellipsoid; no pose lies within 60 deg of these half-axes.
     Degenerate {
@@ -167,9 +167,9 @@ impl PoseList {
         self.len == 0
     }
 
-    fn push(&mut self, i: usize) {
+    fn push(&mut self, i: u16) {
         if let Some(slot) = self.index.get_mut(usize::from(self.len)) {
-            *slot = u16::try_from(i).unwrap_or(u16::MAX);
+            *slot = i;
             self.len += 1;
         }
     }
@@ -199,13 +199,13 @@ pub(crate) fn finite(v: f32) -> bool {
     v - v == 0.0
 }
 
-/// Checks gravity and the kept means, the same for both initialisations: `Ok` or which is wrong.
+/// Checks gravity and the means, the same for both initialisations: `Ok` or which is wrong.
 #[allow(clippy::eq_op)] // `x - x` is the test.
-pub(crate) fn check_input(poses: &[Pose], keep: &[bool], gravity: f32) -> Result<(), EllipsoidError> {
+pub(crate) fn check_input<'a>(means: impl Iterator<Item = &'a [f32; 3]>, gravity: f32) -> Result<(), EllipsoidError> {
     if !(gravity > 0.0 && gravity < f32::INFINITY) {
         return Err(EllipsoidError::InvalidGravity);
     }
-    for m in kept(poses, keep) {
+    for m in means {
         // `x - x` is 0 for a finite `x`, NaN otherwise.
         if (m[0] - m[0]) + (m[1] - m[1]) + (m[2] - m[2]) != 0.0 {
             return Err(EllipsoidError::NonFinitePose);
@@ -214,138 +214,159 @@ pub(crate) fn check_input(poses: &[Pose], keep: &[bool], gravity: f32) -> Result
     Ok(())
 }
 
-/// The means of the poses flagged in `keep` (poses past its end are not kept).
-pub(crate) fn kept<'a>(poses: &'a [Pose], keep: &'a [bool]) -> impl Iterator<Item = [f32; 3]> + 'a {
-    keep.iter().zip(poses).filter_map(|(&k, p)| k.then_some(p.mean))
+/// The means of the poses listed in `kept`, in its order (an index past the end of `poses` is
+/// skipped: [`fit_ellipsoid`] refuses it).
+pub(crate) fn kept<'a>(poses: &'a [Pose], kept: &'a [u16]) -> impl Iterator<Item = &'a [f32; 3]> + Clone {
+    kept.iter().filter_map(|&i| poses.get(usize::from(i))).map(|p| &p.mean)
 }
 
-/// Fits the ellipsoid to the means of the poses flagged in `keep` (same length as `poses`; poses
-/// found far off per `rule` are set to `false` there and listed in the result).
+/// Moves `list[at]` to the end of `list`, the others keeping their order.
+fn move_to_end(list: &mut [u16], at: usize) {
+    let mut rest = list.get_mut(at..).unwrap_or_default();
+    while let Some((first, tail)) = rest.split_first_mut() {
+        let Some(second) = tail.first_mut() else { break };
+        core::mem::swap(first, second);
+        rest = tail;
+    }
+}
+
+/// Fits the ellipsoid to the means of the poses listed in `kept` (indices into `poses`). The poses
+/// found far off per `rule` are moved to the end of `kept` and listed in the result: the fit used the
+/// first `kept.len() - fit.excluded.as_slice().len()` entries, in their order.
 pub fn fit_ellipsoid(
     poses: &[Pose],
-    keep: &mut [bool],
+    kept: &mut [u16],
     gravity: f32,
     rule: &OutlierRule,
 ) -> Result<EllipsoidFit, EllipsoidError> {
-    check_input(poses, keep, gravity)?;
-    fit_valid(poses, keep, gravity, rule)
+    if kept.iter().any(|&i| usize::from(i) >= poses.len()) {
+        return Err(EllipsoidError::NonFinitePose);
+    }
+    check_input(self::kept(poses, kept), gravity)?;
+    let (mut params, mut excluded) = (Params::IDENTITY, PoseList::EMPTY);
+    let mut fitting = Fitting::new(poses, gravity, &mut params, &mut excluded);
+    fitting.robust(kept, rule)?;
+    let (center, held, rmse_g) = (fitting.center, fitting.held, fitting.rmse_g);
+    Ok(EllipsoidFit { params, center, excluded, held, rmse_g })
 }
 
-/// [`fit_ellipsoid`] of input [`check_input`] has accepted.
-pub(crate) fn fit_valid(
-    poses: &[Pose],
-    keep: &mut [bool],
-    gravity: f32,
-    rule: &OutlierRule,
-) -> Result<EllipsoidFit, EllipsoidError> {
-    // All zeros (one clear): the fit overwrites the model before anything reads it.
-    let fit = EllipsoidFit {
-        params: Params { bias: [0.0; 3], scale: [0.0; 3], nonorth: [0.0; 3] },
-        center: [0.0; 3],
-        excluded: PoseList::EMPTY,
-        held: [false; 3],
-        rmse_g: 0.0,
-    };
-    let mut fitting = Fitting { poses, keep, gravity, fit };
-    fitting.robust(rule)?;
-    Ok(fitting.fit)
-}
-
-/// The poses, the ones kept and gravity, and the fit: the state of the robust fit.
-struct Fitting<'a> {
+/// The state of the robust fit: the poses and gravity, and the fit so far, its model and the poses
+/// left out written where the caller keeps them (the poses it uses are a list of indices, passed
+/// along).
+pub(crate) struct Fitting<'a> {
     poses: &'a [Pose],
-    keep: &'a mut [bool],
     gravity: f32,
-    fit: EllipsoidFit,
+    /// The model in the paper's convention.
+    params: &'a mut Params,
+    /// Poses left out as far off the ellipsoid.
+    excluded: &'a mut PoseList,
+    /// The centre of the ellipsoid (see [`EllipsoidFit::center`]).
+    pub(crate) center: [f32; 3],
+    /// Non-orthogonality terms held at 0 (see [`EllipsoidFit::held`]).
+    pub(crate) held: [bool; 3],
+    /// Modulus RMSE of the poses kept, fraction of gravity.
+    rmse_g: f32,
+}
+
+impl<'a> Fitting<'a> {
+    /// A fit of `poses` against `gravity` writing its model into `params` and the poses it leaves out
+    /// into `excluded` (cleared here).
+    pub(crate) fn new(poses: &'a [Pose], gravity: f32, params: &'a mut Params, excluded: &'a mut PoseList) -> Self {
+        *excluded = PoseList::EMPTY;
+        Self { poses, gravity, params, excluded, center: [0.0; 3], held: [false; 3], rmse_g: 0.0 }
+    }
 }
 
 impl Fitting<'_> {
-    /// Fits, leaving out poses per `rule`, until the fit stands.
-    fn robust(&mut self, rule: &OutlierRule) -> Result<(), EllipsoidError> {
+    /// Fits the poses listed in `kept`, leaving out poses per `rule` (moved to its end), until the
+    /// fit stands.
+    pub(crate) fn robust(&mut self, mut kept: &mut [u16], rule: &OutlierRule) -> Result<(), EllipsoidError> {
         loop {
-            let kept = kept(self.poses, self.keep).count();
-            if kept < COEFFS {
-                return Err(EllipsoidError::TooFewPoses { got: kept });
+            let count = kept.len();
+            if count < COEFFS {
+                return Err(EllipsoidError::TooFewPoses { got: count });
             }
-            let room = usize::from(self.fit.excluded.len) < MAX_EXCLUDED && kept > COEFFS + 1;
-            let mut fitted = self.fit_once();
+            let room = usize::from(self.excluded.len) < MAX_EXCLUDED && count > COEFFS + 1;
+            let mut fitted = self.fit_once(kept);
             // A gross outlier can bend the quadric into a non-ellipsoid, or into an ellipsoid no
             // accelerometer has: then look for the pose without which the rest fit.
             if fitted != Some(true) && room && finite(rule.floor_g) {
-                if let Some(i) = self.best_left_out() {
-                    self.leave_out(i);
+                if let Some(at) = self.best_left_out(kept) {
+                    kept = self.leave_out(core::mem::take(&mut kept), at);
                     continue;
                 }
-                fitted = self.fit_once();
+                fitted = self.fit_once(kept);
             }
             if fitted.is_none() {
-                return Err(EllipsoidError::Degenerate { missing: missing_directions(self.poses, self.keep) });
+                return Err(EllipsoidError::Degenerate { missing: missing_directions(self::kept(self.poses, kept)) });
             }
-            let (worst, worst_abs, rmse_g) = self.worst_and_rms();
-            self.fit.rmse_g = rmse_g;
+            let (worst, worst_abs, rmse_g, _) = self.statistics(kept, 0.0);
+            self.rmse_g = rmse_g;
             // The limit is at least the floor (or NaN): the median is needed only above the floor.
             if !(worst_abs > rule.floor_g)
                 || !room
-                || !(worst_abs > larger(rule.floor_g, rule.robust_sigmas * 1.4826 * self.median_abs()))
+                || !(worst_abs > larger(rule.floor_g, rule.robust_sigmas * 1.4826 * self.median_abs(kept)))
             {
                 return Ok(());
             }
-            self.leave_out(worst);
+            kept = self.leave_out(core::mem::take(&mut kept), worst);
         }
     }
 
-    fn leave_out(&mut self, i: usize) {
-        if let Some(k) = self.keep.get_mut(i) {
-            *k = false;
-        }
-        self.fit.excluded.push(i);
+    /// `kept` without its entry at `at` (moved to its end and listed as excluded). Out of line: two
+    /// callers.
+    #[inline(never)]
+    fn leave_out<'k>(&mut self, kept: &'k mut [u16], at: usize) -> &'k mut [u16] {
+        move_to_end(kept, at);
+        let Some((&mut last, rest)) = kept.split_last_mut() else { return &mut [] };
+        self.excluded.push(last);
+        rest
     }
 
-    /// The kept pose without which the others fit an ellipsoid best (smallest modulus RMS).
-    fn best_left_out(&mut self) -> Option<usize> {
+    /// The position in `kept` of the pose without which the others fit an ellipsoid best (smallest
+    /// modulus RMS). Each candidate in turn is swapped to the end, the others keeping their order;
+    /// `kept` is as it was on return.
+    fn best_left_out(&mut self, kept: &mut [u16]) -> Option<usize> {
+        let last = kept.len().checked_sub(1)?;
+        move_to_end(kept, 0);
         let mut best: Option<(usize, f32)> = None;
-        for i in 0..self.poses.len() {
-            // (`fit_once` takes `self` mutably: no index into `keep`, whose check could panic.)
-            match self.keep.get_mut(i) {
-                Some(k) if *k => *k = false,
-                _ => continue,
-            }
-            if self.fit_once() == Some(true) {
-                let rms = self.worst_and_rms().2;
+        for at in 0..=last {
+            let others = kept.get(..last).unwrap_or(&[]);
+            if self.fit_once(others) == Some(true) {
+                let rms = self.statistics(others, 0.0).2;
                 if best.is_none_or(|(_, b)| rms < b) {
-                    best = Some((i, rms));
+                    best = Some((at, rms));
                 }
             }
-            if let Some(k) = self.keep.get_mut(i) {
-                *k = true;
+            if at < last {
+                kept.swap(at, last);
             }
         }
-        best.map(|(i, _)| i)
+        best.map(|(at, _)| at)
     }
 
     /// Reference point (mean) and RMS spread of the kept means: the numbers the quadric is fitted in.
-    fn reference(&self) -> ([f32; 3], f32) {
-        let (mut sum, mut n) = ([0.0f32; 3], 0u32);
-        for m in kept(self.poses, self.keep) {
+    fn reference(&self, kept: &[u16]) -> ([f32; 3], f32) {
+        let mut sum = [0.0f32; 3];
+        for m in self::kept(self.poses, kept) {
             for a in 0..3 {
                 sum[a] += m[a];
             }
-            n += 1;
         }
-        let n = n.max(1) as f32;
+        let n = kept.len().max(1) as f32;
         let center = [sum[0] / n, sum[1] / n, sum[2] / n];
-        let spread: f32 = kept(self.poses, self.keep).map(|m| norm_squared(difference(m, center))).sum();
+        let spread: f32 = self::kept(self.poses, kept).map(|m| norm_squared(difference(*m, center))).sum();
         (center, sqrt_f32(spread / n))
     }
 
-    /// One least-squares fit of the quadric to the kept poses, factored into the model (in
-    /// `self.fit`): `None` when the poses do not determine an ellipsoid, else whether it is one an
+    /// One least-squares fit of the quadric to the poses listed in `kept`, factored into the model (in
+    /// `self`): `None` when the poses do not determine an ellipsoid, else whether it is one an
     /// accelerometer can have.
-    fn fit_once(&mut self) -> Option<bool> {
-        let (m0, s) = self.reference();
+    fn fit_once(&mut self, kept: &[u16]) -> Option<bool> {
+        let (m0, s) = self.reference(kept);
         let mut ata: Matrix<COEFFS> = [[0.0; COEFFS]; COEFFS];
         let mut atb = [0.0f32; COEFFS];
-        for m in kept(self.poses, self.keep) {
+        for m in self::kept(self.poses, kept) {
             let v = [(m[0] - m0[0]) / s, (m[1] - m0[1]) / s, (m[2] - m0[2]) / s];
             let row = [
                 v[0] * v[0],
@@ -374,9 +395,9 @@ impl Fitting<'_> {
         // `atb` becomes the quadric coefficients.
         solve_spd_holding_in_place(&mut ata, &mut atb, held).ok()?;
         // Quadric cross terms xy, xz, yz map to Mxx, Myy, Mzz.
-        self.fit.held = [held.contains(6), held.contains(7), held.contains(8)];
+        self.held = [held.contains(6), held.contains(7), held.contains(8)];
         self.factor(&atb, m0, s)?;
-        Some(plausible(&self.fit.params))
+        Some(plausible(self.params))
     }
 
     /// The quadric `v^T A v + b^T v = 1` in `v = (m - m0) / s` to the paper's `Ka`, `B` and the
@@ -396,42 +417,40 @@ impl Fitting<'_> {
         // Ka = L g / (s sqrt(k)).
         let w = self.gravity / (s * sqrt_f32(1.0 + y0 * y0 + y1 * y1 + y2 * y2));
         let ka = Params { bias: [0.0; 3], scale: [w * sx, w * sy, w * sz], nonorth: [w * mx, w * my, w * mz] };
-        self.fit.center = [m0[0] + s * v0, m0[1] + s * v1, m0[2] + s * v2];
-        self.fit.params = Params { bias: ka.ka_times(self.fit.center), ..ka };
-        self.fit.params.is_finite().then_some(())
+        self.center = [m0[0] + s * v0, m0[1] + s * v1, m0[2] + s * v2];
+        *self.params = Params { bias: ka.ka_times(self.center), ..ka };
+        self.params.is_finite().then_some(())
     }
 
-    /// `| |f_b| / g - 1 |` of pose `i` under the fit; `None` when it is not kept. Out of line: every
-    /// statistic below calls it.
+    /// `| |f_b| / g - 1 |` of the mean `m` under the fit. Out of line: every statistic below calls it.
     #[inline(never)]
-    fn abs_error(&self, i: usize) -> Option<f32> {
-        let (pose, &kept) = (self.poses.get(i)?, self.keep.get(i)?);
-        kept.then(|| (sqrt_f32(norm_squared(self.fit.params.apply(pose.mean))) / self.gravity - 1.0).abs())
+    fn abs_error(&self, m: &[f32; 3]) -> f32 {
+        (sqrt_f32(norm_squared(self.params.apply(*m))) / self.gravity - 1.0).abs()
     }
 
-    /// The index and size of the largest modulus error of the kept poses, and their RMS.
-    fn worst_and_rms(&self) -> (usize, f32, f32) {
-        let (mut worst, mut worst_abs, mut sum, mut n) = (0, -1.0f32, 0.0f32, 0u32);
-        for i in 0..self.poses.len() {
-            if let Some(e) = self.abs_error(i) {
-                if e > worst_abs {
-                    (worst, worst_abs) = (i, e);
-                }
-                sum += e * e;
-                n += 1;
+    /// Over the poses listed in `kept`: the position and size of the largest modulus error, their RMS,
+    /// and how many errors are at most `limit`. Out of line: the median calls it once per pose.
+    #[inline(never)]
+    fn statistics(&self, kept: &[u16], limit: f32) -> (usize, f32, f32, usize) {
+        let (mut worst, mut worst_abs, mut sum, mut at_most) = (0, -1.0f32, 0.0f32, 0);
+        for (at, m) in self::kept(self.poses, kept).enumerate() {
+            let e = self.abs_error(m);
+            if e > worst_abs {
+                (worst, worst_abs) = (at, e);
             }
+            sum += e * e;
+            at_most += usize::from(e <= limit);
         }
-        (worst, worst_abs, sqrt_f32(sum / n.max(1) as f32))
+        (worst, worst_abs, sqrt_f32(sum / kept.len().max(1) as f32), at_most)
     }
 
-    /// Lower median of the kept `|e|` without a buffer: the smallest value with at least half the
-    /// values at or below it (quadratic in the pose count, which is small).
-    fn median_abs(&self) -> f32 {
-        let errors = || (0..self.poses.len()).filter_map(|i| self.abs_error(i));
-        let n = errors().count();
+    /// Lower median of the `|e|` of the poses listed in `kept` without a buffer: the smallest value with
+    /// at least half the values at or below it (quadratic in the pose count, which is small).
+    fn median_abs(&self, kept: &[u16]) -> f32 {
         let mut best = f32::INFINITY;
-        for v in errors() {
-            if v < best && 2 * errors().filter(|&o| o <= v).count() >= n {
+        for m in self::kept(self.poses, kept) {
+            let v = self.abs_error(m);
+            if v < best && 2 * self.statistics(kept, v).3 >= kept.len() {
                 best = v;
             }
         }
@@ -484,11 +503,11 @@ fn lower_factor(diagonal: [f32; 3], off: [f32; 3]) -> Option<Params> {
     })
 }
 
-/// Per-axis centre and half-width of the range of the kept means.
-pub(crate) fn mid_range(poses: &[Pose], keep: &[bool]) -> ([f32; 3], [f32; 3]) {
+/// Per-axis centre and half-width of the range of the means.
+pub(crate) fn mid_range<'a>(means: impl Iterator<Item = &'a [f32; 3]>) -> ([f32; 3], [f32; 3]) {
     let mut lo = [f32::INFINITY; 3];
     let mut hi = [f32::NEG_INFINITY; 3];
-    for m in kept(poses, keep) {
+    for m in means {
         for a in 0..3 {
             lo[a] = smaller(m[a], lo[a]);
             hi[a] = larger(m[a], hi[a]);
@@ -515,14 +534,14 @@ pub(crate) fn half_axes_near(u: [f32; 3], cos: f32) -> u8 {
     bits
 }
 
-/// Half-axes with no kept pose within 60 deg, seen from the per-axis mid-range of the readings
-/// (the centre is unknown when the fit fails).
-pub fn missing_directions(poses: &[Pose], keep: &[bool]) -> Directions {
-    let (mid, half) = mid_range(poses, keep);
+/// Half-axes with no pose mean within 60 deg, seen from the per-axis mid-range of the means (the
+/// centre is unknown when the fit fails).
+pub fn missing_directions<'a>(means: impl Iterator<Item = &'a [f32; 3]> + Clone) -> Directions {
+    let (mid, half) = mid_range(means.clone());
     let widest = larger(largest(half), f32::MIN_POSITIVE);
     // cos 60 deg = 0.5.
     let mut seen = 0;
-    for m in kept(poses, keep) {
+    for m in means {
         seen |= half_axes_near([(m[0] - mid[0]) / widest, (m[1] - mid[1]) / widest, (m[2] - mid[2]) / widest], 0.5);
     }
     Directions(!seen & 0x3f)
@@ -540,6 +559,11 @@ mod tests {
     use super::*;
 
     const G: f32 = 9.80665;
+
+    /// Every pose of `N`.
+    fn all<const N: usize>() -> [u16; N] {
+        core::array::from_fn(|i| i as u16)
+    }
 
     fn truth() -> Params {
         Params {
@@ -567,8 +591,7 @@ mod tests {
     fn recovers_raw_count_model_from_free_directions() {
         let p = truth();
         let m = means(&p, sphere_dirs(15));
-        let mut keep = [true; 15];
-        let fit = fit_ellipsoid(&m, &mut keep, G, &OutlierRule::DEFAULT).unwrap();
+        let fit = fit_ellipsoid(&m, &mut all::<15>(), G, &OutlierRule::DEFAULT).unwrap();
         for i in 0..3 {
             assert!((fit.params.scale[i] / p.scale[i] - 1.0).abs() < 1e-3, "{fit:?}");
             assert!((fit.params.bias[i] - p.bias[i]).abs() < 1e-3, "{fit:?}");
@@ -581,10 +604,11 @@ mod tests {
         let p = truth();
         let mut m = means(&p, sphere_dirs(16));
         m[5] = Pose::from_mean([0.0, 0.0, 0.0], 100);
-        let mut keep = [true; 16];
-        let fit = fit_ellipsoid(&m, &mut keep, G, &OutlierRule::DEFAULT).unwrap();
+        let mut kept = all::<16>();
+        let fit = fit_ellipsoid(&m, &mut kept, G, &OutlierRule::DEFAULT).unwrap();
         assert_eq!(fit.excluded.as_slice(), &[5]);
-        assert!(!keep[5]);
+        // Moved to the end, the others in their order.
+        assert_eq!(kept, [0, 1, 2, 3, 4, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 5]);
         assert!((fit.params.scale[0] / p.scale[0] - 1.0).abs() < 1e-3);
     }
 
@@ -604,8 +628,7 @@ mod tests {
             })
         };
         let m = means(&p, arc(0).chain(arc(1)));
-        let mut keep = [true; 26];
-        let fit = fit_ellipsoid(&m, &mut keep, G, &OutlierRule::DEFAULT).unwrap();
+        let fit = fit_ellipsoid(&m, &mut all::<26>(), G, &OutlierRule::DEFAULT).unwrap();
         assert_eq!(fit.held, [true, false, false], "{fit:?}");
         assert!((fit.params.nonorth[1] - 0.01).abs() < 1e-3, "{fit:?}");
     }
@@ -620,8 +643,7 @@ mod tests {
             [libm::sinf(t) * libm::cosf(phi), libm::sinf(t) * libm::sinf(phi), libm::cosf(t)]
         });
         let m = means(&p, dirs);
-        let mut keep = [true; 9];
-        match fit_ellipsoid(&m, &mut keep, G, &OutlierRule::DEFAULT) {
+        match fit_ellipsoid(&m, &mut all::<9>(), G, &OutlierRule::DEFAULT) {
             Err(EllipsoidError::Degenerate { missing }) => assert!(missing.0 & (1 << 5) != 0, "{missing}"),
             other => panic!("{other:?}"),
         }
@@ -629,15 +651,20 @@ mod tests {
 
     #[test]
     fn refuses_bad_input() {
-        let mut keep = [true; 3];
+        let mut kept = all::<3>();
         let ones = [Pose::from_mean([1.0; 3], 100); 3];
         assert_eq!(
-            fit_ellipsoid(&ones, &mut keep, G, &OutlierRule::DEFAULT),
+            fit_ellipsoid(&ones, &mut kept, G, &OutlierRule::DEFAULT),
             Err(EllipsoidError::TooFewPoses { got: 3 })
         );
-        assert_eq!(fit_ellipsoid(&ones, &mut keep, 0.0, &OutlierRule::DEFAULT), Err(EllipsoidError::InvalidGravity));
+        assert_eq!(fit_ellipsoid(&ones, &mut kept, 0.0, &OutlierRule::DEFAULT), Err(EllipsoidError::InvalidGravity));
         let mut m = [Pose::from_mean([1.0; 3], 100); 10];
         m[2].mean[1] = f32::NAN;
-        assert_eq!(fit_ellipsoid(&m, &mut [true; 10], G, &OutlierRule::DEFAULT), Err(EllipsoidError::NonFinitePose));
+        assert_eq!(fit_ellipsoid(&m, &mut all::<10>(), G, &OutlierRule::DEFAULT), Err(EllipsoidError::NonFinitePose));
+        // An index that names no pose.
+        let m = [Pose::from_mean([1.0; 3], 100); 10];
+        let mut kept = all::<10>();
+        kept[4] = 10;
+        assert_eq!(fit_ellipsoid(&m, &mut kept, G, &OutlierRule::DEFAULT), Err(EllipsoidError::NonFinitePose));
     }
 }

@@ -24,8 +24,8 @@
 //! ```
 
 use crate::accumulator::Pose;
-use crate::coarse::{CoarseCalibration, CoarseError};
-use crate::ellipsoid::{EllipsoidError, OutlierRule, PoseList, check_input, fit_valid, held_parameters};
+use crate::coarse::{CoarseError, face_means};
+use crate::ellipsoid::{EllipsoidError, Fitting, OutlierRule, PoseList, check_input, held_parameters, kept};
 use crate::frame::{Deviation, Frame, NormPose};
 use crate::model::{PARAM_COUNT, Params};
 use crate::verdict::PoseSet;
@@ -135,9 +135,15 @@ impl<const MAX_POSES: usize> NormalizedPoses<MAX_POSES> {
         if poses.len() > MAX_POSES {
             return Err(InitError::TooManyPoses { got: poses.len(), capacity: MAX_POSES });
         }
-        let mut keep = [true; MAX_POSES];
-        let keep = &mut keep[..poses.len()];
-        initial_estimate(&mut self.initial, &mut self.frame, poses, keep, init, gravity, rule)?;
+        // Every pose, listed by index; the estimate reorders the list, its first `used` entries are
+        // the poses it kept.
+        self.source.clear();
+        for i in 0..poses.len() {
+            // Capacity checked above.
+            let _ = self.source.push(i as u16);
+        }
+        let used = initial_estimate(&mut self.initial, &mut self.frame, poses, &mut self.source, init, gravity, rule)?;
+        self.source.truncate(used);
         let (frame, initial) = (self.frame, &self.initial);
         self.start = frame.to_deviation(&initial.params);
         for i in 0..PARAM_COUNT {
@@ -146,11 +152,9 @@ impl<const MAX_POSES: usize> NormalizedPoses<MAX_POSES> {
             }
         }
         self.poses.clear();
-        self.source.clear();
-        for (i, (p, _)) in poses.iter().zip(keep.iter()).enumerate().filter(|(_, (_, k))| **k) {
-            // Capacity checked above.
-            let _ = self.poses.push(frame.normalize(p.mean));
-            let _ = self.source.push(i as u16);
+        for m in kept(poses, &self.source) {
+            // As many as the indices.
+            let _ = self.poses.push(frame.normalize(*m));
         }
         Ok(())
     }
@@ -186,46 +190,59 @@ impl<const MAX_POSES: usize> NormalizedPoses<MAX_POSES> {
     }
 }
 
-/// The estimate `init` asks for (see [`Init`]) and its frame, written into `initial` and `frame`;
-/// `keep` marks the poses it uses.
+/// The estimate `init` asks for (see [`Init`]) and its frame, written into `initial` and `frame`,
+/// from the poses listed in `list` (every pose, in order); returns how many it uses: the first
+/// entries of `list`, which it reorders.
+#[inline(always)]
 fn initial_estimate(
     initial: &mut Initial,
     frame: &mut Frame,
     poses: &[Pose],
-    keep: &mut [bool],
+    list: &mut [u16],
     init: Init,
     gravity: f32,
     rule: &OutlierRule,
-) -> Result<(), InitError> {
+) -> Result<usize, InitError> {
     // The same checks for both (as the six faces' error when they are asked for).
-    if let Err(e) = check_input(poses, keep, gravity) {
+    if let Err(e) = check_input(poses.iter().map(|p| &p.mean), gravity) {
         return Err(if init == Init::SixPosition { InitError::Coarse(e.into()) } else { InitError::Ellipsoid(e) });
     }
+    // The ellipsoid's model and the poses it leaves out are written in place; its centre and held
+    // terms kept here.
+    let mut fitted = None;
     let mut ellipsoid_error = None;
     if init != Init::SixPosition {
-        match fit_valid(poses, keep, gravity, rule) {
-            Ok(fit) => {
-                // The normalising frame of the fit: its centre and gains `1 / S`.
-                let s = fit.params.scale;
-                let gain = [1.0 / s[0], 1.0 / s[1], 1.0 / s[2]];
-                *frame = Frame::new(fit.center, gain, gravity).map_err(|e| InitError::Coarse(e.into()))?;
-                let held = held_parameters(&fit.held);
-                *initial = Initial { kind: Init::Ellipsoid, params: fit.params, excluded: fit.excluded, held };
-                return Ok(());
-            }
+        let mut fitting = Fitting::new(poses, gravity, &mut initial.params, &mut initial.excluded);
+        match fitting.robust(list, rule) {
+            Ok(()) => fitted = Some((fitting.center, fitting.held)),
             Err(e) if init == Init::Ellipsoid => return Err(InitError::Ellipsoid(e)),
             Err(e) => {
-                keep.fill(true);
+                // Every pose again, in order.
+                for (i, entry) in list.iter_mut().enumerate() {
+                    *entry = i as u16;
+                }
                 ellipsoid_error = Some(e);
             }
         }
     }
-    // The six faces' own frame, exactly (the paper's path); when they are the fallback, the
-    // ellipsoid's error is the one reported.
-    let c = CoarseCalibration::from_valid_poses(poses, keep, gravity)
-        .map_err(|e| ellipsoid_error.map_or(InitError::Coarse(e), InitError::Ellipsoid))?;
-    *frame = *c.frame();
-    *initial =
-        Initial { kind: Init::SixPosition, params: c.params(), excluded: PoseList::EMPTY, held: [false; PARAM_COUNT] };
-    Ok(())
+    // When the six faces are the fallback, the ellipsoid's error is the one reported.
+    let error = |e: CoarseError| ellipsoid_error.map_or(InitError::Coarse(e), InitError::Ellipsoid);
+    // The normalising frame: the ellipsoid's centre and gains `1 / S`, or the six faces' own
+    // (exactly: the paper's path).
+    let (offset, gain) = match fitted {
+        Some((center, _)) => (center, initial.params.scale.map(|s| 1.0 / s)),
+        None => face_means(kept(poses, list), gravity).map(|(offset, gain, _)| (offset, gain)).map_err(error)?,
+    };
+    *frame = Frame::new(offset, gain, gravity).map_err(|e| error(e.into()))?;
+    let (kind, held) = match fitted {
+        Some((_, held)) => (Init::Ellipsoid, held),
+        None => {
+            initial.params = frame.to_params(&[0.0; PARAM_COUNT]);
+            initial.excluded = PoseList::EMPTY;
+            (Init::SixPosition, [false; 3])
+        }
+    };
+    initial.kind = kind;
+    initial.held = held_parameters(&held);
+    Ok(list.len() - initial.excluded.as_slice().len())
 }
