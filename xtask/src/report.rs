@@ -56,7 +56,7 @@ pub const BUDGETS: [Budget; 6] = [
     budget("lm_cycles", 100_000, "cycles", true, 100_000),
     budget("accumulate_cycles_per_sample", 30, "cycles", false, 65),
     budget("apply_cycles_per_sample", 25, "cycles", false, 31),
-    budget("library_flash_bytes", 16 * 1024, "bytes", false, 24_000),
+    budget("library_flash_bytes", 16 * 1024, "bytes", false, 21_600),
     budget("solve_ram_bytes", 4 * 1024, "bytes", true, 3_810),
 ];
 
