@@ -1,6 +1,6 @@
 //! Colored noise: a bias random walk and/or a bias-instability floor, measured on the longest
-//! rest (a time segment, not the pose means it is judged on) and given to the simulator; judged by
-//! how well the noise model predicts the nominal model's held-out scatter.
+//! rest and pooled over every hold (time segments, not the pose means it is judged on) and given to
+//! the simulator; judged by how well the noise model predicts the nominal model's held-out scatter.
 
 use super::{Candidate, Context, Evaluation, Family, Variant};
 use crate::csvio::Table;
@@ -69,17 +69,24 @@ impl ColoredNoise {
 }
 
 /// The colored noise measured in the holds: on the longest rest, and pooled over every hold
-/// (evidence from all of them, not the longest one only), each against the white noise of
-/// successive differences (blind to slow wander, at least the rounding's `q^2 / 12`).
-fn hold_estimates(ctx: &Context<'_>) -> [(V3, V3); 2] {
+/// (evidence from all of them, not the longest one only), each against two white levels: the
+/// noise of successive differences (blind to slow wander, at least the rounding's `q^2 / 12`),
+/// and the holds' median variance (which counts a wander faster than a hold as white: the lower
+/// estimate when the wander does not grow as a random walk over the log, as a Gauss-Markov noise).
+fn hold_estimates(ctx: &Context<'_>) -> Vec<(V3, V3)> {
     let m = ctx.m;
     let q = quantisation_step(ctx.table);
     let diff = white_from_differences(ctx.table, ctx.poses);
     let white: V3 = std::array::from_fn(|a| if diff[a] > 0.0 { diff[a].max(q[a] * q[a] / 12.0) } else { m.white[a] });
     let longest = (0..ctx.poses.len()).max_by_key(|&i| ctx.poses[i].n).unwrap_or(0);
     let rows = ctx.poses[longest].rows.clone();
-    let rest = colored_noise_estimate(ctx.table, rows.start, rows.end, m.rate, white);
-    [rest, pooled_estimate(ctx.table, ctx.poses, m.rate, white)]
+    [white, m.white]
+        .iter()
+        .flat_map(|&w| {
+            let rest = colored_noise_estimate(ctx.table, rows.start, rows.end, m.rate, w);
+            [rest, pooled_estimate(ctx.table, ctx.poses, m.rate, w)]
+        })
+        .collect()
 }
 
 impl Family for ColoredNoise {
@@ -166,7 +173,7 @@ pub(crate) fn colored_noise_estimate(table: &Table, first: usize, end: usize, ra
     (walk, floor)
 }
 
-/// [`colored_noise_estimate`] pooled over every hold (for a log without one long rest): each
+/// [`colored_noise_estimate`] pooled over every hold (a log may have no long rest): each
 /// hold is cleared of its mean and slope, and the Allan excesses of all holds are fitted together;
 /// the excess test is on their weighted mean at each hold's longest `tau`.
 pub(crate) fn pooled_estimate(table: &Table, poses: &[PoseData], rate: f64, white: V3) -> (V3, V3) {
