@@ -298,20 +298,21 @@ fn uncertainty_half_widths(
 /// Smallest half-width of a GA interval, deviation units.
 const MIN_HALF_WIDTH: f32 = 1e-7;
 
-/// Runs the GA to termination and returns only its report. Out of line: the GA state (population
-/// and offspring, `2 POP 9` floats) then lives in this frame alone, not in one merged with the LM
-/// and verdict frames, and is never moved.
+/// Runs the GA to termination and returns what it found. Out of line: the GA state (population and
+/// offspring, `2 POP 9` floats) then lives in this frame alone, not in one merged with the LM and
+/// verdict frames, and is never moved. The box by reference: a box by value (in and out of a
+/// `Result`) was moved twice on the way.
 #[inline(never)]
 fn run_ga<R: Rng, const POP: usize>(
     norm: &[NormPose],
     start: &Deviation,
-    bounds: SearchBox<PARAM_COUNT>,
-    config: GaConfig,
+    bounds: &SearchBox<PARAM_COUNT>,
+    config: &GaConfig,
     rng: R,
-) -> Result<crate::ga::GaReport<PARAM_COUNT>, GaError> {
-    let mut ga = Ga::<R, POP, PARAM_COUNT>::empty(config, bounds, rng);
+) -> Result<Optimised, GaError> {
+    let mut ga = Ga::<R, POP, PARAM_COUNT>::empty(*config, *bounds, rng);
     seed_population(&mut ga, norm, start)?;
-    Ok(ga.run(&PoseCost(norm)))
+    Ok(Optimised::from_ga(&ga.run(&PoseCost(norm))))
 }
 
 /// What the optimiser did.
@@ -373,13 +374,13 @@ impl<const MAX_POSES: usize> Prepared<MAX_POSES> {
         let normalized = &mut self.normalized;
         normalized.refill(poses, config.init, config.gravity, &config.outliers)?;
         let set = normalized.pose_set(poses);
-        let held = parameters_to_hold(&normalized.start(), normalized.frame(), &set, normalized.initial().held);
+        let mut start = normalized.start();
+        let held = parameters_to_hold(&start, normalized.frame(), &set, normalized.initial().held);
         // One pose per parameter fitted (six faces fit the biases and scale factors).
         let norm = normalized.poses();
         if norm.len() < held.iter().filter(|&&h| !h).count() {
             return Err(SolveError::TooFewPoses { got: norm.len() }.into());
         }
-        let mut start = normalized.start();
         for i in 0..PARAM_COUNT {
             if held[i] {
                 start[i] = 0.0;
@@ -455,9 +456,11 @@ pub fn calibrate<R: Rng, const POP: usize, const MAX_POSES: usize>(
     let run = match config.method {
         Method::Newton | Method::Lm => prepared.polish(start, config)?,
         Method::Taga | Method::TagaLm => {
-            let bounds = prepared.search_box(poses, config)?;
-            let report = run_ga::<R, POP>(prepared.poses(), &prepared.start, bounds, config.ga, rng)?;
-            let ga = Optimised::from_ga(&report);
+            // The box used where it lies in the `Result`: moved out of it, it was copied twice.
+            let ga = match &prepared.search_box(poses, config) {
+                Ok(bounds) => run_ga::<R, POP>(prepared.poses(), &prepared.start, bounds, &config.ga, rng)?,
+                Err(e) => return Err((*e).into()),
+            };
             if config.method == Method::Taga { ga } else { prepared.polish(ga, config)? }
         }
     };
@@ -481,8 +484,8 @@ pub enum Step {
 
 /// [`calibrate`] in bounded steps, to run beside a control loop or in an async task: [`Calibrator::new`]
 /// makes the initial estimate and the first population, each [`Calibrator::step`] runs one GA
-/// generation (about 60 k cycles on a Cortex-M4F at population 40 and 24 poses), and the last step
-/// polishes (LM, some 100 k cycles) and judges. The same seeds give the same result as [`calibrate`].
+/// generation (about 66 k cycles on a Cortex-M4F at population 24 and 24 poses, `cargo xtask report`), and
+/// the last step polishes (LM, some 100 k cycles) and judges. The same seeds give the same result as [`calibrate`].
 ///
 /// ```
 /// use accelcal::accumulator::Pose;

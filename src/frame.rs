@@ -113,15 +113,15 @@ fn quotient((n_hi, n_lo): (f32, f32), (d_hi, d_lo): (f32, f32)) -> (f32, f32) {
 impl Frame {
     /// A frame with per-axis `offset` and `gain` (input unit per output unit) and `gravity` (output unit).
     pub fn new(offset: [f32; 3], gain: [f32; 3], gravity: f32) -> Result<Self, FrameError> {
-        if !(gravity.is_finite() && gravity > 0.0) {
+        if !crate::linalg::positive_finite(gravity) {
             return Err(FrameError::InvalidGravity);
         }
         for (axis, &k) in gain.iter().enumerate() {
-            if !(k.is_finite() && k != 0.0) {
+            if !crate::linalg::nonzero_finite(k) {
                 return Err(FrameError::DegenerateGain { axis: axis as u8 });
             }
         }
-        if offset.iter().any(|c| !c.is_finite()) {
+        if !offset.iter().all(|&c| crate::linalg::finite(c)) {
             return Err(FrameError::NonFiniteOffset);
         }
         Ok(Self { offset, gain, gravity })

@@ -51,7 +51,7 @@ impl Params {
 
     /// `true` when every parameter is finite.
     pub fn is_finite(&self) -> bool {
-        self.to_array().iter().all(|v| v.is_finite())
+        self.to_array().iter().all(|&v| crate::linalg::finite(v))
     }
 
     /// `Ka * f_s` (no bias).

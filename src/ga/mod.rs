@@ -113,19 +113,20 @@ impl<const DIM: usize> SearchBox<DIM> {
 
     /// The box `center - half ..= center + half`, gene by gene (checked as by [`SearchBox::new`]).
     pub fn around(center: &[f32; DIM], half: &[f32; DIM]) -> Result<Self, GaError> {
-        let mut out = Self { lower: *center, upper: *center };
+        let mut out = Self { lower: [0.0; DIM], upper: [0.0; DIM] };
         for i in 0..DIM {
-            out.lower[i] -= half[i];
-            out.upper[i] += half[i];
+            (out.lower[i], out.upper[i]) = (center[i] - half[i], center[i] + half[i]);
+            if !valid_width(out.upper[i] - out.lower[i]) {
+                return Err(GaError::InvalidInterval { dim: i as u8 });
+            }
         }
-        out.checked()
+        Ok(out)
     }
 
     /// `self` if every width `upper - lower` is positive and finite (so no bound is infinite or NaN).
     fn checked(self) -> Result<Self, GaError> {
         for i in 0..DIM {
-            let width = self.upper[i] - self.lower[i];
-            if !(width > 0.0 && width < f32::INFINITY) {
+            if !valid_width(self.upper[i] - self.lower[i]) {
                 return Err(GaError::InvalidInterval { dim: i as u8 });
             }
         }
@@ -155,9 +156,14 @@ impl<const DIM: usize> SearchBox<DIM> {
     }
 }
 
-/// `v` reflected at `lo` and `hi`, then clamped into `[lo, hi]`. Inlined: out of line it saves 80 bytes
-/// and costs 5 % of a generation's cycles (two calls per gene in the crossover loop).
-#[inline(always)]
+/// A search interval's width is positive and finite (so neither bound is infinite or NaN).
+fn valid_width(width: f32) -> bool {
+    width > 0.0 && width < f32::INFINITY
+}
+
+/// `v` reflected at `lo` and `hi`, then clamped into `[lo, hi]`. Out of line: three callers (flash
+/// first; it costs a few % of a generation's cycles, two calls per gene in the crossover loop).
+#[inline(never)]
 fn reflect(v: f32, lo: f32, hi: f32) -> f32 {
     let r = if v < lo {
         2.0 * lo - v
@@ -410,25 +416,21 @@ impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O
         self.stall = if best < previous_best - 1e-6 * previous_best.abs() { 0 } else { self.stall.saturating_add(1) };
     }
 
-    /// Copies the `elites` best into the first offspring slots (repeatedly the best not yet taken: POP
-    /// is small; no sort, no allocation) and their costs into `costs`.
+    /// Copies the `elites` best into the first offspring slots (repeatedly the first smallest cost not
+    /// yet taken, taken ones set to infinity in a copy: costs are finite; no sort, no allocation) and
+    /// their costs into `costs`.
     #[inline(always)]
     fn keep_elites(&mut self, costs: &mut [f32; POP]) {
-        let mut taken = [false; POP];
+        let mut left = self.costs;
         for e in 0..self.config.elites {
-            let mut best = usize::MAX;
-            for i in 0..POP {
-                if !taken[i] && (best == usize::MAX || self.costs[i] < self.costs[best]) {
-                    best = i;
-                }
-            }
-            if let (Some(flag), Some(slot), Some(cost), Some(genes)) =
-                (taken.get_mut(best), self.offspring.get_mut(e), costs.get_mut(e), self.population.get(best))
+            let best = argmin(&left);
+            if let (Some(cost), Some(kept), Some(slot), Some(genes)) =
+                (left.get_mut(best), costs.get_mut(e), self.offspring.get_mut(e), self.population.get(best))
             {
-                *flag = true;
                 // `copy_from_slice` is a non-overlapping copy; an assignment here linked `memmove` (1.5 KB).
                 slot.copy_from_slice(genes);
-                *cost = self.costs[best];
+                *kept = *cost;
+                *cost = f32::INFINITY;
             }
         }
     }
@@ -444,19 +446,28 @@ impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O
             let (a, b) = (self.tournament().min(POP - 1), self.tournament().min(POP - 1));
             let (fa, fb) = (-self.costs[a], -self.costs[b]);
             let pc = O::probability(crossover, if fa >= fb { fa } else { fb }, stats);
-            let mut second = self.population[b];
-            let first = &mut self.offspring[slot];
+            // The parents copied into their children's slots; the second child into `spare` (bred for the
+            // draws, then dropped) when the last slot is taken.
+            let mut spare = self.population[b];
+            let Some((first, rest)) = self.offspring.get_mut(slot..).and_then(|s| s.split_first_mut()) else {
+                break;
+            };
+            let second = match rest.first_mut() {
+                Some(second) => {
+                    second.copy_from_slice(&spare);
+                    second
+                }
+                None => &mut spare,
+            };
             first.copy_from_slice(&self.population[a]);
             if uniform(&mut self.rng) < pc {
-                blend(&mut self.rng, &self.bounds, self.config.blend_alpha, first, &mut second);
+                blend(&mut self.rng, &self.bounds, self.config.blend_alpha, first, second);
             }
             (fitness[slot], parent[slot]) = (fa, a as u16);
-            slot += 1;
-            if slot < POP {
-                self.offspring[slot] = second;
-                (fitness[slot], parent[slot]) = (fb, b as u16);
-                slot += 1;
+            if let (Some(f), Some(p)) = (fitness.get_mut(slot + 1), parent.get_mut(slot + 1)) {
+                (*f, *p) = (fb, b as u16);
             }
+            slot += 2;
         }
     }
 
@@ -466,7 +477,7 @@ impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O
     fn mutate_child(&mut self, i: usize, pm: f32, parent: usize, spread: &[f32; DIM]) {
         let mut mutated = false;
         for d in 0..DIM {
-            if hot_uniform(&mut self.rng) < pm {
+            if uniform(&mut self.rng) < pm {
                 self.mutate(i, d, spread);
                 mutated = true;
             }
@@ -605,17 +616,11 @@ fn draw<R: Rng>(rng: &mut R) -> u32 {
     rng.next_u32()
 }
 
-/// Uniform in `[0, 1)`. Out of line: seven callers.
+/// Uniform in `[0, 1)`. Out of line: eight callers (flash first: in the per-gene mutation loop a call
+/// per draw costs a few % of a generation's cycles).
 #[inline(never)]
 fn uniform<R: Rng>(rng: &mut R) -> f32 {
     to_unit(draw(rng))
-}
-
-/// [`uniform`] with the generator inlined, for the per-gene loops (two thirds of the draws): a call per
-/// draw there costs some 10 % of a generation's cycles.
-#[inline(always)]
-fn hot_uniform<R: Rng>(rng: &mut R) -> f32 {
-    to_unit(rng.next_u32())
 }
 
 /// The top 24 bits of `r` as a fraction in `[0, 1)`.
@@ -624,11 +629,10 @@ fn to_unit(r: u32) -> f32 {
 }
 
 /// Two uniform draws in `[0, 1)` of 16-bit resolution from one 32-bit output (the hot loops need many;
-/// 1/65536 of a crossover interval or of the population is resolution enough). The generator inlined,
-/// as in [`hot_uniform`].
+/// 1/65536 of a crossover interval or of the population is resolution enough).
 #[inline(always)]
 fn two_uniforms<R: Rng>(rng: &mut R) -> (f32, f32) {
-    let r = rng.next_u32();
+    let r = draw(rng);
     let scale = 1.0 / 65_536.0;
     ((r & 0xFFFF) as f32 * scale, (r >> 16) as f32 * scale)
 }
@@ -690,6 +694,27 @@ fn argmax(v: &[f32]) -> usize {
 mod tests {
     extern crate std;
     use super::*;
+    use rand_core::SeedableRng;
+
+    #[test]
+    fn elites_are_the_best_in_cost_order_the_first_index_on_ties() {
+        // Four cost levels over the box: ties are the rule, so the order among equals is exercised.
+        let cost = |x: &[f32; 1]| (x[0] * 2.0).floor().abs();
+        let bounds = SearchBox::new([-2.0], [2.0]).unwrap();
+        let config = GaConfig { elites: 3, ..GaConfig::DEFAULT };
+        let rng = rand_xoshiro::Xoshiro128PlusPlus::seed_from_u64(5);
+        let mut ga: Ga<_, 10, 1> = Ga::new(config, bounds, rng, &cost).unwrap();
+        for _ in 0..20 {
+            let (population, costs) = (ga.population, ga.costs);
+            let mut order: [usize; 10] = core::array::from_fn(|i| i);
+            order.sort_unstable_by(|&a, &b| costs[a].total_cmp(&costs[b]).then(a.cmp(&b)));
+            ga.step(&cost);
+            for e in 0..3 {
+                assert_eq!(ga.population[e], population[order[e]], "elite {e}");
+                assert_eq!(ga.costs[e], costs[order[e]], "elite {e}");
+            }
+        }
+    }
 
     #[test]
     fn lg_count_is_within_three_ulps_of_log10_for_every_count_to_a_million() {

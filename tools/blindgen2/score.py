@@ -1,0 +1,167 @@
+#!/usr/bin/env python3
+"""Score `accelcal diagnose --json` on a directory written by generate.py.
+
+    python3 tools/blindgen2/score.py DIR [--accelcal PATH] [--json] [--jobs N] [--timeout S]
+
+For each log in DIR/manifest.json runs the CLI, records verdict, gap.ratio_before,
+shrink and wall time (a non-zero exit is a refusal; its message is kept), writes
+DIR/results.json and prints per family and overall:
+  logs, clearly visible (ratio_before >= 2), right among visible, false alarms on clean
+  logs (verdict != none, all clean logs), out-of-catalogue honest (none/unexplained, all
+  ooc logs), refusals, median shrink of the right visible ones, slowest log (s).
+"""
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import time
+from concurrent.futures import ThreadPoolExecutor
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+DEFAULT_CLI = os.path.normpath(os.path.join(HERE, "..", "..", "target", "release", "accelcal"))
+VISIBLE = 2.0
+
+
+def get(d, path):
+    for k in path.split("."):
+        if not isinstance(d, dict) or k not in d:
+            return None
+        d = d[k]
+    return d
+
+
+def run_one(cli, d, entry, timeout):
+    path = os.path.join(d, entry["file"])
+    t0 = time.time()
+    try:
+        p = subprocess.run([cli, "diagnose", "--json", path], capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return dict(entry, refused=True, message=f"timeout after {timeout} s", seconds=time.time() - t0)
+    secs = time.time() - t0
+    if p.returncode != 0:
+        msg = (p.stderr.strip() or p.stdout.strip()).splitlines()
+        return dict(entry, refused=True, message=" | ".join(msg[-3:])[:400], seconds=secs, exit=p.returncode)
+    try:
+        js = json.loads(p.stdout)
+    except json.JSONDecodeError as e:
+        return dict(entry, refused=True, message=f"unparsable JSON: {e}", seconds=secs)
+    verdict = js.get("verdict")
+    shrink = js.get("shrink")
+    if isinstance(verdict, dict):  # {"effect": ..., "shrink": ..., ...}
+        if shrink is None:
+            shrink = verdict.get("shrink")
+        verdict = verdict.get("effect")
+    ratio = get(js, "gap.ratio_before")
+    return dict(entry, refused=False, verdict=verdict, ratio_before=ratio, shrink=shrink, seconds=secs)
+
+
+def is_right(r):
+    if r["refused"]:
+        return False
+    if r["expected"] == "honest":
+        return r["verdict"] in ("none", "unexplained")
+    return r["verdict"] == r["expected"]
+
+
+def summarise(rows):
+    vis = [r for r in rows if not r["refused"] and isinstance(r.get("ratio_before"), (int, float))
+           and r["ratio_before"] >= VISIBLE]
+    right_vis = [r for r in vis if is_right(r)]
+    clean = [r for r in rows if r["expected"] == "none" and not r["refused"]]
+    ooc = [r for r in rows if r["expected"] == "honest" and not r["refused"]]
+    shr = [r["shrink"] for r in right_vis if isinstance(r.get("shrink"), (int, float))]
+    return dict(
+        logs=len(rows),
+        visible=len(vis),
+        right_visible=len(right_vis),
+        clean_logs=len(clean),
+        false_alarms=sum(1 for r in clean if r["verdict"] != "none"),
+        ooc_logs=len(ooc),
+        ooc_honest=sum(1 for r in ooc if r["verdict"] in ("none", "unexplained")),
+        refusals=sum(1 for r in rows if r["refused"]),
+        median_shrink=statistics.median(shr) if shr else None,
+        slowest_s=round(max((r["seconds"] for r in rows), default=0.0), 2),
+        verdicts=dict(sorted(_count(r.get("verdict") or "REFUSED" for r in rows).items())),
+    )
+
+
+def _count(it):
+    c = {}
+    for x in it:
+        c[x] = c.get(x, 0) + 1
+    return c
+
+
+def fmt_row(name, s, w=20):
+    fa = f"{s['false_alarms']}/{s['clean_logs']}" if s["clean_logs"] else "-"
+    oo = f"{s['ooc_honest']}/{s['ooc_logs']}" if s["ooc_logs"] else "-"
+    ms = f"{s['median_shrink']:.3g}" if s["median_shrink"] is not None else "-"
+    return (f"{name:<{w}}{s['logs']:>5}{s['visible']:>8}{s['right_visible']:>5}/{s['visible']:<4}"
+            f"{fa:>8}{oo:>9}{s['refusals']:>8}{ms:>9}{s['slowest_s']:>9.2f}")
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("dir")
+    ap.add_argument("--accelcal", default=DEFAULT_CLI)
+    ap.add_argument("--json", action="store_true", help="machine output on stdout")
+    ap.add_argument("--jobs", type=int, default=1)
+    ap.add_argument("--timeout", type=float, default=600.0)
+    ap.add_argument("--logs", action="store_true", help="also print one line per log")
+    ap.add_argument("--by-shape", action="store_true", help="also a table per family/shape")
+    a = ap.parse_args(argv)
+    if not os.path.exists(a.accelcal):
+        sys.exit(f"no CLI at {a.accelcal}: build it with `cargo build --release -p accelcal-host` or pass --accelcal")
+    with open(os.path.join(a.dir, "manifest.json")) as fh:
+        manifest = json.load(fh)
+    with ThreadPoolExecutor(max_workers=max(1, a.jobs)) as ex:
+        rows = list(ex.map(lambda e: run_one(a.accelcal, a.dir, e, a.timeout), manifest))
+    fams = []
+    for r in rows:
+        if r["family"] not in fams:
+            fams.append(r["family"])
+    per = {f: summarise([r for r in rows if r["family"] == f]) for f in fams}
+    overall = summarise(rows)
+    with open(os.path.join(a.dir, "results.json"), "w") as fh:
+        json.dump(dict(per_family=per, overall=overall, logs=rows), fh, indent=1)
+    if a.json:
+        json.dump(dict(per_family=per, overall=overall, logs=rows), sys.stdout, indent=1)
+        print()
+        return
+    print(f"{'family':<20}{'logs':>5}{'visible':>8}{'right/vis':>10}{'f.alarm':>8}{'ooc ok':>9}"
+          f"{'refused':>8}{'shrink':>9}{'slowest':>9}")
+    for f in fams:
+        print(fmt_row(f, per[f]))
+    print(fmt_row("overall", overall))
+    print()
+    if a.by_shape:
+        keys = []
+        for r in rows:
+            k = f"{r['family']}/{r['shape']}"
+            if k not in keys:
+                keys.append(k)
+        for k in keys:
+            print(fmt_row(k, summarise([r for r in rows if f"{r['family']}/{r['shape']}" == k]), 36))
+        print()
+    for f in fams:
+        print(f"{f}: verdicts {per[f]['verdicts']}")
+    if a.logs:
+        for r in rows:
+            rb = r.get("ratio_before")
+            rb = f"{rb:7.2f}" if isinstance(rb, (int, float)) else "      -"
+            v = "REFUSED" if r["refused"] else r["verdict"]
+            mark = "ok" if is_right(r) else "--"
+            print(f"{mark} {r['file']:<44} {r['magnitude']:>9.4g} {r.get('magnitude_unit', ''):<12.12} "
+                  f"ratio {rb}  {v:<18} exp {r['expected']:<18} {r['seconds']:6.2f} s")
+        print()
+    refused = [r for r in rows if r["refused"]]
+    for r in refused:
+        print(f"refused {r['file']}: {r['message']}")
+    print(f"(visible: gap.ratio_before >= {VISIBLE:g}; per-log rows in {os.path.join(a.dir, 'results.json')})")
+
+
+if __name__ == "__main__":
+    main()
