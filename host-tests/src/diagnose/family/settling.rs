@@ -160,3 +160,26 @@ impl Family for Settling {
         out
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diagnose::{DiagnoseOptions, gap};
+    use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
+
+    fn decays(class: EffectClass, seed: u64) -> bool {
+        let table = to_table(&generate(&random_scenario(class, seed)), "sim").unwrap();
+        let opts = DiagnoseOptions::DEFAULT;
+        let m = gap::measure(&table, &opts).unwrap();
+        transient_decays(&Context::new(&table, &m, &opts).unwrap())
+    }
+
+    #[test]
+    fn a_settling_transient_decays_a_random_walk_and_white_noise_do_not() {
+        for seed in 1..4 {
+            assert!(decays(EffectClass::Settling, seed), "settling seed {seed}");
+            assert!(!decays(EffectClass::ColoredNoise, seed), "random walk seed {seed}");
+            assert!(!decays(EffectClass::None, seed), "clean seed {seed}");
+        }
+    }
+}
