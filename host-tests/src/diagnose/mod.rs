@@ -32,8 +32,8 @@
 //! The families (one file each under `family/`, several parametrisations each):
 //! - `drift`: bias `c (1 - exp(-t / tau))` per axis (`tau` from a grid), two time constants, or
 //!   polynomial in time (degree 1 to 3);
-//! - `temperature`: bias, relative scale, or both, linear in the measured temperature, optionally
-//!   through a first-order lag of the thermometer;
+//! - `temperature`: bias, relative scale, or both, linear or quadratic in the measured
+//!   temperature, optionally through a first-order lag of the thermometer;
 //! - `scale-nonlinearity`: `k2 a^2`, `k3 a^3` or both per axis;
 //! - `settling`: a transient proportional to the change from the previous pose, decaying over
 //!   `tau` from the start of each pose (only a `tau` that decays within the hold), or the transient
