@@ -58,7 +58,7 @@ pub trait Reading: Copy + Default {
     fn count(n: u32) -> Self::Sum;
     /// The exact sums of `samples` relative to [`Reading::block_reference`] of the first one (zero for
     /// none), and whether one of them is saturated at `limit` (blocks of any length; the accumulator
-    /// sums its full buffer with [`Reading::full_block_sums`]).
+    /// sums its full buffer with [`Reading::full_block`]).
     fn block_sums(axes: [&[Self]; 3], limit: Self::Limit) -> BlockSums<Self::Sum> {
         let mut out = BlockSums::default();
         for (a, values) in axes.iter().enumerate() {
@@ -68,30 +68,21 @@ pub trait Reading: Copy + Default {
         }
         out
     }
-    /// [`Reading::block_sums`] of a full block (the accumulator's buffer), written in place: the sums
-    /// into `sum` and `sum_sq`, `true` when a sample is saturated.
-    fn full_block_sums<const N: usize>(
+    /// [`Reading::block_sums`] of a full block (the accumulator's buffer), written in place into `sum` and
+    /// `sum_sq`, with the block's statistics: `(mean, variance, saturated)`, the per-axis mean offset
+    /// from the reference and the population variance summed over the axes, in `f32` (no exact rounding
+    /// needed), and whether a sample is saturated.
+    fn full_block<const N: usize>(
         axes: &[[Self; N]; 3],
         limit: Self::Limit,
         sum: &mut [Self::Sum; 3],
         sum_sq: &mut [Self::Sum; 3],
-    ) -> bool {
-        let mut saturated = false;
-        for ((values, sum), sum_sq) in axes.iter().zip(sum).zip(sum_sq) {
-            let axis = Self::axis_sums(values, limit);
-            (*sum, *sum_sq) = (axis.0, axis.1);
-            saturated |= axis.2;
-        }
-        saturated
-    }
+    ) -> ([f32; 3], f32, bool);
     /// One axis of [`Reading::block_sums`]: `(sum, sum of squares, saturated)`.
     fn axis_sums(values: &[Self], limit: Self::Limit) -> (Self::Sum, Self::Sum, bool);
     /// Mean and (population) variance of `n` samples, from their sums relative to `reference`
     /// (pose close; no software `f64` for `i16` on a Cortex-M4F).
     fn mean_and_variance(reference: Self, sum: Self::Sum, sum_sq: Self::Sum, n: u32) -> (f32, f32);
-    /// Per-axis mean offset from the reference and population variance summed over the axes, of one
-    /// block of `n` samples, in `f32` (the block statistics: no exact rounding needed).
-    fn block_statistics(sum: &[Self::Sum; 3], sum_sq: &[Self::Sum; 3], n: u32) -> ([f32; 3], f32);
     /// The value as `f32` (exact for `i16`; no software `f64` on a Cortex-M4F).
     fn to_f32(self) -> f32;
     /// `false` for NaN or infinity.
@@ -180,41 +171,65 @@ fn ratio_to_f32(total: i64, n: u32) -> f32 {
 }
 
 /// Raw sums `(sum x, sum x^2)` of one axis of a block of `i16` samples (at most `2^16`: the `i32` sum
-/// is exact, `2^16 * 2^15 = 2^31`), four samples per step; each square (at most `2^30`) is one
-/// multiply-accumulate into the `i64` (`smlal` on a Cortex-M4). Raw sums of a pose stay exact in `i64`:
-/// at most `2^31` samples, `2^31 * 2^30 = 2^61`.
+/// is exact, `2^16 * 2^15 = 2^31`, and so is every partial sum), eight samples per step (their loads
+/// pipeline on a Cortex-M4); each square (at most `2^30`) is one multiply-accumulate into the `i64`
+/// (`smlal`). Raw sums of a pose stay exact in `i64`: at most `2^31` samples, `2^31 * 2^30 = 2^61`.
 #[inline(always)]
 fn raw_i16_axis_sums(values: &[i16]) -> (i32, i64) {
     let (mut sum, mut sum_sq) = (0i32, 0i64);
-    let mut quads = values.chunks_exact(4);
-    for quad in &mut quads {
-        let (a, b, c, d) = (i32::from(quad[0]), i32::from(quad[1]), i32::from(quad[2]), i32::from(quad[3]));
-        sum += (a + b) + (c + d);
-        sum_sq += i64::from(a) * i64::from(a) + i64::from(b) * i64::from(b);
-        sum_sq += i64::from(c) * i64::from(c) + i64::from(d) * i64::from(d);
+    let (eights, rest) = values.as_chunks::<8>();
+    for &[a, b, c, d, e, f, g, h] in eights {
+        let (a, b, c, d) = (i64::from(a), i64::from(b), i64::from(c), i64::from(d));
+        let (e, f, g, h) = (i64::from(e), i64::from(f), i64::from(g), i64::from(h));
+        sum += (((a + b) + (c + d)) + ((e + f) + (g + h))) as i32;
+        sum_sq += a * a + b * b + c * c + d * d;
+        sum_sq += e * e + f * f + g * g + h * h;
     }
-    for &v in quads.remainder() {
-        let a = i32::from(v);
-        sum += a;
-        sum_sq += i64::from(a) * i64::from(a);
+    for &v in rest {
+        let x = i64::from(v);
+        sum += x as i32;
+        sum_sq += x * x;
     }
     (sum, sum_sq)
 }
 
-/// One axis of a block: raw `(sum, sum of squares, saturated)`.
+/// One axis of a block of `n = values.len()` samples: raw `(sum, sum of squares, n^2 variance,
+/// saturated)`, `n^2 variance = n sum_sq - sum^2` exact (at most `n^2 2^30 <= 2^62`).
 #[inline(always)]
-fn i16_axis_sums(values: &[i16], limit: i32) -> (i64, i64, bool) {
-    let first = values.first().copied().unwrap_or(0);
+fn i16_axis(values: &[i16], limit: i32) -> (i32, i64, u64, bool) {
     let (sum, sum_sq) = raw_i16_axis_sums(values);
-    // Every sample is within sqrt(sum (x - first)^2) of the first: none can reach the limit (nor a rail)
-    // when that sum < (min(limit, i16::MAX) - |first|)^2. Exact: every product is of two 32-bit factors
-    // (one multiply each) and every term is below 2^47. Only otherwise are the samples checked.
-    let (n, r) = (values.len() as i32, i32::from(first));
-    let about_first = sum_sq - 2 * i64::from(r) * i64::from(sum) + i64::from(n) * i64::from(r * r);
-    let margin = limit.min(i32::from(i16::MAX)) - r.abs();
-    let saturated = (margin <= 0 || about_first >= i64::from(margin) * i64::from(margin))
-        && values.iter().any(|v| v.saturated(limit));
-    (i64::from(sum), sum_sq, saturated)
+    let n = values.len() as u64;
+    let spread = (n as i64 * sum_sq - i64::from(sum) * i64::from(sum)) as u64;
+    // With d_i = n x_i - sum, sum d_i^2 = n spread: every |n x_i| <= |sum| + sqrt(n spread). None can reach
+    // the limit (nor a rail) when that is below n min(limit, i16::MAX): margin > 0 and margin^2 > n spread
+    // (margin < 2^31; a product that overflows fails the test). Only otherwise are the samples checked.
+    let margin = n as i64 * i64::from(limit.min(i32::from(i16::MAX))) - i64::from(sum).abs();
+    let clear = margin > 0 && spread.checked_mul(n).is_some_and(|t| t < (margin * margin) as u64);
+    (sum, sum_sq, spread, !clear && values.iter().any(|v| v.saturated(limit)))
+}
+
+/// One axis of a full block: its raw sums written to `sum` and `sum_sq`, its `n^2` variance
+/// `n sum_sq - sum^2` returned (exact, at most `2^62`). Out of line, once per axis: nothing else is
+/// live, so its loop keeps every value in a register.
+#[inline(never)]
+fn i16_block_axis(values: &[i16], sum: &mut i64, sum_sq: &mut i64) -> u64 {
+    let (s, sq) = raw_i16_axis_sums(values);
+    (*sum, *sum_sq) = (i64::from(s), sq);
+    (values.len() as i64 * sq - i64::from(s) * i64::from(s)) as u64
+}
+
+/// `false` when no sample of a block can be saturated, from its statistics: every sample lies within
+/// `sqrt(n variance)` of its axis mean, so none reaches `min(limit, i16::MAX)` (nor a rail) when
+/// `(min(limit, i16::MAX) - |mean| - 1)^2 > 1.01 n variance + 1` on every axis (the 1 and the 1 % cover the
+/// `f32` rounding of the mean, below `2^-8`, and of the variance, below `2^-20` relative). Only otherwise
+/// are the samples checked.
+#[inline(always)]
+fn i16_may_saturate(mean: &[f32; 3], variance: f32, n: usize, limit: i32) -> bool {
+    let (reach, spread) = (limit.min(i32::from(i16::MAX)) as f32 - 1.0, 1.01 * n as f32 * variance + 1.0);
+    mean.iter().any(|m| {
+        let room = reach - m.abs();
+        !(room > 0.0 && room * room > spread)
+    })
 }
 
 impl Reading for i16 {
@@ -231,24 +246,29 @@ impl Reading for i16 {
     fn count(n: u32) -> i64 {
         i64::from(n)
     }
-    #[inline(always)]
     fn axis_sums(values: &[i16], limit: i32) -> (i64, i64, bool) {
-        i16_axis_sums(values, limit)
+        let (sum, sum_sq, _, saturated) = i16_axis(values, limit);
+        (i64::from(sum), sum_sq, saturated)
     }
-    fn block_statistics(sum: &[i64; 3], sum_sq: &[i64; 3], n: u32) -> ([f32; 3], f32) {
-        let n_inverse = 1.0 / n.max(1) as f32;
-        // Per axis n^2 variance = n sum_sq - sum^2, exact: n <= 2^16 samples within 2^16 of each other
-        // give at most n^2 2^30 = 2^62 (and n sum_sq, sum^2 <= 2^62); the three axes fit a u64.
-        let mut n_squared_variance = 0u64;
-        let mut mean = [0.0; 3];
-        for ((m, &sum), &sum_sq) in mean.iter_mut().zip(sum).zip(sum_sq) {
-            // A block's raw sum fits an i32: at most 2^16 samples of at most 2^15.
-            let sum = sum as i32;
-            let sum_squared = i64::from(sum) * i64::from(sum);
-            n_squared_variance = n_squared_variance.wrapping_add((i64::from(n) * sum_sq - sum_squared) as u64);
-            *m = sum as f32 * n_inverse;
+    #[inline(always)]
+    fn full_block<const N: usize>(
+        axes: &[[i16; N]; 3],
+        limit: i32,
+        sum: &mut [i64; 3],
+        sum_sq: &mut [i64; 3],
+    ) -> ([f32; 3], f32, bool) {
+        let n_inverse = 1.0 / N as f32;
+        // The three axes' n^2 variances (each at most 2^62) fit a u64.
+        let (mut mean, mut n_squared_variance) = ([0.0; 3], 0u64);
+        for a in 0..3 {
+            n_squared_variance += i16_block_axis(&axes[a], &mut sum[a], &mut sum_sq[a]);
+            // A block's raw sum fits an i32 (at most 2^16 samples of at most 2^15).
+            mean[a] = sum[a] as i32 as f32 * n_inverse;
         }
-        (mean, u64_to_f32_halves(n_squared_variance) * n_inverse * n_inverse)
+        let variance = u64_to_f32_halves(n_squared_variance) * n_inverse * n_inverse;
+        let saturated =
+            i16_may_saturate(&mean, variance, N, limit) && axes.iter().flatten().any(|v| v.saturated(limit));
+        (mean, variance, saturated)
     }
     fn mean_and_variance(reference: i16, sum: i64, sum_sq: i64, n: u32) -> (f32, f32) {
         let count = n.max(1);
@@ -314,15 +334,23 @@ impl Reading for f32 {
         let variance = sum_sq / n - m * m;
         ((f64::from(reference) + m) as f32, if variance > 0.0 { variance as f32 } else { 0.0 })
     }
-    fn block_statistics(sum: &[f64; 3], sum_sq: &[f64; 3], n: u32) -> ([f32; 3], f32) {
-        let n_inverse = 1.0 / n.max(1) as f32;
-        let (mut mean, mut variance) = ([0.0; 3], 0.0);
+    fn full_block<const N: usize>(
+        axes: &[[f32; N]; 3],
+        limit: f32,
+        sum: &mut [f64; 3],
+        sum_sq: &mut [f64; 3],
+    ) -> ([f32; 3], f32, bool) {
+        let n_inverse = 1.0 / N as f32;
+        let (mut mean, mut variance, mut saturated) = ([0.0; 3], 0.0, false);
         for a in 0..3 {
+            let axis = Self::axis_sums(&axes[a], limit);
+            (sum[a], sum_sq[a]) = (axis.0, axis.1);
+            saturated |= axis.2;
             mean[a] = sum[a] as f32 * n_inverse;
             let v = sum_sq[a] as f32 * n_inverse - mean[a] * mean[a];
             variance += if v > 0.0 { v } else { 0.0 };
         }
-        (mean, variance)
+        (mean, variance, saturated)
     }
     fn to_f32(self) -> f32 {
         self
@@ -715,12 +743,16 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         let buffer = &self.buffer;
         let block = &mut self.blocks[slot % 2];
         let sums = &mut block.sums;
-        sums.saturated = R::full_block_sums(buffer, self.saturation_limit, &mut sums.sum, &mut sums.sum_sq);
-        (sums.n, sums.start_index, sums.end_index) = (BLOCK as u32, start_index, self.counted);
-        let (mut mean, variance) = R::block_statistics(&sums.sum, &sums.sum_sq, BLOCK as u32);
+        let (mut mean, variance, saturated) =
+            R::full_block(buffer, self.saturation_limit, &mut sums.sum, &mut sums.sum_sq);
+        (sums.n, sums.start_index, sums.end_index, sums.saturated) =
+            (BLOCK as u32, start_index, self.counted, saturated);
         for ((m, reference), values) in mean.iter_mut().zip(&mut sums.reference).zip(buffer) {
             *reference = R::block_reference(values[0]);
-            *m += reference.to_f32();
+            // Raw sums have a zero reference (no `+ 0.0` at run time).
+            if R::RELATIVE {
+                *m += reference.to_f32();
+            }
         }
         (block.mean, block.variance) = (mean, variance);
         (mean, variance)
@@ -944,6 +976,38 @@ mod tests {
         for v in [(1u64 << 25) + 1, (1 << 25) + 3, (1 << 40) + (1 << 16), (1 << 40) + (3 << 16)] {
             assert_eq!(u64_to_f32(v).to_bits(), (v as f32).to_bits(), "{v}");
         }
+    }
+
+    #[test]
+    fn the_f32_saturation_bound_never_clears_a_saturated_block() {
+        // Blocks near the rails and near a limit: whenever a sample is saturated, the bound must send the
+        // block to the sample-by-sample check (it may also do so for a clear block).
+        let mut x = 0x2545_F491_4F6C_DD1Du64;
+        let (mut saturated_blocks, mut cleared) = (0, 0);
+        for round in 0..4000 {
+            let limit = [32_769, 32_767, 30_000, 16_384][round % 4];
+            let centre = [32_760i32, -32_760, 29_990, 16_380, 0][round % 5];
+            let spread = [1u64, 3, 12, 400][round % 4];
+            let mut axes = [[0i16; 32]; 3];
+            for axis in &mut axes {
+                for v in axis.iter_mut() {
+                    x = x.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+                    let offset = (x >> 33) % (2 * spread + 1);
+                    *v = (centre + offset as i32 - spread as i32).clamp(-32_768, 32_767) as i16;
+                }
+            }
+            let (mut sum, mut sum_sq) = ([0i64; 3], [0i64; 3]);
+            let (mean, variance, saturated) = i16::full_block(&axes, limit, &mut sum, &mut sum_sq);
+            let truth = axes.iter().flatten().any(|v| v.saturated(limit));
+            assert_eq!(saturated, truth, "round {round}");
+            if truth {
+                saturated_blocks += 1;
+                assert!(i16_may_saturate(&mean, variance, 32, limit), "round {round}");
+            } else if !i16_may_saturate(&mean, variance, 32, limit) {
+                cleared += 1;
+            }
+        }
+        assert!(saturated_blocks > 500 && cleared > 500, "{saturated_blocks} saturated, {cleared} cleared");
     }
 
     #[test]

@@ -24,10 +24,10 @@ use crate::ellipsoid::OutlierRule;
 use crate::frame::{Deviation, Frame, NormPose, objective};
 use crate::ga::{Ga, GaConfig, GaError, SearchBox};
 pub use crate::init::{Init, InitError, Initial, NormalizedPoses};
-use crate::linalg::larger;
+use crate::linalg::{Held, larger};
 use crate::model::{PARAM_COUNT, Params};
 use crate::solve::{LmConfig, NewtonConfig, SolveError, SolveTermination, levenberg_marquardt_holding, newton_holding};
-use crate::verdict::{PoseSet, Verdict, VerdictBounds, Warnings, information_matrix, judge, parameters_to_hold};
+use crate::verdict::{PoseSet, Verdict, VerdictBounds, information_in_place, judge, parameters_to_hold};
 
 /// The recommended seeded generator for the GA: 32-bit state arithmetic, fast on a Cortex-M4.
 #[cfg(feature = "default-rng")]
@@ -268,31 +268,36 @@ pub fn search_box(
     start: &Deviation,
     frame: &Frame,
     set: &PoseSet<'_>,
-    held: &[bool; PARAM_COUNT],
+    held: Held,
 ) -> Result<SearchBox<PARAM_COUNT>, GaError> {
-    let half = match intervals {
-        Intervals::Fixed(widths) => widths.half_widths(),
-        Intervals::Uncertainty { sigmas } => uncertainty_half_widths(*sigmas, start, frame, set, held)
-            .unwrap_or_else(|| SearchWidths::DEFAULT.half_widths()),
-    };
+    let mut half = SearchWidths::DEFAULT.half_widths();
+    match intervals {
+        Intervals::Fixed(widths) => half = widths.half_widths(),
+        Intervals::Uncertainty { sigmas } => uncertainty_half_widths(*sigmas, start, frame, set, held, &mut half),
+    }
     SearchBox::around(start, &half)
 }
 
-/// `sigmas` standard deviations of each parameter at `start` ([`Intervals::Uncertainty`]); `None` when
-/// the covariance cannot be formed.
+/// `sigmas` standard deviations of each parameter at `start` ([`Intervals::Uncertainty`]) into `half`;
+/// `half` is left as it is when the covariance cannot be formed.
 fn uncertainty_half_widths(
     sigmas: f32,
     start: &Deviation,
     frame: &Frame,
     set: &PoseSet<'_>,
-    held: &[bool; PARAM_COUNT],
-) -> Option<[f32; PARAM_COUNT]> {
-    let mut cov = information_matrix(start, frame, set, held, true)?;
-    if !crate::verdict::covariance_holding_in_place(&mut cov, held) {
-        return None;
+    held: Held,
+    half: &mut [f32; PARAM_COUNT],
+) {
+    let mut cov = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
+    if !information_in_place(start, frame, set, held, true, &mut cov)
+        || !crate::verdict::covariance_holding_in_place(&mut cov, held)
+    {
+        return;
     }
     // A floor keeps the box valid where a parameter is held or determined exactly.
-    Some(core::array::from_fn(|i| larger(sigmas * crate::linalg::sqrt_f32(larger(cov[i][i], 0.0)), MIN_HALF_WIDTH)))
+    for (i, h) in half.iter_mut().enumerate() {
+        *h = larger(sigmas * crate::linalg::sqrt_f32(larger(cov[i][i], 0.0)), MIN_HALF_WIDTH);
+    }
 }
 
 /// Smallest half-width of a GA interval, deviation units.
@@ -353,7 +358,7 @@ impl Optimised {
 /// parameters held at nominal, and the start (held parameters at 0).
 pub struct Prepared<const MAX_POSES: usize> {
     normalized: NormalizedPoses<MAX_POSES>,
-    held: [bool; PARAM_COUNT],
+    held: Held,
     start: Deviation,
 }
 
@@ -366,8 +371,7 @@ impl<const MAX_POSES: usize> Prepared<MAX_POSES> {
     }
 
     /// A placeholder to [`Prepared::refill`].
-    const EMPTY: Self =
-        Self { normalized: NormalizedPoses::EMPTY, held: [false; PARAM_COUNT], start: [0.0; PARAM_COUNT] };
+    const EMPTY: Self = Self { normalized: NormalizedPoses::EMPTY, held: Held::NONE, start: [0.0; PARAM_COUNT] };
 
     /// [`Prepared::new`] into `self`, where it stays: the pose buffer is never copied on the stack.
     fn refill(&mut self, poses: &[Pose], config: &CalibrationConfig) -> Result<(), CalibrationError> {
@@ -375,14 +379,14 @@ impl<const MAX_POSES: usize> Prepared<MAX_POSES> {
         normalized.refill(poses, config.init, config.gravity, &config.outliers)?;
         let set = normalized.pose_set(poses);
         let mut start = normalized.start();
-        let held = parameters_to_hold(&start, normalized.frame(), &set, normalized.initial().held);
+        let held = parameters_to_hold(&start, normalized.frame(), &set, Held::from_flags(&normalized.initial().held));
         // One pose per parameter fitted (six faces fit the biases and scale factors).
         let norm = normalized.poses();
-        if norm.len() < held.iter().filter(|&&h| !h).count() {
+        if norm.len() < PARAM_COUNT - held.count() {
             return Err(SolveError::TooFewPoses { got: norm.len() }.into());
         }
         for i in 0..PARAM_COUNT {
-            if held[i] {
+            if held.contains(i) {
                 start[i] = 0.0;
             }
         }
@@ -397,21 +401,15 @@ impl<const MAX_POSES: usize> Prepared<MAX_POSES> {
 
     /// The GA's search box ([`search_box`]).
     fn search_box(&self, poses: &[Pose], config: &CalibrationConfig) -> Result<SearchBox<PARAM_COUNT>, GaError> {
-        search_box(
-            &config.intervals,
-            &self.start,
-            self.normalized.frame(),
-            &self.normalized.pose_set(poses),
-            &self.held,
-        )
+        search_box(&config.intervals, &self.start, self.normalized.frame(), &self.normalized.pose_set(poses), self.held)
     }
 
     /// Newton or LM (per `config.method`; LM for TAGA+LM) from `run.x`.
     fn polish(&self, run: Optimised, config: &CalibrationConfig) -> Result<Optimised, CalibrationError> {
         let norm = self.poses();
         let r = match config.method {
-            Method::Newton => newton_holding(run.x, norm, &config.newton, &self.held)?,
-            _ => levenberg_marquardt_holding(run.x, norm, &config.lm, &self.held)?,
+            Method::Newton => newton_holding(run.x, norm, &config.newton, self.held)?,
+            _ => levenberg_marquardt_holding(run.x, norm, &config.lm, self.held)?,
         };
         Ok(run.polished(r))
     }
@@ -421,16 +419,15 @@ impl<const MAX_POSES: usize> Prepared<MAX_POSES> {
     fn conclude(&self, poses: &[Pose], run: &Optimised, config: &CalibrationConfig) -> Calibration {
         let frame = self.normalized.frame();
         let set = self.normalized.pose_set(poses);
-        let initial = *self.normalized.initial();
+        let initial = self.normalized.initial();
         // The GA moves held genes within its smallest interval; they are held exactly.
-        let x: Deviation = core::array::from_fn(|i| if self.held[i] { self.start[i] } else { run.x[i] });
+        let x: Deviation = core::array::from_fn(|i| if self.held.contains(i) { self.start[i] } else { run.x[i] });
         let before = config.before.unwrap_or_else(|| frame.to_params(&[0.0; PARAM_COUNT]));
-        let warnings = Warnings { held: self.held, excluded: initial.excluded };
-        let mut verdict = judge(&x, frame, &set, &before, &config.bounds, warnings);
+        let mut verdict = judge(&x, frame, &set, &before, &config.bounds, self.held, initial.excluded);
         verdict.failures.not_converged = run.solver_termination == Some(SolveTermination::MaxIterations);
         Calibration {
             params: frame.to_params(&x),
-            initial,
+            initial: *initial,
             method: config.method,
             objective: objective_value(&x, set.norm, config.gravity),
             generations: run.generations,

@@ -368,13 +368,13 @@ impl Fitting<'_> {
         let shift = MIN_THIN_VARIANCE * (ata[3][3] + ata[4][4] + ata[5][5]);
         lower_factor([ata[3][3] - shift, ata[4][4] - shift, ata[5][5] - shift], [ata[4][3], ata[5][3], ata[5][4]])?;
         let held = weak_pivots(&ata, DETERMINED_PIVOT);
-        if held[..6].iter().any(|&h| h) {
+        if (0..6).any(|i| held.contains(i)) {
             return None;
         }
         // `atb` becomes the quadric coefficients.
-        solve_spd_holding_in_place(&mut ata, &mut atb, &held).ok()?;
+        solve_spd_holding_in_place(&mut ata, &mut atb, held).ok()?;
         // Quadric cross terms xy, xz, yz map to Mxx, Myy, Mzz.
-        self.fit.held = [held[6], held[7], held[8]];
+        self.fit.held = [held.contains(6), held.contains(7), held.contains(8)];
         self.factor(&atb, m0, s)?;
         Some(plausible(&self.fit.params))
     }

@@ -27,6 +27,81 @@ impl core::fmt::Display for LinalgError {
 
 impl core::error::Error for LinalgError {}
 
+/// A set of indices (each below 16) held out of a solve: a bit mask, small enough to pass in a register
+/// (a `[bool; 9]` by value was a `memcpy` call at every pass on a Cortex-M4F).
+///
+/// ```
+/// use accelcal::linalg::Held;
+/// let held = Held::NONE.with(6).with(8);
+/// assert!(held.contains(6) && !held.contains(7));
+/// assert_eq!((held.count(), held.to_flags::<9>()[8]), (2, true));
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Held(u16);
+
+impl Held {
+    /// Nothing held.
+    pub const NONE: Self = Self(0);
+
+    /// The indices flagged in `flags` (those from 16 on are ignored).
+    pub fn from_flags(flags: &[bool]) -> Self {
+        let mut out = Self::NONE;
+        for (i, _) in flags.iter().enumerate().filter(|(_, f)| **f) {
+            out.insert(i);
+        }
+        out
+    }
+
+    /// One flag per index below `N`.
+    pub fn to_flags<const N: usize>(self) -> [bool; N] {
+        core::array::from_fn(|i| self.contains(i))
+    }
+
+    /// `true` when index `i` is held (`false` from 16 on).
+    #[inline]
+    pub fn contains(self, i: usize) -> bool {
+        self.0.checked_shr(i as u32).unwrap_or(0) & 1 != 0
+    }
+
+    /// Holds index `i` too (nothing from 16 on).
+    #[inline]
+    pub fn insert(&mut self, i: usize) {
+        self.0 |= 1u16.checked_shl(i as u32).unwrap_or(0);
+    }
+
+    /// `self` with index `i` held too.
+    #[inline]
+    pub fn with(mut self, i: usize) -> Self {
+        self.insert(i);
+        self
+    }
+
+    /// The indices held in `self` or in `other`.
+    #[inline]
+    pub fn union(self, other: Self) -> Self {
+        Self(self.0 | other.0)
+    }
+
+    /// How many indices are held (a loop over the set bits, out of line: `count_ones` is a longer bit
+    /// trick on a Cortex-M).
+    #[inline(never)]
+    pub fn count(self) -> usize {
+        let (mut bits, mut n) = (self.0, 0);
+        while bits != 0 {
+            bits &= bits - 1;
+            n += 1;
+        }
+        n
+    }
+
+    /// `true` when nothing is held.
+    #[inline]
+    pub fn is_empty(self) -> bool {
+        self.0 == 0
+    }
+}
+
 /// Solves `a x = b` by Gaussian elimination with partial pivoting.
 pub fn solve_lu<const N: usize>(mut a: Matrix<N>, mut b: [f32; N]) -> Result<[f32; N], LinalgError> {
     let scale = a.iter().flatten().fold(0.0f32, |m, v| m.max(v.abs()));
@@ -168,14 +243,17 @@ fn add_block_rows<const RHS: bool>(
 /// (it is, to that precision, a combination of the columns before it), is flagged in `held` and treated
 /// the same. Returns the scaling `D` (0 where held).
 #[inline(never)]
-fn factor<const N: usize>(a: &mut Matrix<N>, held: &mut [bool; N], min_pivot: f32, cholesky: bool) -> [f32; N] {
+fn factor<const N: usize>(a: &mut Matrix<N>, held: &mut Held, min_pivot: f32, cholesky: bool) -> [f32; N] {
+    const { assert!(N <= 16, "a `Held` mask has 16 entries") };
     let mut d = [0.0f32; N];
     // The weight of column `k` in the elimination: its pivot (unscaled), 1 (Cholesky).
     let mut weight = [1.0f32; N];
     for i in 0..N {
-        held[i] |= !positive_finite(a[i][i]);
+        if !positive_finite(a[i][i]) {
+            held.insert(i);
+        }
         // Row `i` reads only the columns `j <= i`: its scaling is due now.
-        d[i] = if held[i] {
+        d[i] = if held.contains(i) {
             0.0
         } else if cholesky {
             1.0 / sqrt_f32(a[i][i])
@@ -183,10 +261,10 @@ fn factor<const N: usize>(a: &mut Matrix<N>, held: &mut [bool; N], min_pivot: f3
             1.0
         };
         for j in 0..=i {
-            if held[i] {
+            if held.contains(i) {
                 break;
             }
-            let scaled = if held[j] { 0.0 } else { a[i][j] * d[i] * d[j] };
+            let scaled = if held.contains(j) { 0.0 } else { a[i][j] * d[i] * d[j] };
             // The Cholesky form subtracts the sum, the other each term: kept as they were measured.
             let mut s = if cholesky { 0.0 } else { scaled };
             for k in 0..j {
@@ -202,10 +280,11 @@ fn factor<const N: usize>(a: &mut Matrix<N>, held: &mut [bool; N], min_pivot: f3
                 weight[i] = if cholesky { 1.0 } else { s };
             } else {
                 // Found weak just now: held from here on.
-                (held[i], d[i]) = (true, 0.0);
+                held.insert(i);
+                d[i] = 0.0;
             }
         }
-        if held[i] {
+        if held.contains(i) {
             // Out of the factorisation: zeros and a unit diagonal (what the elimination gives a held row).
             a[i].iter_mut().take(i).for_each(|v| *v = 0.0);
             a[i][i] = 1.0;
@@ -267,14 +346,14 @@ fn factor_solve<const N: usize>(l: &Matrix<N>, d: &[f32; N], b: &mut [f32; N], c
 pub fn ldlt_solve_holding_in_place<const N: usize>(
     a: &mut Matrix<N>,
     b: &mut [f32; N],
-    held: &[bool; N],
+    held: Held,
 ) -> Result<(), LinalgError> {
     solve_in_place(a, b, held, false)
 }
 
 /// [`ldlt_solve_holding_in_place`] with nothing held.
 pub fn ldlt_solve_in_place<const N: usize>(a: &mut Matrix<N>, b: &mut [f32; N]) -> Result<(), LinalgError> {
-    solve_in_place(a, b, &[false; N], false)
+    solve_in_place(a, b, Held::NONE, false)
 }
 
 /// [`factor`] (in the `cholesky` form or not, holding `held`) and [`factor_solve`]; an error when the
@@ -282,12 +361,12 @@ pub fn ldlt_solve_in_place<const N: usize>(a: &mut Matrix<N>, b: &mut [f32; N]) 
 fn solve_in_place<const N: usize>(
     a: &mut Matrix<N>,
     b: &mut [f32; N],
-    held: &[bool; N],
+    held: Held,
     cholesky: bool,
 ) -> Result<(), LinalgError> {
-    let mut flagged = *held;
+    let mut flagged = held;
     let d = factor(a, &mut flagged, 0.0, cholesky);
-    if newly_flagged(&flagged, held) {
+    if flagged != held {
         return Err(LinalgError::Singular);
     }
     factor_solve(a, &d, b, cholesky);
@@ -305,16 +384,17 @@ pub fn spd_inverse<const N: usize>(a: &Matrix<N>) -> Result<Matrix<N>, LinalgErr
 /// [`spd_inverse`] in place: `a` is replaced by its inverse (left unchanged on an error). One matrix of
 /// scratch (the factor) besides `a`.
 pub fn spd_inverse_in_place<const N: usize>(a: &mut Matrix<N>) -> Result<(), LinalgError> {
-    spd_inverse_holding_in_place(a, &[false; N])
+    spd_inverse_holding_in_place(a, Held::NONE)
 }
 
 /// [`spd_inverse_in_place`] of `a` with the rows and columns flagged in `held` replaced by the identity;
 /// those rows and columns of the result are 0. `a` is left unchanged on an error.
-pub fn spd_inverse_holding_in_place<const N: usize>(a: &mut Matrix<N>, held: &[bool; N]) -> Result<(), LinalgError> {
+#[inline(never)]
+pub fn spd_inverse_holding_in_place<const N: usize>(a: &mut Matrix<N>, held: Held) -> Result<(), LinalgError> {
     let mut l = *a;
-    let mut flagged = *held;
+    let mut flagged = held;
     let d = factor(&mut l, &mut flagged, 0.0, true);
-    if newly_flagged(&flagged, held) {
+    if flagged != held {
         return Err(LinalgError::Singular);
     }
     for j in 0..N {
@@ -328,12 +408,6 @@ pub fn spd_inverse_holding_in_place<const N: usize>(a: &mut Matrix<N>, held: &[b
     if a.iter().flatten().all(|&v| finite(v)) { Ok(()) } else { Err(LinalgError::Singular) }
 }
 
-/// `true` when the factorisation flagged an entry that was not held (elementwise: an array comparison
-/// links `memcmp`).
-fn newly_flagged<const N: usize>(flagged: &[bool; N], held: &[bool; N]) -> bool {
-    flagged.iter().zip(held).any(|(f, h)| f != h)
-}
-
 /// Smallest share of a column's information not explained by the columns before it (the pivot of
 /// the Jacobi-scaled Cholesky factorisation) for it to count as determined.
 pub const DETERMINED_PIVOT: f32 = 1e-5;
@@ -342,20 +416,20 @@ pub const DETERMINED_PIVOT: f32 = 1e-5;
 /// them: a Cholesky factorisation of the Jacobi-scaled `a` in column order, where a column whose
 /// remaining pivot is below `min_pivot` is flagged and then left out. Only the lower triangle
 /// (`a[i][j]`, `j <= i`) is read. A zero or non-finite diagonal is flagged too.
-pub fn weak_pivots<const N: usize>(a: &Matrix<N>, min_pivot: f32) -> [bool; N] {
-    let mut l = *a;
-    let mut weak = [false; N];
-    factor(&mut l, &mut weak, min_pivot, true);
+pub fn weak_pivots<const N: usize>(a: &Matrix<N>, min_pivot: f32) -> Held {
+    weak_pivots_in_place(&mut a.clone(), min_pivot)
+}
+
+/// [`weak_pivots`] without a copy: `a`'s lower triangle is overwritten by the factors.
+pub fn weak_pivots_in_place<const N: usize>(a: &mut Matrix<N>, min_pivot: f32) -> Held {
+    let mut weak = Held::NONE;
+    factor(a, &mut weak, min_pivot, true);
     weak
 }
 
 /// Solves `a x = b` (`a` symmetric positive semi-definite, lower triangle read) with the entries of
 /// `x` flagged in `held` fixed at 0: their rows and columns are replaced by the identity.
-pub fn solve_spd_holding<const N: usize>(
-    a: &Matrix<N>,
-    b: &[f32; N],
-    held: &[bool; N],
-) -> Result<[f32; N], LinalgError> {
+pub fn solve_spd_holding<const N: usize>(a: &Matrix<N>, b: &[f32; N], held: Held) -> Result<[f32; N], LinalgError> {
     let (mut m, mut x) = (*a, *b);
     solve_spd_holding_in_place(&mut m, &mut x, held)?;
     Ok(x)
@@ -366,7 +440,7 @@ pub fn solve_spd_holding<const N: usize>(
 pub fn solve_spd_holding_in_place<const N: usize>(
     a: &mut Matrix<N>,
     b: &mut [f32; N],
-    held: &[bool; N],
+    held: Held,
 ) -> Result<(), LinalgError> {
     solve_in_place(a, b, held, true)
 }
@@ -416,9 +490,9 @@ mod tests {
     fn scaled_factor_reproduces_the_scaled_matrix() {
         let a = spd4();
         let mut l = a;
-        let mut held = [false; 4];
+        let mut held = Held::NONE;
         let d = factor(&mut l, &mut held, 0.0, true);
-        assert_eq!(held, [false; 4]);
+        assert_eq!(held, Held::NONE);
         // The factor's diagonal is stored as its reciprocal.
         let factor = |i: usize, k: usize| if i == k { 1.0 / l[i][i] } else { l[i][k] };
         for i in 0..4 {
@@ -432,10 +506,10 @@ mod tests {
     #[test]
     fn in_place_forms_equal_the_copying_ones_bit_for_bit() {
         let a = spd4();
-        let (b, held) = ([1.0, -2.0, 0.5, 3.0], [false, true, false, false]);
+        let (b, held) = ([1.0, -2.0, 0.5, 3.0], Held::NONE.with(1));
         let (mut m, mut x) = (a, b);
-        solve_spd_holding_in_place(&mut m, &mut x, &held).unwrap();
-        assert_eq!(x, solve_spd_holding(&a, &b, &held).unwrap());
+        solve_spd_holding_in_place(&mut m, &mut x, held).unwrap();
+        assert_eq!(x, solve_spd_holding(&a, &b, held).unwrap());
         assert_eq!(x[1], 0.0);
         for i in [0, 2, 3] {
             let r: f32 = [0, 2, 3].iter().map(|&k| a[i.max(k)][i.min(k)] * x[k]).sum();
@@ -450,7 +524,7 @@ mod tests {
     fn held_inverse_is_the_inverse_of_the_rest_with_zeros() {
         let a = spd4();
         let mut inv = a;
-        spd_inverse_holding_in_place(&mut inv, &[false, false, true, false]).unwrap();
+        spd_inverse_holding_in_place(&mut inv, Held::NONE.with(2)).unwrap();
         let free = [0, 1, 3];
         for &i in &free {
             assert_eq!((inv[i][2], inv[2][i]), (0.0, 0.0));
@@ -481,10 +555,8 @@ mod tests {
             assert_eq!(m[i][..=i], full[i][..=i], "row {i}");
             assert!(m[i][i + 1..].iter().all(|&v| v == 0.0), "row {i}: upper triangle untouched");
         }
-        let mut weak = [false; 9];
-        weak[4] = true;
-        assert_eq!(weak_pivots(&m, DETERMINED_PIVOT), weak);
-        assert_eq!(weak_pivots(&spd4(), DETERMINED_PIVOT), [false; 4]);
+        assert_eq!(weak_pivots(&m, DETERMINED_PIVOT), Held::NONE.with(4));
+        assert_eq!(weak_pivots(&spd4(), DETERMINED_PIVOT), Held::NONE);
     }
 
     #[test]

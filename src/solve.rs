@@ -17,7 +17,7 @@
 //! ```
 
 use crate::frame::{Deviation, NormPose, modulus_error_gradient, objective, residual_jacobian};
-use crate::linalg::{Matrix, add_normal_row, finite, larger, ldlt_solve_holding_in_place, solve_lu};
+use crate::linalg::{Held, Matrix, add_normal_row, finite, larger, ldlt_solve_holding_in_place, solve_lu};
 use crate::model::PARAM_COUNT;
 
 /// Why a solve could not produce parameters.
@@ -123,8 +123,8 @@ impl Default for NewtonConfig {
 }
 
 /// At least one pose per free parameter, everything finite.
-fn check_input(x: &Deviation, poses: &[NormPose], held: &[bool; PARAM_COUNT]) -> Result<(), SolveError> {
-    if poses.len() < held.iter().filter(|&&h| !h).count() || poses.is_empty() {
+fn check_input(x: &Deviation, poses: &[NormPose], held: Held) -> Result<(), SolveError> {
+    if poses.len() < PARAM_COUNT - held.count() || poses.is_empty() {
         return Err(SolveError::TooFewPoses { got: poses.len() });
     }
     let poses_finite = poses.iter().all(|p| finite(p.q) && p.u.iter().all(|&v| finite(v)));
@@ -199,22 +199,22 @@ fn sub(x: &Deviation, step: &Deviation) -> (Deviation, f32) {
 /// Damped Gauss-Newton with Marquardt's diagonal scaling; the 9x9 system is solved by the library's
 /// factorisation, unscaled (`L D L^T`, no square roots), on the stack. Stops on a small step, on no further decrease, or at `max_iterations`.
 pub fn levenberg_marquardt(x0: Deviation, poses: &[NormPose], config: &LmConfig) -> Result<SolveReport, SolveError> {
-    levenberg_marquardt_holding(x0, poses, config, &[false; PARAM_COUNT])
+    levenberg_marquardt_holding(x0, poses, config, Held::NONE)
 }
 
 /// Holds the parameters flagged in `held` at their start values (Newton): their rows and columns of the
 /// Hessian become the identity and their right-hand side 0, so their step is 0.
-fn hold(jtj: &mut Matrix<PARAM_COUNT>, rhs: &mut Deviation, held: &[bool; PARAM_COUNT]) {
-    if !held.iter().any(|&h| h) {
+fn hold(jtj: &mut Matrix<PARAM_COUNT>, rhs: &mut Deviation, held: Held) {
+    if held.is_empty() {
         return;
     }
     for i in 0..PARAM_COUNT {
         for j in 0..PARAM_COUNT {
-            if held[i] || held[j] {
+            if held.contains(i) || held.contains(j) {
                 jtj[i][j] = if i == j { 1.0 } else { 0.0 };
             }
         }
-        if held[i] {
+        if held.contains(i) {
             rhs[i] = 0.0;
         }
     }
@@ -226,7 +226,7 @@ pub fn levenberg_marquardt_holding(
     x0: Deviation,
     poses: &[NormPose],
     config: &LmConfig,
-    held: &[bool; PARAM_COUNT],
+    held: Held,
 ) -> Result<SolveReport, SolveError> {
     check_input(&x0, poses, held)?;
     let mut x = x0;
@@ -286,7 +286,7 @@ pub fn levenberg_marquardt_holding(
 /// The classical Newton iteration on `fE` (the paper's baseline): full Hessian
 /// `H = (2/N) sum(grad E grad E^T + 2 E Jr^T Jr)`, undamped step `H d = -grad fE`, no line search.
 pub fn newton(x0: Deviation, poses: &[NormPose], config: &NewtonConfig) -> Result<SolveReport, SolveError> {
-    newton_holding(x0, poses, config, &[false; PARAM_COUNT])
+    newton_holding(x0, poses, config, Held::NONE)
 }
 
 /// [`newton`] with the parameters flagged in `held` fixed at their values in `x0`.
@@ -294,7 +294,7 @@ pub fn newton_holding(
     x0: Deviation,
     poses: &[NormPose],
     config: &NewtonConfig,
-    held: &[bool; PARAM_COUNT],
+    held: Held,
 ) -> Result<SolveReport, SolveError> {
     check_input(&x0, poses, held)?;
     let mut x = x0;

@@ -10,7 +10,7 @@
 use crate::accumulator::Pose;
 use crate::ellipsoid::PoseList;
 use crate::frame::{Deviation, Frame, NormPose};
-use crate::linalg::{Matrix, larger, spd_inverse_holding_in_place};
+use crate::linalg::{Held, Matrix, larger, spd_inverse_holding_in_place};
 use crate::model::{PARAM_COUNT, Params};
 use crate::solve::normal_equations;
 
@@ -202,7 +202,7 @@ pub fn information_matrix(
     x: &Deviation,
     frame: &Frame,
     set: &PoseSet<'_>,
-    held: &[bool; PARAM_COUNT],
+    held: Held,
     inflate: bool,
 ) -> Option<Matrix<PARAM_COUNT>> {
     let mut info = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
@@ -210,16 +210,16 @@ pub fn information_matrix(
 }
 
 /// [`information_matrix`] into `info` (no copies of the matrix); `false` where it gives `None`.
-fn information_in_place(
+pub(crate) fn information_in_place(
     x: &Deviation,
     frame: &Frame,
     set: &PoseSet<'_>,
-    held: &[bool; PARAM_COUNT],
+    held: Held,
     inflate: bool,
     info: &mut Matrix<PARAM_COUNT>,
 ) -> bool {
     let n = set.len();
-    let free = held.iter().filter(|&&h| !h).count();
+    let free = PARAM_COUNT - held.count();
     if n < free || n == 0 {
         return false;
     }
@@ -261,7 +261,7 @@ pub fn deviation_covariance(
     x: &Deviation,
     frame: &Frame,
     set: &PoseSet<'_>,
-    held: &[bool; PARAM_COUNT],
+    held: Held,
 ) -> Option<Matrix<PARAM_COUNT>> {
     let mut cov = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
     covariance_in_place(x, frame, set, held, &mut cov).then_some(cov)
@@ -272,20 +272,20 @@ fn covariance_in_place(
     x: &Deviation,
     frame: &Frame,
     set: &PoseSet<'_>,
-    held: &[bool; PARAM_COUNT],
+    held: Held,
     cov: &mut Matrix<PARAM_COUNT>,
 ) -> bool {
     information_in_place(x, frame, set, held, false, cov) && covariance_holding_in_place(cov, held)
 }
 
 /// Inverse of `info` with the `held` rows and columns replaced by the identity, then zeroed.
-pub fn covariance_holding(mut info: Matrix<PARAM_COUNT>, held: &[bool; PARAM_COUNT]) -> Option<Matrix<PARAM_COUNT>> {
+pub fn covariance_holding(mut info: Matrix<PARAM_COUNT>, held: Held) -> Option<Matrix<PARAM_COUNT>> {
     covariance_holding_in_place(&mut info, held).then_some(info)
 }
 
 /// [`covariance_holding`] in place: `info` becomes the covariance; `false` (and `info` unusable)
 /// when it cannot be inverted.
-pub fn covariance_holding_in_place(info: &mut Matrix<PARAM_COUNT>, held: &[bool; PARAM_COUNT]) -> bool {
+pub fn covariance_holding_in_place(info: &mut Matrix<PARAM_COUNT>, held: Held) -> bool {
     spd_inverse_holding_in_place(info, held).is_ok()
 }
 
@@ -310,35 +310,29 @@ pub const HOLD_STD: Deviation = [0.05, 0.05, 0.05, 0.02, 0.02, 0.02, 0.01, 0.01,
 /// The user's verdict bounds play no part: a parameter fitted but worse determined than they ask
 /// fails the verdict instead.
 #[inline(never)] // its matrices need not share a stack frame with the solvers'
-pub fn parameters_to_hold(
-    x: &Deviation,
-    frame: &Frame,
-    set: &PoseSet<'_>,
-    held: [bool; PARAM_COUNT],
-) -> [bool; PARAM_COUNT] {
-    let structural = undetermined_parameters(x, set.norm);
-    let mut held: [bool; PARAM_COUNT] = core::array::from_fn(|i| held[i] || structural[i]);
+pub fn parameters_to_hold(x: &Deviation, frame: &Frame, set: &PoseSet<'_>, held: Held) -> Held {
+    let mut held = held.union(undetermined_parameters(x, set.norm));
     let mut info = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
-    if !information_in_place(x, frame, set, &held, false, &mut info) {
+    if !information_in_place(x, frame, set, held, false, &mut info) {
         return held;
     }
     loop {
         let mut cov = info;
-        if !covariance_holding_in_place(&mut cov, &held) {
+        if !covariance_holding_in_place(&mut cov, held) {
             break;
         }
         // The largest ratio above 1 (or NaN), `PARAM_COUNT` for none.
         let mut worst = (PARAM_COUNT, 1.0f32);
         for i in 0..PARAM_COUNT {
             let ratio = crate::linalg::sqrt_f32(larger(cov[i][i], 0.0)) / HOLD_STD[i];
-            if !held[i] && !(ratio <= worst.1) {
+            if !held.contains(i) && !(ratio <= worst.1) {
                 worst = (i, ratio);
             }
         }
-        match held.get_mut(worst.0) {
-            Some(h) => *h = true,
-            None => break,
+        if worst.0 == PARAM_COUNT {
+            break;
         }
+        held.insert(worst.0);
     }
     held
 }
@@ -348,10 +342,10 @@ pub fn parameters_to_hold(
 /// remaining pivot is below [`crate::linalg::DETERMINED_PIVOT`] is (to f32 precision) a combination of
 /// the ones before it and is flagged, then left out. With only axis-aligned poses, for example, the
 /// non-orthogonality terms are flagged.
-pub fn undetermined_parameters(x: &Deviation, norm: &[NormPose]) -> [bool; PARAM_COUNT] {
+pub fn undetermined_parameters(x: &Deviation, norm: &[NormPose]) -> Held {
     let (mut info, mut unused) = ([[0.0f32; PARAM_COUNT]; PARAM_COUNT], [0.0; PARAM_COUNT]);
     normal_equations(x, norm, None, &mut info, &mut unused);
-    crate::linalg::weak_pivots(&info, crate::linalg::DETERMINED_PIVOT)
+    crate::linalg::weak_pivots_in_place(&mut info, crate::linalg::DETERMINED_PIVOT)
 }
 
 /// Standard deviations of the paper-convention parameters from a deviation covariance.
@@ -418,7 +412,8 @@ fn rmse_of_mg(sum: f32, n: usize, g: f32) -> f32 {
 }
 
 /// Judges `x` (deviation in `frame`) on the poses of `set` against `bounds`; `before` is the model the
-/// RMSE before calibration is computed with; `warnings` says what was held and left out.
+/// RMSE before calibration is computed with; `held` (the parameters held at nominal) and `excluded`
+/// (the poses left out) become the verdict's [`Warnings`].
 #[inline(never)] // its matrices need not share a stack frame with the solvers'
 pub fn judge(
     x: &Deviation,
@@ -426,11 +421,11 @@ pub fn judge(
     set: &PoseSet<'_>,
     before: &Params,
     bounds: &VerdictBounds,
-    warnings: Warnings,
+    held: Held,
+    excluded: PoseList,
 ) -> Verdict {
     let params = frame.to_params(x);
-    let held = &warnings.held;
-    let fitted = held.iter().filter(|&&h| !h).count();
+    let fitted = PARAM_COUNT - held.count();
     let sums = ModulusSums::of(x, frame, set, before);
     let rmse_after_mg = rmse_of_mg(sums.after, set.len(), 1.0);
     let noise_floor = noise_floor_of(sums.noise, set.len(), fitted);
@@ -448,14 +443,15 @@ pub fn judge(
             || x.iter().any(|v| !(v.abs() <= PLAUSIBLE_DEVIATION)),
         ..Failures::default()
     };
+    let mut warnings = Warnings { held: [false; PARAM_COUNT], excluded };
     let structurally_undetermined = undetermined_parameters(x, set.norm);
     let limits = param_limits(&params, bounds, frame.gravity);
     for i in 0..PARAM_COUNT {
-        if held[i] {
-            std[i] = f32::INFINITY;
-            continue;
+        if held.contains(i) {
+            (std[i], warnings.held[i]) = (f32::INFINITY, true);
+        } else {
+            failures.undetermined[i] = structurally_undetermined.contains(i) || !(std[i] <= limits[i]);
         }
-        failures.undetermined[i] = structurally_undetermined[i] || !(std[i] <= limits[i]);
     }
     let rmse_before_mg = rmse_of_mg(sums.before, set.len(), frame.gravity);
     Verdict { rmse_before_mg, rmse_after_mg, noise_floor_mg: noise_floor, param_std: std, failures, warnings }

@@ -259,7 +259,15 @@ fn a_solve_that_does_not_converge_or_lands_far_away_fails_its_verdict() {
     let frame = norm.frame();
     let far = [0.9; PARAM_COUNT];
     let set = norm.pose_set(&poses);
-    let v = accelcal::verdict::judge(&far, frame, &set, &Params::IDENTITY, &Default::default(), Default::default());
+    let v = accelcal::verdict::judge(
+        &far,
+        frame,
+        &set,
+        &Params::IDENTITY,
+        &Default::default(),
+        accelcal::linalg::Held::NONE,
+        accelcal::ellipsoid::PoseList::EMPTY,
+    );
     assert!(v.failures.implausible && !v.pass());
     // The converged solve passes.
     let cal = calibrate::<_, 40, 32>(&poses, &config(Method::Lm), Xoshiro128PlusPlus::seed_from_u64(1)).unwrap();

@@ -121,7 +121,7 @@ fn crlb_variance(plan: Plan, seed: u64, noise_mg: f64) -> Option<[f64; PARAM_COU
     let norm = NormalizedPoses::<MAX_POSES>::new(&poses, cfg.gravity as f32).ok()?;
     let frame = norm.frame();
     let x = frame.to_deviation(&cfg.truth);
-    let cov = deviation_covariance(&x, frame, &norm.pose_set(&poses), &[false; PARAM_COUNT])?;
+    let cov = deviation_covariance(&x, frame, &norm.pose_set(&poses), accelcal::linalg::Held::NONE)?;
     let std = param_std(frame, &cov);
     let t = cfg.truth.to_array();
     Some(std::array::from_fn(|i| (100.0 * f64::from(std[i]) / f64::from(t[i])).powi(2)))

@@ -44,7 +44,8 @@ fn free_hand_sessions_reach_the_cramer_rao_bound() {
         assert!(cal.verdict.complete(), "seed {seed}: {:?}", cal.verdict);
         let norm = NormalizedPoses::<64>::prepare(&acc.poses, Init::Ellipsoid, G, &config.outliers).unwrap();
         let x_truth = norm.frame().to_deviation(&cfg.truth);
-        let cov = deviation_covariance(&x_truth, norm.frame(), &norm.pose_set(&acc.poses), &[false; PARAM_COUNT]);
+        let cov =
+            deviation_covariance(&x_truth, norm.frame(), &norm.pose_set(&acc.poses), accelcal::linalg::Held::NONE);
         let crlb = param_std(norm.frame(), &cov.expect("the bound exists"));
         let (ratio, which) = worst_ratio(&cal.params, &cfg.truth, &crlb);
         println!(
@@ -93,7 +94,7 @@ fn one_glitch_pose_is_left_out_and_named() {
             kept.remove(bad);
             let norm = NormalizedPoses::<64>::prepare(&kept, Init::Ellipsoid, G, &config.outliers).unwrap();
             let x_truth = norm.frame().to_deviation(&cfg.truth);
-            let cov = deviation_covariance(&x_truth, norm.frame(), &norm.pose_set(&kept), &[false; PARAM_COUNT]);
+            let cov = deviation_covariance(&x_truth, norm.frame(), &norm.pose_set(&kept), accelcal::linalg::Held::NONE);
             let crlb = param_std(norm.frame(), &cov.expect("the bound exists"));
             let (ratio, which) = worst_ratio(&cal.params, &cfg.truth, &crlb);
             assert!(ratio <= 3.5, "seed {seed}, {name}: {} is {ratio}x its CRLB", PARAM_NAMES[which]);

@@ -54,7 +54,7 @@ const fn budget(key: &'static str, limit: u64, unit: &'static str, enforced: boo
 pub const BUDGETS: [Budget; 6] = [
     budget("full_calibration_cycles", 2_000_000, "cycles", true, 2_000_000),
     budget("lm_cycles", 100_000, "cycles", true, 100_000),
-    budget("accumulate_cycles_per_sample", 30, "cycles", false, 67),
+    budget("accumulate_cycles_per_sample", 30, "cycles", false, 65),
     budget("apply_cycles_per_sample", 25, "cycles", false, 31),
     budget("library_flash_bytes", 16 * 1024, "bytes", false, 24_000),
     budget("solve_ram_bytes", 4 * 1024, "bytes", true, 3_810),
