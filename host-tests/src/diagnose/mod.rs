@@ -32,19 +32,24 @@
 //! The families (one file each under `family/`, several parametrisations each):
 //! - `drift`: bias `c (1 - exp(-t / tau))` per axis (`tau` from a grid), two time constants, or
 //!   polynomial in time (degree 1 to 3);
-//! - `temperature`: bias, relative scale, or both, linear in the measured temperature, optionally
-//!   through a first-order lag of the thermometer;
+//! - `temperature`: bias, relative scale, or both, linear or quadratic in the measured
+//!   temperature, optionally through a first-order lag of the thermometer;
 //! - `scale-nonlinearity`: `k2 a^2`, `k3 a^3` or both per axis;
 //! - `settling`: a transient proportional to the change from the previous pose, decaying over
-//!   `tau` from the start of each pose (only a `tau` that decays within the hold), or the transient measured in each pose (its mean minus the
-//!   mean of its last half) scaled per axis or by one factor, or a ringing mount (disturbed holds
-//!   oscillating at one common frequency, more early in the hold: `family/ringing.rs`) left out;
+//!   `tau` from the start of each pose (only a `tau` that decays within the hold), or the transient
+//!   measured in each pose (its mean minus the mean of its last half) scaled per axis or by one
+//!   factor, or the start of every hold left out (these two only when the holds, pooled, move more
+//!   in their first half than in their second: a wandering noise moves them alike), or a ringing
+//!   mount (disturbed holds oscillating at one common frequency, more early in the hold:
+//!   `family/ringing.rs`) left out;
 //! - `motion`: poses whose own samples move slowly (chi-square of segment means after the first,
 //!   above 6 times the median pose's and 40) are dropped, each at the cost of an expected noise
 //!   variance plus the penalty (not when they decay or ring: that is settling);
-//! - `colored-noise`: a bias random walk or a bias-instability floor (whichever fits the Allan
-//!   variance better) measured on the longest rest (detrended quadratically in time and linearly in
-//!   temperature, overlapping Allan variance in excess of white noise); the simulator gets it.
+//! - `colored-noise`: a bias random walk and/or a bias-instability floor measured on the longest
+//!   rest (detrended quadratically in time and linearly in temperature) and pooled over every hold
+//!   (each cleared of its line), from the overlapping Allan variance in excess of white noise (two
+//!   white levels: successive differences, at least `q^2 / 12`, and the holds' median variance);
+//!   the level the withheld poses' scatter agrees with best is given to the simulator.
 //!
 //! ```
 //! use accelcal_host::diagnose::{diagnose, DiagnoseOptions};

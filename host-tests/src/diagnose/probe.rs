@@ -8,15 +8,21 @@ use super::family::{Context, Variant};
 use super::gap::PoseData;
 use super::report::Probe;
 
-/// Periodic bias `u . (s sin(2 pi t / P) + c cos(2 pi t / P))`, at least three periods in the log
-/// (the period's search charged as one parameter).
+/// Periodic bias `u . (s sin(2 pi t / P) + c cos(2 pi t / P))`, at least three periods in the log.
+/// The period's search is charged as `ln` of the independent periods searched (one per cycle over
+/// the log; the grid is five times finer) parameters: the best of `M` independent tries of pure
+/// noise gains about `2 ln M` expected variances by chance (each parameter costs
+/// [`PARAMETER_PENALTY`](super::PARAMETER_PENALTY) = 2).
 fn periodic(ctx: &Context<'_>) -> Vec<Variant> {
     let t_end = ctx.poses.last().map_or(1.0, PoseData::t_mid);
     let mut out = Vec::new();
     // Frequencies from 3 periods per log to one per 10 s, a fifth of a cycle over the log apart.
     let step_hz = 0.2 / t_end.max(1e-9);
-    let mut f_hz = 3.0 / t_end.max(1e-9);
-    while f_hz <= 0.1 {
+    let (lowest_hz, highest_hz) = (3.0 / t_end.max(1e-9), 0.1);
+    let independent = ((highest_hz - lowest_hz) * t_end).max(1.0);
+    let params = 6 + (independent.ln().ceil() as usize).max(1);
+    let mut f_hz = lowest_hz;
+    while f_hz <= highest_hz {
         let (period, w) = (1.0 / f_hz, std::f64::consts::TAU * f_hz);
         let extra = ctx
             .poses
@@ -27,7 +33,7 @@ fn periodic(ctx: &Context<'_>) -> Vec<Variant> {
                 u.iter().map(|x| x * s).chain(u.iter().map(|x| x * c)).collect()
             })
             .collect();
-        out.push(Variant { extra, params: 7, detail: format!("a periodic bias, period {period:.0} s") });
+        out.push(Variant { extra, params, detail: format!("a periodic bias, period {period:.0} s") });
         f_hz += step_hz;
     }
     out

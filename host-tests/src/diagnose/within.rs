@@ -69,7 +69,7 @@ pub(crate) struct Within {
 
 /// White variance per axis from successive differences (`var(x[i+1] - x[i]) / 2`), median over
 /// the poses: slow movements within a pose do not inflate it.
-fn white_from_differences(table: &Table, poses: &[PoseData]) -> V3 {
+pub(crate) fn white_from_differences(table: &Table, poses: &[PoseData]) -> V3 {
     std::array::from_fn(|a| {
         let per_pose: Vec<f64> = poses
             .iter()

@@ -1,13 +1,14 @@
 //! Colored noise: a bias random walk and/or a bias-instability floor, measured on the longest
-//! rest (a time segment, not the pose means it is judged on) and given to the simulator; judged by
-//! how well the noise model predicts the nominal model's held-out scatter.
+//! rest and pooled over every hold (time segments, not the pose means it is judged on) and given to
+//! the simulator; judged by how well the noise model predicts the nominal model's held-out scatter.
 
 use super::{Candidate, Context, Evaluation, Family, Variant};
 use crate::csvio::Table;
 use crate::diagnose::gap::PoseData;
-use crate::diagnose::gap::{Noise, expected_cv_ms, residual_noise_draws, row_time, simulate_gap};
+use crate::diagnose::gap::{Noise, expected_cv_ms, quantisation_step, residual_noise_draws, row_time, simulate_gap};
 use crate::diagnose::math::cv_residuals;
 use crate::diagnose::math::{V3, lstsq, mean, predict};
+use crate::diagnose::within::white_from_differences;
 use crate::diagnose::{CV_NOISE_DRAWS, PARAMETER_PENALTY, WALK_EXCESS};
 
 pub(crate) struct ColoredNoise;
@@ -45,6 +46,47 @@ impl ColoredNoise {
             (crate::diagnose::math::sum_sq(&ctx.nominal_cv).0 + PARAMETER_PENALTY * ctx.e_white) / m.poses.len() as f64;
         Some((ms / e_col).sqrt())
     }
+
+    /// The noise model the withheld poses' scatter agrees with best, among each estimate's random
+    /// walk and floor together and each alone (their levels come from the holds, not from the pose
+    /// means): `(ratio, walk, floor)`.
+    fn best_noise(&self, ctx: &Context<'_>, estimates: &[(V3, V3)]) -> Option<(f64, V3, V3)> {
+        let zero = [0.0; 3];
+        let mut best: Option<(f64, V3, V3)> = None;
+        for &(walk, floor) in estimates {
+            for (w, f) in [(walk, floor), (walk, zero), (zero, floor)] {
+                if !(ctx.pose_level && w.iter().chain(&f).any(|v| *v > 0.0)) {
+                    continue;
+                }
+                let Some(ratio) = self.heldout_ratio(ctx, w, f) else { continue };
+                if best.is_none_or(|(b, _, _)| ctx.gain(ratio) > ctx.gain(b)) {
+                    best = Some((ratio, w, f));
+                }
+            }
+        }
+        best
+    }
+}
+
+/// The colored noise measured in the holds: on the longest rest, and pooled over every hold
+/// (evidence from all of them, not the longest one only), each against two white levels: the
+/// noise of successive differences (blind to slow wander, at least the rounding's `q^2 / 12`),
+/// and the holds' median variance (which counts a wander faster than a hold as white: the lower
+/// estimate when the wander does not grow as a random walk over the log, as a Gauss-Markov noise).
+fn hold_estimates(ctx: &Context<'_>) -> Vec<(V3, V3)> {
+    let m = ctx.m;
+    let q = quantisation_step(ctx.table);
+    let diff = white_from_differences(ctx.table, ctx.poses);
+    let white: V3 = std::array::from_fn(|a| if diff[a] > 0.0 { diff[a].max(q[a] * q[a] / 12.0) } else { m.white[a] });
+    let longest = (0..ctx.poses.len()).max_by_key(|&i| ctx.poses[i].n).unwrap_or(0);
+    let rows = ctx.poses[longest].rows.clone();
+    [white, m.white]
+        .iter()
+        .flat_map(|&w| {
+            let rest = colored_noise_estimate(ctx.table, rows.start, rows.end, m.rate, w);
+            [rest, pooled_estimate(ctx.table, ctx.poses, m.rate, w)]
+        })
+        .collect()
 }
 
 impl Family for ColoredNoise {
@@ -62,26 +104,9 @@ impl Family for ColoredNoise {
 
     fn evaluate(&self, ctx: &Context<'_>) -> Evaluation {
         let m = ctx.m;
-        let n = ctx.poses.len();
-        let longest = (0..n).max_by_key(|&i| ctx.poses[i].n).unwrap_or(0);
-        let rows = ctx.poses[longest].rows.clone();
-        let (mut walk, mut floor) = colored_noise_estimate(ctx.table, rows.start, rows.end, m.rate, m.white);
-        if walk.iter().chain(&floor).all(|v| *v == 0.0) {
-            (walk, floor) = pooled_estimate(ctx.table, ctx.poses, m.rate, m.white);
-        }
-        // The measured random walk and floor, and each alone: the one the withheld poses' scatter
-        // agrees with best (their levels come from the holds, not from the pose means).
-        let zero = [0.0; 3];
-        let mut best: Option<(f64, V3, V3)> = None;
-        for (w, f) in [(walk, floor), (walk, zero), (zero, floor)] {
-            if !(ctx.pose_level && w.iter().chain(&f).any(|v| *v > 0.0)) {
-                continue;
-            }
-            let Some(ratio) = self.heldout_ratio(ctx, w, f) else { continue };
-            if best.is_none_or(|(b, _, _)| ctx.gain(ratio) > ctx.gain(b)) {
-                best = Some((ratio, w, f));
-            }
-        }
+        let estimates = hold_estimates(ctx);
+        let best = self.best_noise(ctx, &estimates);
+        let (walk, floor) = estimates[0];
         let applicable = best.is_some();
         let (heldout_ratio, walk, floor) = best.unwrap_or((ctx.heldout_ratio_nominal, walk, floor));
         let noise = Noise { white: m.white, walk, floor: std::array::from_fn(|a| floor[a] + m.quantisation[a]) };
@@ -148,7 +173,7 @@ pub(crate) fn colored_noise_estimate(table: &Table, first: usize, end: usize, ra
     (walk, floor)
 }
 
-/// [`colored_noise_estimate`] pooled over every hold (for a log without one long rest): each
+/// [`colored_noise_estimate`] pooled over every hold (a log may have no long rest): each
 /// hold is cleared of its mean and slope, and the Allan excesses of all holds are fitted together;
 /// the excess test is on their weighted mean at each hold's longest `tau`.
 pub(crate) fn pooled_estimate(table: &Table, poses: &[PoseData], rate: f64, white: V3) -> (V3, V3) {

@@ -4,7 +4,10 @@
 //!
 //! Decay test: a time constant is tried only when the transient decays within the pose
 //! (`tau` at most a third of the median hold); a slower "transient" is a constant offset per pose,
-//! not settling.
+//! not settling. The measured transients and the trimmed starts (which take any movement at the
+//! start of a hold for a transient) are tried only when the holds, pooled, move more in their first
+//! half than in their second ([`transient_decays`]): a noise that wanders through the whole hold
+//! (random walk, flicker, Gauss-Markov) also moves the start of a hold, but as much as its end.
 //!
 //! Any transient, whatever its shape (a ringing mount, an exponential), is also tested by leaving
 //! out the start of every hold (its first sixth or third): if the pose means of the rest agree
@@ -15,6 +18,7 @@
 use super::{Context, Evaluation, Family, Variant, motion, ringing, standard_evaluation};
 use crate::diagnose::PARAMETER_PENALTY;
 use crate::diagnose::SEGMENTS;
+use crate::diagnose::locate::within_chi2_of;
 use crate::diagnose::math::{V3, cv_residuals, dot, fit_residuals, mean_of, median, norm, rms, sum_sq};
 
 /// Leading segments of each hold left out by the start-trimmed variants.
@@ -23,7 +27,29 @@ const TRIMS: [usize; 2] = [1, 2];
 /// Time constants tried, s.
 const TAUS_S: [f64; 5] = [0.25, 0.5, 1.0, 2.0, 4.0];
 
+/// How many times the excess movement of the holds' first halves must exceed their second halves'
+/// for a transient that decays (an exponential with `tau` a third of the hold gives about 20).
+const DECAY_RATIO: f64 = 3.0;
+
+/// Standard deviations of the pooled chi-square by which the first halves' movement must exceed
+/// white noise.
+const DECAY_Z: f64 = 3.0;
+
 pub(crate) struct Settling;
+
+/// The holds, pooled, move more in their first half than in their second, beyond white noise: the
+/// chi-square of each half's segment means about their own mean, summed over the poses, less its
+/// degrees of freedom.
+pub(crate) fn transient_decays(ctx: &Context<'_>) -> bool {
+    let half = SEGMENTS / 2;
+    let white = &ctx.m.white;
+    let axes = white.iter().filter(|w| **w > 0.0).count();
+    let poses: Vec<_> = ctx.poses.iter().filter(|p| p.seg_n > 0).collect();
+    let dof = (poses.len() * axes * (half - 1)) as f64;
+    let early: f64 = poses.iter().map(|p| within_chi2_of(p, white, 0..half)).sum::<f64>() - dof;
+    let late: f64 = poses.iter().map(|p| within_chi2_of(p, white, half..2 * half)).sum::<f64>() - dof;
+    dof > 0.0 && early > DECAY_Z * (2.0 * dof).sqrt() && early > DECAY_RATIO * late.max(0.0)
+}
 
 /// The exponential transient toward the previous pose, `tau` seconds.
 fn toward_previous(ctx: &Context<'_>, tau: f64) -> Vec<Vec<f64>> {
@@ -92,7 +118,8 @@ impl Family for Settling {
         {
             e = ring;
         }
-        for drop in TRIMS {
+        let trims: &[usize] = if transient_decays(ctx) { &TRIMS } else { &[] };
+        for &drop in trims {
             let Some((ratio, after, ratio_after)) = trimmed_start(ctx, drop) else { continue };
             let c = &mut e.candidate;
             if ctx.gain(ratio) > c.evidence() {
@@ -117,6 +144,9 @@ impl Family for Settling {
                 detail: format!("transient toward the previous pose, tau {tau} s"),
             })
             .collect();
+        if !transient_decays(ctx) {
+            return out;
+        }
         let transient = measured_transients(ctx);
         let dirs = ctx.directions();
         let per_axis = (0..ctx.poses.len()).map(|i| (0..3).map(|a| dirs[i][a] * transient[i][a]).collect()).collect();
@@ -128,5 +158,28 @@ impl Family for Settling {
         let common = (0..ctx.poses.len()).map(|i| vec![dot(dirs[i], transient[i])]).collect();
         out.push(Variant { extra: common, params: 1, detail: "measured transient (pose mean - last half)".into() });
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diagnose::{DiagnoseOptions, gap};
+    use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
+
+    fn decays(class: EffectClass, seed: u64) -> bool {
+        let table = to_table(&generate(&random_scenario(class, seed)), "sim").unwrap();
+        let opts = DiagnoseOptions::DEFAULT;
+        let m = gap::measure(&table, &opts).unwrap();
+        transient_decays(&Context::new(&table, &m, &opts).unwrap())
+    }
+
+    #[test]
+    fn a_settling_transient_decays_a_random_walk_and_white_noise_do_not() {
+        for seed in 1..4 {
+            assert!(decays(EffectClass::Settling, seed), "settling seed {seed}");
+            assert!(!decays(EffectClass::ColoredNoise, seed), "random walk seed {seed}");
+            assert!(!decays(EffectClass::None, seed), "clean seed {seed}");
+        }
     }
 }

@@ -1,6 +1,7 @@
-//! Temperature: bias, relative scale, or both, linear in the temperature the sensor sees: the
-//! thermometer's reading, or that reading through a first-order lag (the sensor warms later than
-//! the thermometer), with the lag's time constant from a grid.
+//! Temperature: bias, relative scale, or both, linear or quadratic (a second-order temperature
+//! coefficient) in the temperature the sensor sees: the thermometer's reading, or that reading
+//! through a first-order lag (the sensor warms later than the thermometer), with the lag's time
+//! constant from a grid.
 
 use super::{Context, Family, Variant};
 use crate::diagnose::gap::row_time;
@@ -81,23 +82,17 @@ fn temperature_effect(f: V3, dt: f64, power: usize, bias: bool, scale: bool) -> 
     out
 }
 
-/// Bias and/or scale columns linear in the pose temperatures `temps`.
-fn design(ctx: &Context<'_>, temps: &[f64], bias: bool, scale: bool) -> Vec<Vec<f64>> {
+/// Bias and/or scale columns in the pose temperatures `temps`, up to the power `power` of the
+/// temperature change (a second-order temperature coefficient for `power` 2).
+fn design(ctx: &Context<'_>, temps: &[f64], power: usize, bias: bool, scale: bool) -> Vec<Vec<f64>> {
     let t0 = mean(temps);
     temps
         .iter()
         .zip(ctx.directions())
         .zip(ctx.calibrated())
         .map(|((t, u), f)| {
-            let dt = t - t0;
-            let mut row = Vec::new();
-            if bias {
-                row.extend(u.iter().map(|c| c * dt));
-            }
-            if scale {
-                row.extend((0..3).map(|a| u[a] * f[a] * dt));
-            }
-            row
+            let effect = temperature_effect(*f, t - t0, power, bias, scale);
+            effect.iter().map(|e| u.iter().zip(e).map(|(a, b)| a * b).sum()).collect()
         })
         .collect()
 }
@@ -122,9 +117,11 @@ impl Family for Temperature {
             let lag_params = usize::from(lag > 0.0);
             let through = if lag > 0.0 { format!(" (thermometer lagged {lag:.0} s)") } else { String::new() };
             for (bias, scale, what) in [(true, false, "bias"), (false, true, "scale"), (true, true, "bias and scale")] {
-                let params = 3 * (usize::from(bias) + usize::from(scale)) + lag_params;
-                let extra = design(ctx, &temps, bias, scale);
-                out.push(Variant { extra, params, detail: format!("{what} linear in temperature{through}") });
+                for (power, shape) in [(1, "linear"), (2, "quadratic")] {
+                    let params = 3 * power * (usize::from(bias) + usize::from(scale)) + lag_params;
+                    let extra = design(ctx, &temps, power, bias, scale);
+                    out.push(Variant { extra, params, detail: format!("{what} {shape} in temperature{through}") });
+                }
             }
         }
         out
