@@ -34,7 +34,7 @@
 
 use crate::accumulator::Pose;
 use crate::linalg::{
-    DETERMINED_PIVOT, Matrix, add_outer_product, larger, smaller, solve_spd_holding_in_place, sqrt_f32, weak_pivots,
+    DETERMINED_PIVOT, Matrix, add_outer_product, larger, smaller, solve_spd_holding_weak_in_place, sqrt_f32,
 };
 use crate::model::{PARAM_COUNT, Params, norm_squared};
 
@@ -388,12 +388,11 @@ impl Fitting<'_> {
         // must carry MIN_THIN_VARIANCE of its trace (positive definite after removing that much).
         let shift = MIN_THIN_VARIANCE * (ata[3][3] + ata[4][4] + ata[5][5]);
         lower_factor([ata[3][3] - shift, ata[4][4] - shift, ata[5][5] - shift], [ata[4][3], ata[5][3], ata[5][4]])?;
-        let held = weak_pivots(&ata, DETERMINED_PIVOT);
+        // `atb` becomes the quadric coefficients; weakly determined cross terms are held at 0.
+        let held = solve_spd_holding_weak_in_place(&mut ata, &mut atb, DETERMINED_PIVOT).ok()?;
         if (0..6).any(|i| held.contains(i)) {
             return None;
         }
-        // `atb` becomes the quadric coefficients.
-        solve_spd_holding_in_place(&mut ata, &mut atb, held).ok()?;
         // Quadric cross terms xy, xz, yz map to Mxx, Myy, Mzz.
         self.held = [held.contains(6), held.contains(7), held.contains(8)];
         self.factor(&atb, m0, s)?;

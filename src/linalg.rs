@@ -427,6 +427,20 @@ pub fn weak_pivots_in_place<const N: usize>(a: &mut Matrix<N>, min_pivot: f32) -
     weak
 }
 
+/// Solves `a x = b` in place (as [`solve_spd_holding_in_place`]) with the entries held that
+/// [`weak_pivots`] flags at `min_pivot`, found and solved in one factorisation (the same factors and
+/// the same solution, bit for bit, as flagging on a copy and then solving). Returns the held entries.
+pub fn solve_spd_holding_weak_in_place<const N: usize>(
+    a: &mut Matrix<N>,
+    b: &mut [f32; N],
+    min_pivot: f32,
+) -> Result<Held, LinalgError> {
+    let mut held = Held::NONE;
+    let d = factor(a, &mut held, min_pivot, true);
+    factor_solve(a, &d, b, true);
+    if b.iter().all(|&v| finite(v)) { Ok(held) } else { Err(LinalgError::Singular) }
+}
+
 /// Solves `a x = b` (`a` symmetric positive semi-definite, lower triangle read) with the entries of
 /// `x` flagged in `held` fixed at 0: their rows and columns are replaced by the identity.
 pub fn solve_spd_holding<const N: usize>(a: &Matrix<N>, b: &[f32; N], held: Held) -> Result<[f32; N], LinalgError> {
@@ -518,6 +532,31 @@ mod tests {
         let mut inv = a;
         spd_inverse_in_place(&mut inv).unwrap();
         assert_eq!(inv, spd_inverse(&a).unwrap());
+    }
+
+    #[test]
+    fn weak_entries_found_while_solving_equal_flagging_then_solving_bit_for_bit() {
+        // Column 3 a combination of columns 0 and 1 (plus a tiny part): weak at a pivot of 1e-3.
+        let g: [[f32; 4]; 4] =
+            [[1.0, 0.3, -0.2, 0.0], [0.1, 2.0, 0.5, 0.0], [-0.6, 0.2, 1.5, 0.0], [0.4, -0.9, 0.1, 0.0]];
+        let g: [[f32; 4]; 4] = core::array::from_fn(|i| {
+            let mut r = g[i];
+            r[3] = 0.5 * r[0] - 0.25 * r[1] + if i == 2 { 1e-3 } else { 0.0 };
+            r
+        });
+        let weak: Matrix<4> =
+            core::array::from_fn(|i| core::array::from_fn(|j| (0..4).map(|k| g[k][i] * g[k][j]).sum()));
+        for (a, min_pivot) in [(spd4(), 1e-3), (weak, 1e-3), (weak, 0.0)] {
+            let b = [1.0, -2.0, 0.5, 3.0];
+            let held = weak_pivots(&a, min_pivot);
+            let (mut expected_m, mut expected_x) = (a, b);
+            let expected = solve_spd_holding_in_place(&mut expected_m, &mut expected_x, held);
+            let (mut m, mut x) = (a, b);
+            let found = solve_spd_holding_weak_in_place(&mut m, &mut x, min_pivot);
+            assert_eq!(found.ok(), expected.ok().map(|()| held));
+            assert_eq!(x.map(f32::to_bits), expected_x.map(f32::to_bits));
+        }
+        assert!(weak_pivots(&weak, 1e-3).contains(3), "the test matrix has a weak pivot");
     }
 
     #[test]
