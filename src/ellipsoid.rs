@@ -34,7 +34,7 @@
 
 use crate::accumulator::Pose;
 use crate::linalg::{
-    DETERMINED_PIVOT, Matrix, add_outer_product, larger, smaller, solve_spd_holding_weak_in_place, sqrt_f32,
+    DETERMINED_PIVOT, Matrix, add_normal_row, larger, smaller, solve_spd_holding_weak_in_place, sqrt_f32,
 };
 use crate::model::{PARAM_COUNT, Params, norm_squared};
 
@@ -379,10 +379,8 @@ impl Fitting<'_> {
                 2.0 * v[0] * v[2],
                 2.0 * v[1] * v[2],
             ];
-            for i in 0..COEFFS {
-                atb[i] += row[i];
-            }
-            add_outer_product(&mut ata, &row, 1.0);
+            // Residual 1 (the quadric's right-hand side), weight 1: `atb += row` exactly.
+            add_normal_row(&mut ata, &mut atb, &row, 1.0, 1.0);
         }
         // The linear terms' block is `n` times the covariance of the means: its smallest eigenvalue
         // must carry MIN_THIN_VARIANCE of its trace (positive definite after removing that much).
