@@ -234,17 +234,20 @@ pub fn ga_solver<R: Rng, const POP: usize>(
     config: GaConfig,
     rng: R,
 ) -> Result<Ga<R, POP, PARAM_COUNT>, GaError> {
-    let mut ga = Ga::empty(config, widths.search_box(start)?, rng);
-    seed_population(&mut ga, norm, start)?;
+    let mut ga = Ga::empty(config, SearchBox::UNSET, rng);
+    seed_population(&mut ga, norm, start, &widths.half_widths())?;
     Ok(ga)
 }
 
-/// Draws the initial population of a calibration GA and injects the start.
+/// Sets the box `start +- half` of a calibration GA (built with [`SearchBox::UNSET`]), draws its initial
+/// population and injects the start.
 fn seed_population<R: Rng, const POP: usize>(
     ga: &mut Ga<R, POP, PARAM_COUNT>,
     norm: &[NormPose],
     start: &Deviation,
+    half: &[f32; PARAM_COUNT],
 ) -> Result<(), GaError> {
+    ga.set_bounds_around(start, half)?;
     ga.initialize(&PoseCost(norm))?;
     ga.inject(start, &PoseCost(norm));
     Ok(())
@@ -261,21 +264,22 @@ impl crate::ga::CostFunction<PARAM_COUNT> for PoseCost<'_> {
     }
 }
 
-/// The GA's search box for `intervals` around `start` (held parameters pinned to a zero-width-like box).
+/// The half-widths of the GA's search box for `intervals` around `start` (held parameters pinned to a
+/// zero-width-like interval); the box is `start +- half` ([`SearchBox::around`]).
 #[inline(never)] // its matrices need not share a stack frame with the GA's state
-pub fn search_box(
+pub fn search_half_widths(
     intervals: &Intervals,
     start: &Deviation,
     frame: &Frame,
     set: &PoseSet<'_>,
     held: Held,
-) -> Result<SearchBox<PARAM_COUNT>, GaError> {
+) -> [f32; PARAM_COUNT] {
     let mut half = SearchWidths::DEFAULT.half_widths();
     match intervals {
         Intervals::Fixed(widths) => half = widths.half_widths(),
         Intervals::Uncertainty { sigmas } => uncertainty_half_widths(*sigmas, start, frame, set, held, &mut half),
     }
-    SearchBox::around(start, &half)
+    half
 }
 
 /// `sigmas` standard deviations of each parameter at `start` ([`Intervals::Uncertainty`]) into `half`;
@@ -305,18 +309,18 @@ const MIN_HALF_WIDTH: f32 = 1e-7;
 
 /// Runs the GA to termination and returns what it found. Out of line: the GA state (population and
 /// offspring, `2 POP 9` floats) then lives in this frame alone, not in one merged with the LM and
-/// verdict frames, and is never moved. The box by reference: a box by value (in and out of a
-/// `Result`) was moved twice on the way.
+/// verdict frames, and is never moved. The box is set in place from its half-widths: a box by value
+/// was a `memcpy` call.
 #[inline(never)]
 fn run_ga<R: Rng, const POP: usize>(
     norm: &[NormPose],
     start: &Deviation,
-    bounds: &SearchBox<PARAM_COUNT>,
+    half: &[f32; PARAM_COUNT],
     config: &GaConfig,
     rng: R,
 ) -> Result<Optimised, GaError> {
-    let mut ga = Ga::<R, POP, PARAM_COUNT>::empty(*config, *bounds, rng);
-    seed_population(&mut ga, norm, start)?;
+    let mut ga = Ga::<R, POP, PARAM_COUNT>::empty(*config, SearchBox::UNSET, rng);
+    seed_population(&mut ga, norm, start, half)?;
     Ok(Optimised::from_ga(&ga.run(&PoseCost(norm))))
 }
 
@@ -399,9 +403,10 @@ impl<const MAX_POSES: usize> Prepared<MAX_POSES> {
         self.normalized.poses()
     }
 
-    /// The GA's search box ([`search_box`]).
-    fn search_box(&self, poses: &[Pose], config: &CalibrationConfig) -> Result<SearchBox<PARAM_COUNT>, GaError> {
-        search_box(&config.intervals, &self.start, self.normalized.frame(), &self.normalized.pose_set(poses), self.held)
+    /// The half-widths of the GA's search box ([`search_half_widths`]).
+    fn search_half_widths(&self, poses: &[Pose], config: &CalibrationConfig) -> [f32; PARAM_COUNT] {
+        let (frame, set) = (self.normalized.frame(), self.normalized.pose_set(poses));
+        search_half_widths(&config.intervals, &self.start, frame, &set, self.held)
     }
 
     /// Newton or LM (per `config.method`; LM for TAGA+LM) from `run.x`.
@@ -453,11 +458,8 @@ pub fn calibrate<R: Rng, const POP: usize, const MAX_POSES: usize>(
     let run = match config.method {
         Method::Newton | Method::Lm => prepared.polish(start, config)?,
         Method::Taga | Method::TagaLm => {
-            // The box used where it lies in the `Result`: moved out of it, it was copied twice.
-            let ga = match &prepared.search_box(poses, config) {
-                Ok(bounds) => run_ga::<R, POP>(prepared.poses(), &prepared.start, bounds, &config.ga, rng)?,
-                Err(e) => return Err((*e).into()),
-            };
+            let half = prepared.search_half_widths(poses, config);
+            let ga = run_ga::<R, POP>(prepared.poses(), &prepared.start, &half, &config.ga, rng)?;
             if config.method == Method::Taga { ga } else { prepared.polish(ga, config)? }
         }
     };
@@ -521,8 +523,9 @@ impl<R: Rng, const POP: usize, const MAX_POSES: usize> Calibrator<R, POP, MAX_PO
         let ga = match config.method {
             Method::Newton | Method::Lm => None,
             Method::Taga | Method::TagaLm => {
-                let mut ga = Ga::empty(config.ga, prepared.search_box(poses, config)?, rng);
-                seed_population(&mut ga, prepared.poses(), &prepared.start)?;
+                let half = prepared.search_half_widths(poses, config);
+                let mut ga = Ga::empty(config.ga, SearchBox::UNSET, rng);
+                seed_population(&mut ga, prepared.poses(), &prepared.start, &half)?;
                 Some(ga)
             }
         };

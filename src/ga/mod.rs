@@ -113,14 +113,23 @@ impl<const DIM: usize> SearchBox<DIM> {
 
     /// The box `center - half ..= center + half`, gene by gene (checked as by [`SearchBox::new`]).
     pub fn around(center: &[f32; DIM], half: &[f32; DIM]) -> Result<Self, GaError> {
-        let mut out = Self { lower: [0.0; DIM], upper: [0.0; DIM] };
+        let mut out = Self::UNSET;
+        out.set_around(center, half)?;
+        Ok(out)
+    }
+
+    /// A placeholder (every interval empty) for [`Ga::empty`] before [`Ga::set_bounds_around`].
+    pub const UNSET: Self = Self { lower: [0.0; DIM], upper: [0.0; DIM] };
+
+    /// [`SearchBox::around`] into `self`, where it stays (a box returned in a `Result` is copied).
+    fn set_around(&mut self, center: &[f32; DIM], half: &[f32; DIM]) -> Result<(), GaError> {
         for i in 0..DIM {
-            (out.lower[i], out.upper[i]) = (center[i] - half[i], center[i] + half[i]);
-            if !valid_width(out.upper[i] - out.lower[i]) {
+            (self.lower[i], self.upper[i]) = (center[i] - half[i], center[i] + half[i]);
+            if !valid_width(self.upper[i] - self.lower[i]) {
                 return Err(GaError::InvalidInterval { dim: i as u8 });
             }
         }
-        Ok(out)
+        Ok(())
     }
 
     /// `self` if every width `upper - lower` is positive and finite (so no bound is infinite or NaN).
@@ -326,6 +335,12 @@ impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O
         }
     }
 
+    /// Sets the search box to `center - half ..= center + half` (checked as by [`SearchBox::new`]), in
+    /// place: for a GA built by [`Ga::empty`] with [`SearchBox::UNSET`], before [`Ga::initialize`].
+    pub fn set_bounds_around(&mut self, center: &[f32; DIM], half: &[f32; DIM]) -> Result<(), GaError> {
+        self.bounds.set_around(center, half)
+    }
+
     /// Checks the configuration ([`GaConfig::validate`]), draws the population uniformly from the box
     /// and evaluates it (generation 0). On an error nothing is drawn.
     pub fn initialize(&mut self, cost: &impl CostFunction<DIM>) -> Result<(), GaError> {
@@ -403,11 +418,11 @@ impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O
             let pm = O::probability(&mutation, parent_fitness[i], &stats);
             self.mutate_child(i, pm, usize::from(parent_index[i]), &spread);
         }
-        // A copy, not a swap: every offspring slot is rewritten before it is read in the next generation,
-        // and a swap of two large arrays links a 1.5 KB `memmove`.
-        self.population = self.offspring;
-        // Elites keep their costs; only offspring are evaluated.
+        // Row by row beside the evaluation (which reads the row), not a swap (a 1.5 KB `memmove`) nor
+        // one assignment of the arrays (a `memcpy` call): a row is copied inline. Elites keep their costs;
+        // only offspring are evaluated.
         for i in 0..POP {
+            self.population[i] = self.offspring[i];
             self.costs[i] = if i < self.config.elites { parent_fitness[i] } else { self.evaluate(cost, i) };
         }
         self.best_index = argmin(&self.costs);
@@ -416,21 +431,21 @@ impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O
         self.stall = if best < previous_best - 1e-6 * previous_best.abs() { 0 } else { self.stall.saturating_add(1) };
     }
 
-    /// Copies the `elites` best into the first offspring slots (repeatedly the first smallest cost not
-    /// yet taken, taken ones set to infinity in a copy: costs are finite; no sort, no allocation) and
-    /// their costs into `costs`.
+    /// Copies the `elites` best into the first offspring slots, in the order of (cost, index) (the
+    /// first index on ties; costs are finite: no sort, no copy of the costs), and their costs into
+    /// `costs`.
     #[inline(always)]
     fn keep_elites(&mut self, costs: &mut [f32; POP]) {
-        let mut left = self.costs;
+        let (mut after_cost, mut after_index) = (f32::NEG_INFINITY, usize::MAX);
         for e in 0..self.config.elites {
-            let best = argmin(&left);
-            if let (Some(cost), Some(kept), Some(slot), Some(genes)) =
-                (left.get_mut(best), costs.get_mut(e), self.offspring.get_mut(e), self.population.get(best))
+            let best = next_smallest(&self.costs, after_cost, after_index);
+            if let (Some(&cost), Some(kept), Some(slot), Some(genes)) =
+                (self.costs.get(best), costs.get_mut(e), self.offspring.get_mut(e), self.population.get(best))
             {
-                // `copy_from_slice` is a non-overlapping copy; an assignment here linked `memmove` (1.5 KB).
+                // `copy_from_slice`: an assignment of one row to another here linked `memmove` (1.5 KB).
                 slot.copy_from_slice(genes);
-                *kept = *cost;
-                *cost = f32::INFINITY;
+                *kept = cost;
+                (after_cost, after_index) = (cost, best);
             }
         }
     }
@@ -667,12 +682,21 @@ fn lg_count(n: u32) -> f32 {
     (k as f32 * LN_2 + ln_m) * LOG10_E
 }
 
-/// Index of the first smallest value (0 for an empty slice); NaN never wins. Out of line: three callers.
-#[inline(never)]
+/// Index of the first smallest finite value (0 if there is none); NaN never wins.
 fn argmin(v: &[f32]) -> usize {
-    let (mut best, mut best_value) = (0, v.first().copied().unwrap_or(0.0));
+    let i = next_smallest(v, f32::NEG_INFINITY, usize::MAX);
+    if i < v.len() { i } else { 0 }
+}
+
+/// Index of the smallest finite value after (`after_cost`, `after_index`) in the order of (value,
+/// index) (`usize::MAX` when there is none; `(NEG_INFINITY, usize::MAX)` for the first); NaN never wins.
+/// Out of line: the elites and `argmin`.
+#[inline(never)]
+fn next_smallest(v: &[f32], after_cost: f32, after_index: usize) -> usize {
+    let (mut best, mut best_value) = (usize::MAX, f32::INFINITY);
     for (i, &c) in v.iter().enumerate() {
-        if c < best_value {
+        let later = c > after_cost || (c == after_cost && i > after_index);
+        if later && c < best_value {
             (best, best_value) = (i, c);
         }
     }
