@@ -309,8 +309,8 @@ const MIN_HALF_WIDTH: f32 = 1e-7;
 
 /// Runs the GA to termination and returns what it found. Out of line: the GA state (population and
 /// offspring, `2 POP 9` floats) then lives in this frame alone, not in one merged with the LM and
-/// verdict frames, and is never moved. The box is set in place from its half-widths: a box by value
-/// was a `memcpy` call.
+/// verdict frames, and is never moved. The box is set in place from its half-widths (a box by value
+/// was a `memcpy` call), the result written into `out` (returned in a `Result`, it was copied).
 #[inline(never)]
 fn run_ga<R: Rng, const POP: usize>(
     norm: &[NormPose],
@@ -318,10 +318,12 @@ fn run_ga<R: Rng, const POP: usize>(
     half: &[f32; PARAM_COUNT],
     config: &GaConfig,
     rng: R,
-) -> Result<Optimised, GaError> {
+    out: &mut Optimised,
+) -> Result<(), GaError> {
     let mut ga = Ga::<R, POP, PARAM_COUNT>::empty(*config, SearchBox::UNSET, rng);
     seed_population(&mut ga, norm, start, half)?;
-    Ok(Optimised::from_ga(&ga.run(&PoseCost(norm))))
+    *out = Optimised::from_ga(&ga.run(&PoseCost(norm)));
+    Ok(())
 }
 
 /// What the optimiser did.
@@ -454,15 +456,14 @@ pub fn calibrate<R: Rng, const POP: usize, const MAX_POSES: usize>(
 ) -> Result<Calibration, CalibrationError> {
     let mut prepared = Prepared::<MAX_POSES>::EMPTY;
     prepared.refill(poses, config)?;
-    let start = Optimised::at(prepared.start);
-    let run = match config.method {
-        Method::Newton | Method::Lm => prepared.polish(start, config)?,
-        Method::Taga | Method::TagaLm => {
-            let half = prepared.search_half_widths(poses, config);
-            let ga = run_ga::<R, POP>(prepared.poses(), &prepared.start, &half, &config.ga, rng)?;
-            if config.method == Method::Taga { ga } else { prepared.polish(ga, config)? }
-        }
-    };
+    let mut run = Optimised::at(prepared.start);
+    if matches!(config.method, Method::Taga | Method::TagaLm) {
+        let half = prepared.search_half_widths(poses, config);
+        run_ga::<R, POP>(prepared.poses(), &prepared.start, &half, &config.ga, rng, &mut run)?;
+    }
+    if config.method != Method::Taga {
+        run = prepared.polish(run, config)?;
+    }
     Ok(prepared.conclude(poses, &run, config))
 }
 

@@ -109,12 +109,13 @@ impl<const MAX_POSES: usize> NormalizedPoses<MAX_POSES> {
         Ok(out)
     }
 
-    /// A placeholder to [`NormalizedPoses::refill`]: no poses, the identity frame.
+    /// A placeholder to [`NormalizedPoses::refill`], which writes every field: no poses, all zeros (a
+    /// placeholder with ones in it was a 608-byte `memcpy` from flash where it was placed).
     pub(crate) const EMPTY: Self = Self {
-        frame: Frame { offset: [0.0; 3], gain: [1.0; 3], gravity: 1.0 },
+        frame: Frame { offset: [0.0; 3], gain: [0.0; 3], gravity: 0.0 },
         initial: Initial {
             kind: Init::Auto,
-            params: Params::IDENTITY,
+            params: Params { bias: [0.0; 3], scale: [0.0; 3], nonorth: [0.0; 3] },
             excluded: PoseList::EMPTY,
             held: [false; PARAM_COUNT],
         },
