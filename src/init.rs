@@ -144,13 +144,8 @@ impl<const MAX_POSES: usize> NormalizedPoses<MAX_POSES> {
         }
         let used = initial_estimate(&mut self.initial, &mut self.frame, poses, &mut self.source, init, gravity, rule)?;
         self.source.truncate(used);
-        let (frame, initial) = (self.frame, &self.initial);
-        self.start = frame.to_deviation(&initial.params);
-        for i in 0..PARAM_COUNT {
-            if initial.held[i] {
-                self.start[i] = 0.0;
-            }
-        }
+        self.start = start_deviation(&self.initial, &self.frame);
+        let frame = &self.frame;
         self.poses.clear();
         for m in kept(poses, &self.source) {
             // As many as the indices.
@@ -207,14 +202,17 @@ fn initial_estimate(
     if let Err(e) = check_input(poses.iter().map(|p| &p.mean), gravity) {
         return Err(if init == Init::SixPosition { InitError::Coarse(e.into()) } else { InitError::Ellipsoid(e) });
     }
-    // The ellipsoid's model and the poses it leaves out are written in place; its centre and held
-    // terms kept here.
-    let mut fitted = None;
+    // The ellipsoid's model and the poses it leaves out are written in place; its centre kept here.
+    let mut center = None;
     let mut ellipsoid_error = None;
     if init != Init::SixPosition {
         let mut fitting = Fitting::new(poses, gravity, &mut initial.params, &mut initial.excluded);
         match fitting.robust(list, rule) {
-            Ok(()) => fitted = Some((fitting.center, fitting.held)),
+            Ok(()) => {
+                center = Some(fitting.center);
+                initial.kind = Init::Ellipsoid;
+                initial.held = held_parameters(&fitting.held);
+            }
             Err(e) if init == Init::Ellipsoid => return Err(InitError::Ellipsoid(e)),
             Err(e) => {
                 // Every pose again, in order.
@@ -229,20 +227,79 @@ fn initial_estimate(
     let error = |e: CoarseError| ellipsoid_error.map_or(InitError::Coarse(e), InitError::Ellipsoid);
     // The normalising frame: the ellipsoid's centre and gains `1 / S`, or the six faces' own
     // (exactly: the paper's path).
-    let (offset, gain) = match fitted {
-        Some((center, _)) => (center, initial.params.scale.map(|s| 1.0 / s)),
+    let (offset, gain) = match center {
+        Some(center) => (center, initial.params.scale.map(|s| 1.0 / s)),
         None => face_means(kept(poses, list), gravity).map(|(offset, gain, _)| (offset, gain)).map_err(error)?,
     };
     *frame = Frame::new(offset, gain, gravity).map_err(|e| error(e.into()))?;
-    let (kind, held) = match fitted {
-        Some((_, held)) => (Init::Ellipsoid, held),
-        None => {
-            initial.params = frame.to_params(&[0.0; PARAM_COUNT]);
-            initial.excluded = PoseList::EMPTY;
-            (Init::SixPosition, [false; 3])
-        }
-    };
-    initial.kind = kind;
-    initial.held = held_parameters(&held);
+    if center.is_none() {
+        initial.params = frame.to_params(&[0.0; PARAM_COUNT]);
+        initial.excluded = PoseList::EMPTY;
+        initial.kind = Init::SixPosition;
+        initial.held = [false; PARAM_COUNT];
+    }
     Ok(list.len() - initial.excluded.as_slice().len())
+}
+
+/// [`Frame::to_deviation`] of `initial`'s model in `frame`, its frame, bit for bit, held parameters
+/// at 0: the frame's offset is the model's centre, whose image `Ka c` is the model's bias (the ellipsoid
+/// computes `B` so, and [`Frame::to_params`] the six faces' model), so the bias deviations are exactly 0.
+fn start_deviation(initial: &Initial, frame: &Frame) -> Deviation {
+    let (p, k) = (&initial.params, frame.gain);
+    let mut start = [0.0; PARAM_COUNT];
+    for a in 0..3 {
+        start[3 + a] = p.scale[a] * k[a] - 1.0;
+    }
+    (start[6], start[7], start[8]) = (p.nonorth[0] * k[0], p.nonorth[1] * k[0], p.nonorth[2] * k[1]);
+    for (x, &held) in start.iter_mut().zip(&initial.held) {
+        if held {
+            *x = 0.0;
+        }
+    }
+    start
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Poses on a known model: the six faces (two turns each) and four diagonals.
+    fn poses() -> [Pose; 16] {
+        let truth = Params { bias: [0.3, -0.2, 0.1], scale: [1.02, 0.97, 1.01], nonorth: [0.01, -0.02, 0.015] };
+        let d = 0.577_350_3 * 9.80665;
+        let dirs: [[f32; 3]; 16] = [
+            [9.80665, 0.1, 0.0],
+            [9.80665, 0.0, 0.1],
+            [-9.80665, 0.1, 0.0],
+            [-9.80665, 0.0, -0.1],
+            [0.1, 9.80665, 0.0],
+            [0.0, 9.80665, 0.1],
+            [0.1, -9.80665, 0.0],
+            [0.0, -9.80665, -0.1],
+            [0.1, 0.0, 9.80665],
+            [0.0, 0.1, 9.80665],
+            [0.1, 0.0, -9.80665],
+            [0.0, -0.1, -9.80665],
+            [d, d, d],
+            [-d, d, -d],
+            [d, -d, -d],
+            [-d, -d, d],
+        ];
+        dirs.map(|g| Pose::from_mean(truth.invert(g).unwrap(), 100))
+    }
+
+    #[test]
+    fn the_start_is_the_deviation_of_the_initial_model_bit_for_bit() {
+        for init in [Init::Ellipsoid, Init::SixPosition] {
+            let norm = NormalizedPoses::<16>::prepare(&poses(), init, 9.80665, &OutlierRule::DEFAULT).unwrap();
+            assert_eq!(norm.initial().kind, init);
+            let mut expected = norm.frame().to_deviation(&norm.initial().params);
+            for (x, &held) in expected.iter_mut().zip(&norm.initial().held) {
+                if held {
+                    *x = 0.0;
+                }
+            }
+            assert_eq!(norm.start().map(f32::to_bits), expected.map(f32::to_bits), "{init:?}");
+        }
+    }
 }
