@@ -202,17 +202,14 @@ fn initial_estimate(
     if let Err(e) = check_input(poses.iter().map(|p| &p.mean), gravity) {
         return Err(if init == Init::SixPosition { InitError::Coarse(e.into()) } else { InitError::Ellipsoid(e) });
     }
-    // The ellipsoid's model and the poses it leaves out are written in place; its centre kept here.
-    let mut center = None;
+    // The ellipsoid's model and the poses it leaves out are written in place; its centre and held
+    // terms kept here.
+    let mut fitted = None;
     let mut ellipsoid_error = None;
     if init != Init::SixPosition {
         let mut fitting = Fitting::new(poses, gravity, &mut initial.params, &mut initial.excluded);
         match fitting.robust(list, rule) {
-            Ok(()) => {
-                center = Some(fitting.center);
-                initial.kind = Init::Ellipsoid;
-                initial.held = held_parameters(&fitting.held);
-            }
+            Ok(()) => fitted = Some((fitting.center, fitting.held)),
             Err(e) if init == Init::Ellipsoid => return Err(InitError::Ellipsoid(e)),
             Err(e) => {
                 // Every pose again, in order.
@@ -227,17 +224,21 @@ fn initial_estimate(
     let error = |e: CoarseError| ellipsoid_error.map_or(InitError::Coarse(e), InitError::Ellipsoid);
     // The normalising frame: the ellipsoid's centre and gains `1 / S`, or the six faces' own
     // (exactly: the paper's path).
-    let (offset, gain) = match center {
-        Some(center) => (center, initial.params.scale.map(|s| 1.0 / s)),
+    let (offset, gain) = match fitted {
+        Some((center, _)) => (center, initial.params.scale.map(|s| 1.0 / s)),
         None => face_means(kept(poses, list), gravity).map(|(offset, gain, _)| (offset, gain)).map_err(error)?,
     };
     *frame = Frame::new(offset, gain, gravity).map_err(|e| error(e.into()))?;
-    if center.is_none() {
-        initial.params = frame.to_params(&[0.0; PARAM_COUNT]);
-        initial.excluded = PoseList::EMPTY;
-        initial.kind = Init::SixPosition;
-        initial.held = [false; PARAM_COUNT];
-    }
+    let (kind, held) = match fitted {
+        Some((_, held)) => (Init::Ellipsoid, held),
+        None => {
+            initial.params = frame.to_params(&[0.0; PARAM_COUNT]);
+            initial.excluded = PoseList::EMPTY;
+            (Init::SixPosition, [false; 3])
+        }
+    };
+    initial.kind = kind;
+    initial.held = held_parameters(&held);
     Ok(list.len() - initial.excluded.as_slice().len())
 }
 
