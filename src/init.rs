@@ -144,7 +144,7 @@ impl<const MAX_POSES: usize> NormalizedPoses<MAX_POSES> {
         }
         let used = initial_estimate(&mut self.initial, &mut self.frame, poses, &mut self.source, init, gravity, rule)?;
         self.source.truncate(used);
-        self.start = start_deviation(&self.initial, &self.frame);
+        start_deviation(&self.initial, &self.frame, &mut self.start);
         let frame = &self.frame;
         self.poses.clear();
         for m in kept(poses, &self.source) {
@@ -243,21 +243,19 @@ fn initial_estimate(
 }
 
 /// [`Frame::to_deviation`] of `initial`'s model in `frame`, its frame, bit for bit, held parameters
-/// at 0: the frame's offset is the model's centre, whose image `Ka c` is the model's bias (the ellipsoid
-/// computes `B` so, and [`Frame::to_params`] the six faces' model), so the bias deviations are exactly 0.
-fn start_deviation(initial: &Initial, frame: &Frame) -> Deviation {
+/// at 0, written into `start`: the frame's offset is the model's centre, whose image `Ka c` is the
+/// model's bias (the ellipsoid computes `B` so, and [`Frame::to_params`] the six faces' model), so the
+/// bias deviations are exactly 0; only non-orthogonality terms are ever held.
+fn start_deviation(initial: &Initial, frame: &Frame, start: &mut Deviation) {
     let (p, k) = (&initial.params, frame.gain);
-    let mut start = [0.0; PARAM_COUNT];
+    *start = [0.0; PARAM_COUNT];
     for a in 0..3 {
         start[3 + a] = p.scale[a] * k[a] - 1.0;
-    }
-    (start[6], start[7], start[8]) = (p.nonorth[0] * k[0], p.nonorth[1] * k[0], p.nonorth[2] * k[1]);
-    for (x, &held) in start.iter_mut().zip(&initial.held) {
-        if held {
-            *x = 0.0;
+        // Mxx and Myy are relative to the x gain, Mzz to the y gain.
+        if !initial.held[6 + a] {
+            start[6 + a] = p.nonorth[a] * k[a / 2];
         }
     }
-    start
 }
 
 #[cfg(test)]
