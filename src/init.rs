@@ -220,15 +220,15 @@ fn initial_estimate(
             }
         }
     }
-    // When the six faces are the fallback, the ellipsoid's error is the one reported.
-    let error = |e: CoarseError| ellipsoid_error.map_or(InitError::Coarse(e), InitError::Ellipsoid);
     // The normalising frame: the ellipsoid's centre and gains `1 / S`, or the six faces' own
     // (exactly: the paper's path).
-    let (offset, gain) = match fitted {
-        Some((center, _)) => (center, initial.params.scale.map(|s| 1.0 / s)),
-        None => face_means(kept(poses, list), gravity).map(|(offset, gain, _)| (offset, gain)).map_err(error)?,
-    };
-    *frame = Frame::new(offset, gain, gravity).map_err(|e| error(e.into()))?;
+    let frame_or_error = match fitted {
+        Some((center, _)) => Ok((center, initial.params.scale.map(|s| 1.0 / s))),
+        None => face_means(kept(poses, list), gravity).map(|(offset, gain, _)| (offset, gain)),
+    }
+    .and_then(|(offset, gain)| Ok(Frame::new(offset, gain, gravity)?));
+    // When the six faces are the fallback, the ellipsoid's error is the one reported.
+    *frame = frame_or_error.map_err(|e| ellipsoid_error.map_or(InitError::Coarse(e), InitError::Ellipsoid))?;
     let (kind, held) = match fitted {
         Some((_, held)) => (Init::Ellipsoid, held),
         None => {
