@@ -135,13 +135,10 @@ impl<const MAX_POSES: usize> NormalizedPoses<MAX_POSES> {
         if poses.len() > MAX_POSES {
             return Err(InitError::TooManyPoses { got: poses.len(), capacity: MAX_POSES });
         }
-        // Every pose, listed by index; the estimate reorders the list, its first `used` entries are
-        // the poses it kept.
+        // A list of the poses by index (capacity checked above); the estimate fills and reorders it, its
+        // first `used` entries are the poses it kept.
         self.source.clear();
-        for i in 0..poses.len() {
-            // Capacity checked above.
-            let _ = self.source.push(i as u16);
-        }
+        let _ = self.source.resize_default(poses.len());
         let used = initial_estimate(&mut self.initial, &mut self.frame, poses, &mut self.source, init, gravity, rule)?;
         self.source.truncate(used);
         start_deviation(&self.initial, &self.frame, &mut self.start);
@@ -185,9 +182,9 @@ impl<const MAX_POSES: usize> NormalizedPoses<MAX_POSES> {
     }
 }
 
-/// The estimate `init` asks for (see [`Init`]) and its frame, written into `initial` and `frame`,
-/// from the poses listed in `list` (every pose, in order); returns how many it uses: the first
-/// entries of `list`, which it reorders.
+/// The estimate `init` asks for (see [`Init`]) and its frame, written into `initial` and `frame`;
+/// `list`, as long as `poses`, is filled with the indices of the poses it uses first; returns how
+/// many it uses.
 #[inline(always)]
 fn initial_estimate(
     initial: &mut Initial,
@@ -206,16 +203,14 @@ fn initial_estimate(
     // terms kept here.
     let mut fitted = None;
     let mut ellipsoid_error = None;
+    every_pose(list);
     if init != Init::SixPosition {
         let mut fitting = Fitting::new(poses, gravity, &mut initial.params, &mut initial.excluded);
         match fitting.robust(list, rule) {
             Ok(()) => fitted = Some((fitting.center, fitting.held)),
             Err(e) if init == Init::Ellipsoid => return Err(InitError::Ellipsoid(e)),
             Err(e) => {
-                // Every pose again, in order.
-                for (i, entry) in list.iter_mut().enumerate() {
-                    *entry = i as u16;
-                }
+                every_pose(list);
                 ellipsoid_error = Some(e);
             }
         }
@@ -240,6 +235,13 @@ fn initial_estimate(
     initial.kind = kind;
     initial.held = held_parameters(&held);
     Ok(list.len() - initial.excluded.as_slice().len())
+}
+
+/// Every pose, in order: `list[i] = i`.
+fn every_pose(list: &mut [u16]) {
+    for (i, entry) in list.iter_mut().enumerate() {
+        *entry = i as u16;
+    }
 }
 
 /// [`Frame::to_deviation`] of `initial`'s model in `frame`, its frame, bit for bit, held parameters
