@@ -34,7 +34,7 @@
 
 use crate::accumulator::Pose;
 use crate::linalg::{
-    DETERMINED_PIVOT, Matrix, add_normal_row, larger, smaller, solve_spd_holding_weak_in_place, sqrt_f32,
+    DETERMINED_PIVOT, Held, Matrix, add_normal_row, larger, smaller, solve_spd_holding_weak_in_place, sqrt_f32,
 };
 use crate::model::{PARAM_COUNT, Params, norm_squared};
 
@@ -388,7 +388,9 @@ impl Fitting<'_> {
         lower_factor([ata[3][3] - shift, ata[4][4] - shift, ata[5][5] - shift], [ata[4][3], ata[5][3], ata[5][4]])?;
         // `atb` becomes the quadric coefficients; weakly determined cross terms are held at 0.
         let held = solve_spd_holding_weak_in_place(&mut ata, &mut atb, DETERMINED_PIVOT).ok()?;
-        if (0..6).any(|i| held.contains(i)) {
+        // Only cross terms may be held.
+        let cross_terms = Held::NONE.with(6).with(7).with(8);
+        if held.union(cross_terms) != cross_terms {
             return None;
         }
         // Quadric cross terms xy, xz, yz map to Mxx, Myy, Mzz.
