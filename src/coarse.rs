@@ -19,7 +19,7 @@
 //! ```
 
 use crate::accumulator::Pose;
-use crate::ellipsoid::{EllipsoidError, check_input, half_axes_near, largest, mid_range};
+use crate::ellipsoid::{EllipsoidError, check_input, half_axes_near, mid_range};
 use crate::frame::{Deviation, Frame, FrameError};
 use crate::ga::{GaError, SearchBox};
 use crate::model::{PARAM_COUNT, Params};
@@ -197,11 +197,10 @@ impl CoarseCalibration {
     }
 }
 
-/// Whether every axis, by the half-range `half` of its readings, was pointed both up and down: it then
-/// spans about twice gravity, like the widest one; one that spans much less was never reversed, and
-/// its centre (hence its dominant poses) is unknown.
-fn check_reversed(half: [f32; 3]) -> Result<(), CoarseError> {
-    let widest = largest(half);
+/// Whether every axis, by the half-range `half` of its readings (the largest `widest`), was pointed
+/// both up and down: it then spans about twice gravity, like the widest one; one that spans much less
+/// was never reversed, and its centre (hence its dominant poses) is unknown.
+fn check_reversed(half: [f32; 3], widest: f32) -> Result<(), CoarseError> {
     for a in 0..3 {
         if widest > 0.0 && half[a] < MIN_SPAN_FRACTION * widest {
             // In [0, 75): the cast to `u8` needs no clamp (`u32` is one instruction).
@@ -220,8 +219,8 @@ pub(crate) fn face_means<'a>(
     gravity: f32,
 ) -> Result<([f32; 3], [f32; 3], [[u16; 2]; 3]), CoarseError> {
     // Centre and half-range per axis from the extremes: removes the large offsets of raw counts.
-    let (mid, half) = mid_range(means.clone());
-    check_reversed(half)?;
+    let (mid, half, widest) = mid_range(means.clone());
+    check_reversed(half, widest)?;
     let mut sums = [[0.0f32; 2]; 3];
     let mut counts = [[0u16; 2]; 3];
     for m in means {
