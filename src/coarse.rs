@@ -224,12 +224,9 @@ pub(crate) fn face_means<'a>(
     let mut sums = [[0.0f32; 2]; 3];
     let mut counts = [[0u16; 2]; 3];
     for m in means {
-        let mut u = [0.0; 3];
-        for a in 0..3 {
-            if half[a] > 0.0 {
-                u[a] = (m[a] - mid[a]) / half[a];
-            }
-        }
+        // Every half-range is positive here, or all are 0 (all means equal): then `u` is NaN, near
+        // no half-axis.
+        let u = [(m[0] - mid[0]) / half[0], (m[1] - mid[1]) / half[1], (m[2] - mid[2]) / half[2]];
         let near = half_axes_near(u, DOMINANCE);
         // At most one half-axis is within 25 deg (all six only for u = 0, which points nowhere).
         if near != 0 && near != 0x3f {
