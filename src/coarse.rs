@@ -202,7 +202,8 @@ impl CoarseCalibration {
 /// was never reversed, and its centre (hence its dominant poses) is unknown.
 fn check_reversed(half: [f32; 3], widest: f32) -> Result<(), CoarseError> {
     for a in 0..3 {
-        if widest > 0.0 && half[a] < MIN_SPAN_FRACTION * widest {
+        // Never true when all are 0.
+        if half[a] < MIN_SPAN_FRACTION * widest {
             // In [0, 75): the cast to `u8` needs no clamp (`u32` is one instruction).
             let span_pct = (100.0 * half[a] / widest) as u32 as u8;
             return Err(CoarseError::NotReversed { axis: a as u8, span_pct });
