@@ -123,7 +123,8 @@ def main():
     a = chain.specific_force(ctx) / parts.G0
     extra = ctx.nonlin[0](a)
     want = np.array(p["k2_mg_per_g2"]) * 1e-3 * a ** 2 + np.array(p["k3_mg_per_g3"]) * 1e-3 * a ** 3
-    check("non-linearity polynomial", np.abs(extra - want).max() < 1e-6,  # parameters are reported to 1e-4 mg f"max diff {np.abs(extra - want).max():.1e} g")
+    check("non-linearity polynomial", np.abs(extra - want).max() < 1e-6,
+          f"(parameters reported to 1e-4 mg) max diff {np.abs(extra - want).max():.1e} g")
 
     # 8. Gauss-Markov noise: std and correlation time as drawn
     ctx, r = build(24, "table-books", n_poses=40)
