@@ -50,6 +50,17 @@ FAMILIES = {
 }
 
 
+# shapes that only make physical sense in some session styles (a rigid gimbal does not creep
+# on foam, nobody hand-holds a gimbal); every other shape may meet any style
+STYLES_FOR = {
+    "creep-tilt": ("table-books", "phone-free"),
+    "ringing": ("gimbal", "cube-jig", "table-books"),
+    "hand-held": ("phone-free", "table-books"),
+    "nudge": ("table-books", "cube-jig", "phone-free"),
+    "clamp-pose": ("table-books", "cube-jig"),
+}
+
+
 def log_seed(seed, fam_index, i):
     """The seed of one log: reproducible from (master seed, family index, log index)."""
     return int(seed) * 100_000 + fam_index * 1000 + i
@@ -83,7 +94,7 @@ def make_log(out_dir, family, fam_index, shape, i, seed, small):
     expected, shapes = FAMILIES[family]
     inj = shapes[shape]
     lvl = float(rng.uniform())
-    style = str(rng.choice(session.STYLES))
+    style = str(rng.choice(STYLES_FOR.get(shape, session.STYLES)))
     coarse = family == "clean" and shape == "coarse"
     unit = parts.draw_unit(rng, coarse=coarse, small=small)
     odr = unit["odr_nom_hz"]
@@ -102,7 +113,7 @@ def make_log(out_dir, family, fam_index, shape, i, seed, small):
         scenario = str(rng.choice(["power-up", "from-cold"]))
     elif family == "drift":
         scenario = "warmed-up"
-    T_die, tpar = session.temperature(rng, t, segs, unit["ds"], scenario)
+    T_die, tpar = session.temperature(rng, t, segs, unit["ds"], scenario, hand=style != "gimbal")
     ctx = chain.Ctx(t, fs, segs, st, R, P, T_die, unit)
     ctx.k = k
     params = inj(ctx, rng, lvl) if inj is not None else {}

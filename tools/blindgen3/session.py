@@ -287,13 +287,13 @@ def trajectory(st, t, segs, rng):
 
 
 # ---------------------------------------------------------------- room and die temperature
-def temperature(rng, t, segs, ds, scenario="ordinary"):
+def temperature(rng, t, segs, ds, scenario="ordinary", hand=True):
     """Die temperature (degC) on grid t and the scenario's parameters.
 
     ordinary:      room T0 18-28 degC drifting +-1 K/h, HVAC ripple 0-0.3 K (period 10-30 min);
                    die self-heating dT 'self_heat_k' of the part with tau 60-600 s, powered up
                    0-1200 s before the log starts; each hand move warms the body by 0-0.05 K
-                   (decays with tau 60 s).
+                   (decays with tau 60 s; not on the gimbal: hand=False).
     warmed-up:     as ordinary, powered up 30-120 min before the log (flat die temperature).
     power-up:      log starts at power-up; board self-heating (MCU, radio, regulator) 2-8 K,
                    tau 60-400 s, on top of the part's own.
@@ -333,7 +333,7 @@ def temperature(rng, t, segs, ds, scenario="ordinary"):
         p.update(ramp_k_per_s=r)
     # hand warmth: each hand move adds a small step that decays
     for kind, t0, t1, k in segs:
-        if kind == "move":
+        if kind == "move" and hand:
             d = rng.uniform(0, 0.05)
             m = t >= t1
             T[m] += d * np.exp(-(t[m] - t1) / 60.0)
