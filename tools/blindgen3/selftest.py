@@ -153,7 +153,27 @@ def main():
     check("polling skips with a 2 % fast sensor", 0.01 < frac < 0.03 and np.all(np.diff(st) > 0),
           f"skipped {frac * 100:.2f} % of polls, duplicates {info['duplicates']}, stamps increasing")
 
-    # 11. end to end: --small logs, manifest, row cap, units
+    # 11. every injector: finite output, a measurable effect that grows with the level
+    bad, n_inj = [], 0
+    for fam, (_, shapes) in generate.FAMILIES.items():
+        for shape, inj in shapes.items():
+            if inj is None:
+                continue
+            n_inj += 1
+            mags = []
+            for lvl in (0.0, 1.0):
+                ctx, r = build(30, generate.STYLES_FOR.get(shape, session.STYLES)[0], odr=100.0,
+                               scenario="chamber-ramp" if fam == "temperature" else "ordinary")
+                inj(ctx, np.random.default_rng(7), lvl)
+                t_s, y_s, idx, mag = chain.run_part(ctx, r)
+                if not np.all(np.isfinite(y_s)):
+                    mag = float("nan")
+                mags.append(mag)
+            if not (mags[0] > 0 and mags[1] > mags[0]):
+                bad.append(f"{fam}/{shape} {mags}")
+    check("every injector acts and grows with its level", not bad, "; ".join(bad) or f"{n_inj} injectors, magnitude at level 0 < level 1")
+
+    # 12. end to end: --small logs, manifest, row cap, units
     with tempfile.TemporaryDirectory() as d:
         generate.main(["--out", d, "--per-family", "1", "--seed", "3", "--small",
                        "--families", "clean,temperature,out-of-catalogue"])
