@@ -404,6 +404,7 @@ impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O
     }
 
     /// Runs one generation: elitism, selection, crossover, mutation, evaluation.
+    #[inline(never)]
     pub fn step(&mut self, cost: &impl CostFunction<DIM>) {
         let stats = self.fitness_stats();
         let [crossover, mutation] = self.config.operators.curves(stats.lg_generation);
