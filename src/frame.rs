@@ -231,8 +231,9 @@ pub fn objective(x: &Deviation, poses: &[NormPose]) -> f32 {
     sum / poses.len() as f32
 }
 
-/// Modulus error of one pose and its gradient with respect to `x`.
-#[inline]
+/// Modulus error of one pose and its gradient with respect to `x`. Out of line: the Levenberg-Marquardt
+/// normal equations and the verdict's passes over the poses share one copy.
+#[inline(never)]
 pub fn modulus_error_gradient(x: &Deviation, pose: &NormPose) -> (f32, Deviation) {
     let u = pose.u;
     let d = deviation_residual(x, u);

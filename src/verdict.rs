@@ -162,25 +162,25 @@ impl Verdict {
 /// scale 50 %, non-orthogonality 0.5 rad.
 const PLAUSIBLE_DEVIATION: f32 = 0.5;
 
-/// The normalised modulus error of a pose ([`crate::frame::modulus_error`]) and its variance
-/// ([`error_variance`]), out of line: every pass of the verdict over the poses shares one copy of both
-/// (and of the residual they start from).
+/// The normalised modulus error of a pose and its variance ([`error_variance`]), from its gradient
+/// ([`crate::frame::modulus_error_gradient`], shared with the normal equations), out of line: every
+/// pass of the verdict over the poses shares one copy.
 #[inline(never)]
 fn error_and_variance(x: &Deviation, frame: &Frame, pose: &Pose, norm: &NormPose) -> (f32, Option<f32>) {
-    (crate::frame::modulus_error(x, norm), error_variance(x, frame, pose, norm))
+    let (e, gradient) = crate::frame::modulus_error_gradient(x, norm);
+    (e, error_variance(x, frame, pose, &gradient))
 }
 
-/// Variance of one pose's normalised modulus error `E / g^2` due to its averaging noise; `None` if the
-/// pose carries no variance.
+/// Variance of one pose's normalised modulus error `E / g^2` due to its averaging noise, from the
+/// error's `gradient` (its first three entries are `-2 r`, `r = A u - beta`: halved back exactly);
+/// `None` if the pose carries no variance.
 #[inline]
-fn error_variance(x: &Deviation, frame: &Frame, pose: &Pose, norm: &NormPose) -> Option<f32> {
+fn error_variance(x: &Deviation, frame: &Frame, pose: &Pose, gradient: &Deviation) -> Option<f32> {
     if pose.n == 0 || pose.variance.iter().all(|&v| v == 0.0) {
         return None;
     }
     // dE = 2 r^T A du, du_a = dm_a / (k_a g).
-    let u = norm.u;
-    let r = crate::frame::deviation_residual(x, u);
-    let r = [u[0] + r[0], u[1] + r[1], u[2] + r[2]];
+    let r = [-0.5 * gradient[0], -0.5 * gradient[1], -0.5 * gradient[2]];
     // A^T r with A = I + diag(a) + lower(m) in deviation terms.
     let atr = [(1.0 + x[3]) * r[0] + x[6] * r[1] + x[7] * r[2], (1.0 + x[4]) * r[1] + x[8] * r[2], (1.0 + x[5]) * r[2]];
     let mut var = 0.0;
