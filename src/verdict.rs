@@ -292,11 +292,17 @@ pub fn covariance_holding_in_place(info: &mut Matrix<PARAM_COUNT>, held: Held) -
 /// The largest standard deviation each parameter may have under `bounds` (paper convention,
 /// [`Params::to_array`] order).
 pub fn param_limits(params: &Params, bounds: &VerdictBounds, gravity: f32) -> [f32; PARAM_COUNT] {
-    core::array::from_fn(|i| match i {
+    core::array::from_fn(|i| param_limit(i, params, bounds, gravity))
+}
+
+/// Entry `i` of [`param_limits`].
+#[inline]
+fn param_limit(i: usize, params: &Params, bounds: &VerdictBounds, gravity: f32) -> f32 {
+    match i {
         0..=2 => bounds.max_bias_std_mg * gravity / 1000.0,
         3..=5 => bounds.max_scale_std_rel * params.scale[i - 3].abs(),
         _ => bounds.max_nonorth_std * params.scale[if i == 8 { 1 } else { 0 }].abs(),
-    })
+    }
 }
 
 /// Standard deviation (deviation units: bias in g, scale relative, non-orthogonality in rad) above
@@ -350,18 +356,16 @@ pub fn undetermined_parameters(x: &Deviation, norm: &[NormPose]) -> Held {
 
 /// Standard deviations of the paper-convention parameters from a deviation covariance.
 pub fn param_std(frame: &Frame, covariance: &Matrix<PARAM_COUNT>) -> [f32; PARAM_COUNT] {
-    let t = frame.params_jacobian();
-    let mut out = [0.0; PARAM_COUNT];
-    for (i, o) in out.iter_mut().enumerate() {
+    core::array::from_fn(|i| {
+        let t = frame.params_jacobian_row(i);
         let mut v = 0.0;
         for a in 0..PARAM_COUNT {
             for b in 0..PARAM_COUNT {
-                v += t[i][a] * covariance[a][b] * t[i][b];
+                v += t[a] * covariance[a][b] * t[b];
             }
         }
-        *o = crate::linalg::sqrt_f32(larger(v, 0.0));
-    }
-    out
+        crate::linalg::sqrt_f32(larger(v, 0.0))
+    })
 }
 
 /// Sums over the poses used, in one pass: the squared modulus errors after (normalised, free of the
@@ -445,12 +449,12 @@ pub fn judge(
     };
     let mut warnings = Warnings { held: [false; PARAM_COUNT], excluded };
     let structurally_undetermined = undetermined_parameters(x, set.norm);
-    let limits = param_limits(&params, bounds, frame.gravity);
     for i in 0..PARAM_COUNT {
         if held.contains(i) {
             (std[i], warnings.held[i]) = (f32::INFINITY, true);
         } else {
-            failures.undetermined[i] = structurally_undetermined.contains(i) || !(std[i] <= limits[i]);
+            let limit = param_limit(i, &params, bounds, frame.gravity);
+            failures.undetermined[i] = structurally_undetermined.contains(i) || !(std[i] <= limit);
         }
     }
     let rmse_before_mg = rmse_of_mg(sums.before, set.len(), frame.gravity);
