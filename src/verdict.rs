@@ -318,13 +318,11 @@ pub const HOLD_STD: Deviation = [0.05, 0.05, 0.05, 0.02, 0.02, 0.02, 0.01, 0.01,
 #[inline(never)] // its matrices need not share a stack frame with the solvers'
 pub fn parameters_to_hold(x: &Deviation, frame: &Frame, set: &PoseSet<'_>, held: Held) -> Held {
     let mut held = held.union(undetermined_parameters(x, set.norm));
-    let mut info = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
-    if !information_in_place(x, frame, set, held, false, &mut info) {
-        return held;
-    }
+    // The information matrix of the parameters held so far, rebuilt at each step rather than copied.
+    let first = held;
+    let mut cov = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
     loop {
-        let mut cov = info;
-        if !covariance_holding_in_place(&mut cov, held) {
+        if !(information_in_place(x, frame, set, first, false, &mut cov) && covariance_holding_in_place(&mut cov, held)) {
             break;
         }
         // The largest ratio above 1 (or NaN), `PARAM_COUNT` for none.
