@@ -322,6 +322,23 @@ mod tests {
     }
 
     #[test]
+    fn params_jacobian_matches_differences_of_to_params() {
+        let frame = Frame::new([32768.0, -412.5, 1903.25], [1671.3, 1669.9, 1675.1], 9.80665).unwrap();
+        let t = frame.params_jacobian();
+        let base = frame.to_params(&[0.0; PARAM_COUNT]).to_array();
+        for j in 0..PARAM_COUNT {
+            let mut x = [0.0; PARAM_COUNT];
+            x[j] = 1e-2;
+            let moved = frame.to_params(&x).to_array();
+            for i in 0..PARAM_COUNT {
+                let slope = (moved[i] - base[i]) / 1e-2;
+                let tolerance = 1e-3 * t[i][j].abs() + 1e-3 * base[i].abs();
+                assert!((slope - t[i][j]).abs() <= tolerance, "d p{i} / d x{j}: {slope} vs {}", t[i][j]);
+            }
+        }
+    }
+
+    #[test]
     fn rejects_bad_frames() {
         assert_eq!(Frame::new([0.0; 3], [1.0; 3], 0.0), Err(FrameError::InvalidGravity));
         assert_eq!(Frame::new([0.0; 3], [1.0, 0.0, 1.0], 9.8), Err(FrameError::DegenerateGain { axis: 1 }));

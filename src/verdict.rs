@@ -322,7 +322,9 @@ pub fn parameters_to_hold(x: &Deviation, frame: &Frame, set: &PoseSet<'_>, held:
     let first = held;
     let mut cov = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
     loop {
-        if !(information_in_place(x, frame, set, first, false, &mut cov) && covariance_holding_in_place(&mut cov, held)) {
+        let inverted =
+            information_in_place(x, frame, set, first, false, &mut cov) && covariance_holding_in_place(&mut cov, held);
+        if !inverted {
             break;
         }
         // The largest ratio above 1 (or NaN), `PARAM_COUNT` for none.
