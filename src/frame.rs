@@ -178,10 +178,32 @@ impl Frame {
     /// Jacobian of the paper-convention parameters with respect to the deviation vector:
     /// `J[i][j] = d params[i] / d x[j]` (both in [`Params::to_array`] order). The mapping is affine.
     pub fn params_jacobian(&self) -> [[f32; PARAM_COUNT]; PARAM_COUNT] {
-        core::array::from_fn(|i| self.params_jacobian_row(i))
+        let k = self.gain;
+        let c = self.offset;
+        let g = self.gravity;
+        let mut j = [[0.0; PARAM_COUNT]; PARAM_COUNT];
+        // Scale and non-orthogonality: linear in a and m.
+        j[3][3] = 1.0 / k[0];
+        j[4][4] = 1.0 / k[1];
+        j[5][5] = 1.0 / k[2];
+        j[6][6] = 1.0 / k[0];
+        j[7][7] = 1.0 / k[0];
+        j[8][8] = 1.0 / k[1];
+        // Bias: B = g beta + Ka c.
+        for i in 0..3 {
+            j[i][i] = g;
+        }
+        j[0][3] = c[0] / k[0];
+        j[1][6] = c[0] / k[0];
+        j[1][4] = c[1] / k[1];
+        j[2][7] = c[0] / k[0];
+        j[2][8] = c[1] / k[1];
+        j[2][5] = c[2] / k[2];
+        j
     }
 
-    /// Row `i` of [`Frame::params_jacobian`], built alone (no 9x9 matrix on the stack). Deviation
+    /// Row `i` of [`Frame::params_jacobian`] (the same values, bit for bit), built alone (no 9x9 matrix
+    /// on the stack: the verdict's standard deviations). Deviation
     /// entry `j >= 3` is the `Ka` entry at row `KA_ROW[j]`, column `KA_COLUMN[j]`, over that column's
     /// gain: `d Ka / d x_j = 1 / k` (parameter `j` itself) and, through `B = g beta + Ka c`,
     /// `d B / d x_j = c / k` (bias `KA_ROW[j]`); `d B_i / d beta_i = g`.
@@ -325,6 +347,9 @@ mod tests {
     fn params_jacobian_matches_differences_of_to_params() {
         let frame = Frame::new([32768.0, -412.5, 1903.25], [1671.3, 1669.9, 1675.1], 9.80665).unwrap();
         let t = frame.params_jacobian();
+        for (i, row) in t.iter().enumerate() {
+            assert_eq!(frame.params_jacobian_row(i).map(f32::to_bits), row.map(f32::to_bits), "row {i}");
+        }
         let base = frame.to_params(&[0.0; PARAM_COUNT]).to_array();
         for j in 0..PARAM_COUNT {
             let mut x = [0.0; PARAM_COUNT];
