@@ -201,6 +201,29 @@ impl Frame {
         j[2][5] = c[2] / k[2];
         j
     }
+
+    /// Row `i` of [`Frame::params_jacobian`] (the same values, bit for bit), built alone (no 9x9 matrix
+    /// on the stack: the verdict's standard deviations). Deviation
+    /// entry `j >= 3` is the `Ka` entry at row `KA_ROW[j]`, column `KA_COLUMN[j]`, over that column's
+    /// gain: `d Ka / d x_j = 1 / k` (parameter `j` itself) and, through `B = g beta + Ka c`,
+    /// `d B / d x_j = c / k` (bias `KA_ROW[j]`); `d B_i / d beta_i = g`.
+    #[inline]
+    pub fn params_jacobian_row(&self, i: usize) -> [f32; PARAM_COUNT] {
+        const KA_ROW: [usize; PARAM_COUNT] = [0, 1, 2, 0, 1, 2, 1, 2, 2];
+        const KA_COLUMN: [usize; PARAM_COUNT] = [0, 1, 2, 0, 1, 2, 0, 0, 1];
+        core::array::from_fn(|j| {
+            let column = KA_COLUMN[j];
+            if j < 3 {
+                if i == j { self.gravity } else { 0.0 }
+            } else if i == j {
+                1.0 / self.gain[column]
+            } else if i == KA_ROW[j] {
+                self.offset[column] / self.gain[column]
+            } else {
+                0.0
+            }
+        })
+    }
 }
 
 /// `d = (A - I) u - beta` for deviation `x`.
@@ -231,8 +254,9 @@ pub fn objective(x: &Deviation, poses: &[NormPose]) -> f32 {
     sum / poses.len() as f32
 }
 
-/// Modulus error of one pose and its gradient with respect to `x`.
-#[inline]
+/// Modulus error of one pose and its gradient with respect to `x`. Out of line: the Levenberg-Marquardt
+/// normal equations and the verdict's passes over the poses share one copy.
+#[inline(never)]
 pub fn modulus_error_gradient(x: &Deviation, pose: &NormPose) -> (f32, Deviation) {
     let u = pose.u;
     let d = deviation_residual(x, u);
@@ -316,6 +340,26 @@ mod tests {
             xm[i] -= h;
             let fd = (modulus_error(&xp, &pose) - modulus_error(&xm, &pose)) / (2.0 * h);
             assert!((fd - g[i]).abs() < 1e-3, "param {i}: {fd} vs {}", g[i]);
+        }
+    }
+
+    #[test]
+    fn params_jacobian_matches_differences_of_to_params() {
+        let frame = Frame::new([32768.0, -412.5, 1903.25], [1671.3, 1669.9, 1675.1], 9.80665).unwrap();
+        let t = frame.params_jacobian();
+        for (i, row) in t.iter().enumerate() {
+            assert_eq!(frame.params_jacobian_row(i).map(f32::to_bits), row.map(f32::to_bits), "row {i}");
+        }
+        let base = frame.to_params(&[0.0; PARAM_COUNT]).to_array();
+        for j in 0..PARAM_COUNT {
+            let mut x = [0.0; PARAM_COUNT];
+            x[j] = 1e-2;
+            let moved = frame.to_params(&x).to_array();
+            for i in 0..PARAM_COUNT {
+                let slope = (moved[i] - base[i]) / 1e-2;
+                let tolerance = 1e-3 * t[i][j].abs() + 1e-3 * base[i].abs();
+                assert!((slope - t[i][j]).abs() <= tolerance, "d p{i} / d x{j}: {slope} vs {}", t[i][j]);
+            }
         }
     }
 

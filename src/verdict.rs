@@ -162,25 +162,25 @@ impl Verdict {
 /// scale 50 %, non-orthogonality 0.5 rad.
 const PLAUSIBLE_DEVIATION: f32 = 0.5;
 
-/// The normalised modulus error of a pose ([`crate::frame::modulus_error`]) and its variance
-/// ([`error_variance`]), out of line: every pass of the verdict over the poses shares one copy of both
-/// (and of the residual they start from).
+/// The normalised modulus error of a pose and its variance ([`error_variance`]), from its gradient
+/// ([`crate::frame::modulus_error_gradient`], shared with the normal equations), out of line: every
+/// pass of the verdict over the poses shares one copy.
 #[inline(never)]
 fn error_and_variance(x: &Deviation, frame: &Frame, pose: &Pose, norm: &NormPose) -> (f32, Option<f32>) {
-    (crate::frame::modulus_error(x, norm), error_variance(x, frame, pose, norm))
+    let (e, gradient) = crate::frame::modulus_error_gradient(x, norm);
+    (e, error_variance(x, frame, pose, &gradient))
 }
 
-/// Variance of one pose's normalised modulus error `E / g^2` due to its averaging noise; `None` if the
-/// pose carries no variance.
+/// Variance of one pose's normalised modulus error `E / g^2` due to its averaging noise, from the
+/// error's `gradient` (its first three entries are `-2 r`, `r = A u - beta`: halved back exactly);
+/// `None` if the pose carries no variance.
 #[inline]
-fn error_variance(x: &Deviation, frame: &Frame, pose: &Pose, norm: &NormPose) -> Option<f32> {
+fn error_variance(x: &Deviation, frame: &Frame, pose: &Pose, gradient: &Deviation) -> Option<f32> {
     if pose.n == 0 || pose.variance.iter().all(|&v| v == 0.0) {
         return None;
     }
     // dE = 2 r^T A du, du_a = dm_a / (k_a g).
-    let u = norm.u;
-    let r = crate::frame::deviation_residual(x, u);
-    let r = [u[0] + r[0], u[1] + r[1], u[2] + r[2]];
+    let r = [-0.5 * gradient[0], -0.5 * gradient[1], -0.5 * gradient[2]];
     // A^T r with A = I + diag(a) + lower(m) in deviation terms.
     let atr = [(1.0 + x[3]) * r[0] + x[6] * r[1] + x[7] * r[2], (1.0 + x[4]) * r[1] + x[8] * r[2], (1.0 + x[5]) * r[2]];
     let mut var = 0.0;
@@ -292,11 +292,17 @@ pub fn covariance_holding_in_place(info: &mut Matrix<PARAM_COUNT>, held: Held) -
 /// The largest standard deviation each parameter may have under `bounds` (paper convention,
 /// [`Params::to_array`] order).
 pub fn param_limits(params: &Params, bounds: &VerdictBounds, gravity: f32) -> [f32; PARAM_COUNT] {
-    core::array::from_fn(|i| match i {
+    core::array::from_fn(|i| param_limit(i, params, bounds, gravity))
+}
+
+/// Entry `i` of [`param_limits`].
+#[inline]
+fn param_limit(i: usize, params: &Params, bounds: &VerdictBounds, gravity: f32) -> f32 {
+    match i {
         0..=2 => bounds.max_bias_std_mg * gravity / 1000.0,
         3..=5 => bounds.max_scale_std_rel * params.scale[i - 3].abs(),
         _ => bounds.max_nonorth_std * params.scale[if i == 8 { 1 } else { 0 }].abs(),
-    })
+    }
 }
 
 /// Standard deviation (deviation units: bias in g, scale relative, non-orthogonality in rad) above
@@ -312,13 +318,13 @@ pub const HOLD_STD: Deviation = [0.05, 0.05, 0.05, 0.02, 0.02, 0.02, 0.01, 0.01,
 #[inline(never)] // its matrices need not share a stack frame with the solvers'
 pub fn parameters_to_hold(x: &Deviation, frame: &Frame, set: &PoseSet<'_>, held: Held) -> Held {
     let mut held = held.union(undetermined_parameters(x, set.norm));
-    let mut info = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
-    if !information_in_place(x, frame, set, held, false, &mut info) {
-        return held;
-    }
+    // The information matrix of the parameters held so far, rebuilt at each step rather than copied.
+    let first = held;
+    let mut cov = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
     loop {
-        let mut cov = info;
-        if !covariance_holding_in_place(&mut cov, held) {
+        let inverted =
+            information_in_place(x, frame, set, first, false, &mut cov) && covariance_holding_in_place(&mut cov, held);
+        if !inverted {
             break;
         }
         // The largest ratio above 1 (or NaN), `PARAM_COUNT` for none.
@@ -350,18 +356,16 @@ pub fn undetermined_parameters(x: &Deviation, norm: &[NormPose]) -> Held {
 
 /// Standard deviations of the paper-convention parameters from a deviation covariance.
 pub fn param_std(frame: &Frame, covariance: &Matrix<PARAM_COUNT>) -> [f32; PARAM_COUNT] {
-    let t = frame.params_jacobian();
-    let mut out = [0.0; PARAM_COUNT];
-    for (i, o) in out.iter_mut().enumerate() {
+    core::array::from_fn(|i| {
+        let t = frame.params_jacobian_row(i);
         let mut v = 0.0;
         for a in 0..PARAM_COUNT {
             for b in 0..PARAM_COUNT {
-                v += t[i][a] * covariance[a][b] * t[i][b];
+                v += t[a] * covariance[a][b] * t[b];
             }
         }
-        *o = crate::linalg::sqrt_f32(larger(v, 0.0));
-    }
-    out
+        crate::linalg::sqrt_f32(larger(v, 0.0))
+    })
 }
 
 /// Sums over the poses used, in one pass: the squared modulus errors after (normalised, free of the
@@ -445,12 +449,12 @@ pub fn judge(
     };
     let mut warnings = Warnings { held: [false; PARAM_COUNT], excluded };
     let structurally_undetermined = undetermined_parameters(x, set.norm);
-    let limits = param_limits(&params, bounds, frame.gravity);
     for i in 0..PARAM_COUNT {
         if held.contains(i) {
             (std[i], warnings.held[i]) = (f32::INFINITY, true);
         } else {
-            failures.undetermined[i] = structurally_undetermined.contains(i) || !(std[i] <= limits[i]);
+            let limit = param_limit(i, &params, bounds, frame.gravity);
+            failures.undetermined[i] = structurally_undetermined.contains(i) || !(std[i] <= limit);
         }
     }
     let rmse_before_mg = rmse_of_mg(sums.before, set.len(), frame.gravity);
