@@ -68,12 +68,13 @@ pub trait Reading: Copy + Default {
         }
         out
     }
-    /// [`Reading::block_sums`] of a full block (the accumulator's buffer), written in place into `sum` and
-    /// `sum_sq`, with the block's statistics: `(mean, variance, saturated)`, the per-axis mean offset
-    /// from the reference and the population variance summed over the axes, in `f32` (no exact rounding
-    /// needed), and whether a sample is saturated.
+    /// [`Reading::block_sums`] of a full block of samples (the accumulator's buffer, or `N` samples of
+    /// the caller's slice), written in place into `sum` and `sum_sq`, with the block's statistics:
+    /// `(mean, variance, saturated)`, the per-axis mean offset from the reference and the population
+    /// variance summed over the axes, in `f32` (no exact rounding needed), and whether a sample is
+    /// saturated.
     fn full_block<const N: usize>(
-        axes: &[[Self; N]; 3],
+        samples: &[[Self; 3]; N],
         limit: Self::Limit,
         sum: &mut [Self::Sum; 3],
         sum_sq: &mut [Self::Sum; 3],
@@ -170,23 +171,24 @@ fn ratio_to_f32(total: i64, n: u32) -> f32 {
     if total < 0 { -v } else { v }
 }
 
-/// Raw sums `(sum x, sum x^2)` of one axis of a block of `i16` samples (at most `2^16`: the `i32` sum
+/// Raw sums `(sum x, sum x^2)` of one axis (`axis` of each value) of a block of `i16` samples (at most `2^16`: the `i32` sum
 /// is exact, `2^16 * 2^15 = 2^31`, and so is every partial sum), eight samples per step (their loads
 /// pipeline on a Cortex-M4); each square (at most `2^30`) is one multiply-accumulate into the `i64`
 /// (`smlal`). Raw sums of a pose stay exact in `i64`: at most `2^31` samples, `2^31 * 2^30 = 2^61`.
 #[inline(always)]
-fn raw_i16_axis_sums(values: &[i16]) -> (i32, i64) {
+fn raw_i16_axis_sums<T: Copy>(values: &[T], axis: impl Fn(T) -> i16) -> (i32, i64) {
     let (mut sum, mut sum_sq) = (0i32, 0i64);
     let (eights, rest) = values.as_chunks::<8>();
-    for &[a, b, c, d, e, f, g, h] in eights {
+    for eight in eights {
+        let [a, b, c, d, e, f, g, h] = eight.map(&axis);
         let (a, b, c, d) = (i64::from(a), i64::from(b), i64::from(c), i64::from(d));
         let (e, f, g, h) = (i64::from(e), i64::from(f), i64::from(g), i64::from(h));
         sum += (((a + b) + (c + d)) + ((e + f) + (g + h))) as i32;
         sum_sq += a * a + b * b + c * c + d * d;
         sum_sq += e * e + f * f + g * g + h * h;
     }
-    for &v in rest {
-        let x = i64::from(v);
+    for v in rest {
+        let x = i64::from(axis(*v));
         sum += x as i32;
         sum_sq += x * x;
     }
@@ -197,7 +199,7 @@ fn raw_i16_axis_sums(values: &[i16]) -> (i32, i64) {
 /// saturated)`, `n^2 variance = n sum_sq - sum^2` exact (at most `n^2 2^30 <= 2^62`).
 #[inline(always)]
 fn i16_axis(values: &[i16], limit: i32) -> (i32, i64, u64, bool) {
-    let (sum, sum_sq) = raw_i16_axis_sums(values);
+    let (sum, sum_sq) = raw_i16_axis_sums(values, |v| v);
     let n = values.len() as u64;
     let spread = (n as i64 * sum_sq - i64::from(sum) * i64::from(sum)) as u64;
     // With d_i = n x_i - sum, sum d_i^2 = n spread: every |n x_i| <= |sum| + sqrt(n spread). None can reach
@@ -208,14 +210,14 @@ fn i16_axis(values: &[i16], limit: i32) -> (i32, i64, u64, bool) {
     (sum, sum_sq, spread, !clear && values.iter().any(|v| v.saturated(limit)))
 }
 
-/// One axis of a full block: its raw sums written to `sum` and `sum_sq`, its `n^2` variance
-/// `n sum_sq - sum^2` returned (exact, at most `2^62`). Out of line, once per axis: nothing else is
-/// live, so its loop keeps every value in a register.
+/// Axis `axis` of a full block of samples: its raw sums written to `sum` and `sum_sq`, its `n^2`
+/// variance `n sum_sq - sum^2` returned (exact, at most `2^62`). Out of line, once per axis: nothing
+/// else is live, so its loop keeps every value in a register (the samples are read with a stride).
 #[inline(never)]
-fn i16_block_axis(values: &[i16], sum: &mut i64, sum_sq: &mut i64) -> u64 {
-    let (s, sq) = raw_i16_axis_sums(values);
+fn i16_block_axis(samples: &[[i16; 3]], axis: usize, sum: &mut i64, sum_sq: &mut i64) -> u64 {
+    let (s, sq) = raw_i16_axis_sums(samples, |v: [i16; 3]| v[axis % 3]);
     (*sum, *sum_sq) = (i64::from(s), sq);
-    (values.len() as i64 * sq - i64::from(s) * i64::from(s)) as u64
+    (samples.len() as i64 * sq - i64::from(s) * i64::from(s)) as u64
 }
 
 /// `false` when no sample of a block can be saturated, from its statistics: every sample lies within
@@ -252,7 +254,7 @@ impl Reading for i16 {
     }
     #[inline(always)]
     fn full_block<const N: usize>(
-        axes: &[[i16; N]; 3],
+        samples: &[[i16; 3]; N],
         limit: i32,
         sum: &mut [i64; 3],
         sum_sq: &mut [i64; 3],
@@ -261,13 +263,13 @@ impl Reading for i16 {
         // The three axes' n^2 variances (each at most 2^62) fit a u64.
         let (mut mean, mut n_squared_variance) = ([0.0; 3], 0u64);
         for a in 0..3 {
-            n_squared_variance += i16_block_axis(&axes[a], &mut sum[a], &mut sum_sq[a]);
+            n_squared_variance += i16_block_axis(samples, a, &mut sum[a], &mut sum_sq[a]);
             // A block's raw sum fits an i32 (at most 2^16 samples of at most 2^15).
             mean[a] = sum[a] as i32 as f32 * n_inverse;
         }
         let variance = u64_to_f32_halves(n_squared_variance) * n_inverse * n_inverse;
         let saturated =
-            i16_may_saturate(&mean, variance, N, limit) && axes.iter().flatten().any(|v| v.saturated(limit));
+            i16_may_saturate(&mean, variance, N, limit) && samples.iter().flatten().any(|v| v.saturated(limit));
         (mean, variance, saturated)
     }
     fn mean_and_variance(reference: i16, sum: i64, sum_sq: i64, n: u32) -> (f32, f32) {
@@ -318,15 +320,7 @@ impl Reading for f32 {
         f64::from(n)
     }
     fn axis_sums(values: &[f32], limit: f32) -> (f64, f64, bool) {
-        let (mut sum, mut sum_sq, mut saturated) = (0.0, 0.0, false);
-        let Some(&first) = values.first() else { return (sum, sum_sq, saturated) };
-        for &v in values {
-            let d = v.delta(first);
-            sum += d;
-            sum_sq += d * d;
-            saturated |= v.saturated(limit);
-        }
-        (sum, sum_sq, saturated)
+        f32_axis_sums(values.iter().copied(), limit)
     }
     fn mean_and_variance(reference: f32, sum: f64, sum_sq: f64, n: u32) -> (f32, f32) {
         let n = f64::from(n.max(1));
@@ -335,7 +329,7 @@ impl Reading for f32 {
         ((f64::from(reference) + m) as f32, if variance > 0.0 { variance as f32 } else { 0.0 })
     }
     fn full_block<const N: usize>(
-        axes: &[[f32; N]; 3],
+        samples: &[[f32; 3]; N],
         limit: f32,
         sum: &mut [f64; 3],
         sum_sq: &mut [f64; 3],
@@ -343,7 +337,7 @@ impl Reading for f32 {
         let n_inverse = 1.0 / N as f32;
         let (mut mean, mut variance, mut saturated) = ([0.0; 3], 0.0, false);
         for a in 0..3 {
-            let axis = Self::axis_sums(&axes[a], limit);
+            let axis = f32_axis_sums(samples.iter().map(|s| s[a]), limit);
             (sum[a], sum_sq[a]) = (axis.0, axis.1);
             saturated |= axis.2;
             mean[a] = sum[a] as f32 * n_inverse;
@@ -367,6 +361,19 @@ impl Reading for f32 {
     fn saturated(self, limit: f32) -> bool {
         self.abs() >= limit
     }
+}
+
+/// One axis of `f32` samples: `(sum, sum of squares, saturated)` relative to the first sample, in `f64`.
+fn f32_axis_sums(mut values: impl Iterator<Item = f32> + Clone, limit: f32) -> (f64, f64, bool) {
+    let (mut sum, mut sum_sq, mut saturated) = (0.0, 0.0, false);
+    let Some(first) = values.clone().next() else { return (sum, sum_sq, saturated) };
+    for v in &mut values {
+        let d = v.delta(first);
+        sum += d;
+        sum_sq += d * d;
+        saturated |= v.saturated(limit);
+    }
+    (sum, sum_sq, saturated)
 }
 
 /// `f32::min` as a comparison (the method is a library call on a Cortex-M4F): the other value when one
@@ -620,8 +627,8 @@ pub struct Accumulator<R: Reading, const POSES: usize, const BLOCK: usize> {
     config: AccumulatorConfig,
     poses: heapless::Vec<Pose, POSES>,
     rejections: Rejections,
-    /// The open block's samples, axis by axis, summed when it is full (a push only stores its sample).
-    buffer: [[R; BLOCK]; 3],
+    /// The open block's samples, summed when it is full (a push only stores its sample).
+    buffer: [[R; 3]; BLOCK],
     /// Samples in `buffer`.
     buffered: usize,
     /// Index of the open block's first sample.
@@ -653,7 +660,7 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
             config,
             poses: heapless::Vec::new(),
             rejections: Rejections::default(),
-            buffer: [[R::default(); BLOCK]; 3],
+            buffer: [[R::default(); 3]; BLOCK],
             buffered: 0,
             block_start: 0,
             saturation_limit: R::saturation_limit(config.full_scale),
@@ -679,8 +686,7 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
             self.drop_block();
             return Ok(None);
         }
-        let [x, y, z] = &mut self.buffer;
-        (x[i], y[i], z[i]) = (sample[0], sample[1], sample[2]);
+        self.buffer[i] = sample;
         self.buffered = i + 1;
         if i + 1 == BLOCK {
             return self.close_block();
@@ -734,36 +740,85 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         self.block_start = self.counted;
     }
 
-    /// Sums the full buffer into `blocks[slot]` with its statistics (mean, total variance, which it
-    /// returns); the next block starts at the next sample.
+    /// Feeds the samples of `samples` in order, as [`Accumulator::push`] of each would, up to and
+    /// including the first that completes an event or is refused: returns how many samples were taken
+    /// and that push's result (`Ok(None)` when all were taken without an event). Call it again with the
+    /// rest. Whole blocks of the slice are summed where they lie (no copy, no per-sample bookkeeping):
+    /// the fast path for a sensor FIFO read. The events, poses and statistics are bit for bit those of
+    /// pushing one sample at a time.
+    pub fn push_slice(&mut self, samples: &[[R; 3]]) -> (usize, Result<Option<Event>, AccumulatorError>) {
+        let mut taken = 0;
+        while let Some(rest) = samples.get(taken..) {
+            if let (0, Some(block)) = (self.buffered, rest.first_chunk::<BLOCK>())
+                && block.iter().flatten().all(|v| v.is_finite())
+            {
+                taken += BLOCK;
+                let event = self.close_block_of(block);
+                if !matches!(event, Ok(None)) {
+                    return (taken, event);
+                }
+                continue;
+            }
+            let Some(&sample) = rest.first() else { break };
+            taken += 1;
+            let event = self.push(sample);
+            if !matches!(event, Ok(None)) {
+                return (taken, event);
+            }
+        }
+        (taken, Ok(None))
+    }
+
+    /// Sums the full `block` into `stats` with its statistics (mean, total variance, which it returns).
     #[inline(always)]
-    fn take_block(&mut self, slot: usize) -> ([f32; 3], f32) {
-        let start_index = self.block_start;
-        self.drop_block();
-        let buffer = &self.buffer;
-        let block = &mut self.blocks[slot % 2];
-        let sums = &mut block.sums;
-        let (mut mean, variance, saturated) =
-            R::full_block(buffer, self.saturation_limit, &mut sums.sum, &mut sums.sum_sq);
-        (sums.n, sums.start_index, sums.end_index, sums.saturated) =
-            (BLOCK as u32, start_index, self.counted, saturated);
-        for ((m, reference), values) in mean.iter_mut().zip(&mut sums.reference).zip(buffer) {
-            *reference = R::block_reference(values[0]);
+    fn sum_block(
+        stats: &mut BlockStats<R>,
+        block: &[[R; 3]; BLOCK],
+        limit: R::Limit,
+        (start_index, end_index): (u32, u32),
+    ) -> ([f32; 3], f32) {
+        let sums = &mut stats.sums;
+        let (mut mean, variance, saturated) = R::full_block(block, limit, &mut sums.sum, &mut sums.sum_sq);
+        (sums.n, sums.start_index, sums.end_index, sums.saturated) = (BLOCK as u32, start_index, end_index, saturated);
+        for (a, (m, reference)) in mean.iter_mut().zip(&mut sums.reference).enumerate() {
+            *reference = R::block_reference(block[0][a]);
             // Raw sums have a zero reference (no `+ 0.0` at run time).
             if R::RELATIVE {
                 *m += reference.to_f32();
             }
         }
-        (block.mean, block.variance) = (mean, variance);
+        (stats.mean, stats.variance) = (mean, variance);
         (mean, variance)
+    }
+
+    /// Ends the open block (its samples are `BLOCK` from `block_start`): its index span, and the slot
+    /// its statistics go to.
+    fn end_block(&mut self) -> (usize, (u32, u32)) {
+        let start_index = self.block_start;
+        self.drop_block();
+        ((self.previous_slot + 1) % 2, (start_index, self.counted))
     }
 
     // Once per BLOCK samples: kept out of line so that `push`, inlined into the caller's sample loop, stays
     // small (inlined, its register pressure made every push save and restore all FPU registers).
     #[inline(never)]
     fn close_block(&mut self) -> Result<Option<Event>, AccumulatorError> {
-        let slot = (self.previous_slot + 1) % 2;
-        let (mean, variance) = self.take_block(slot);
+        let (slot, span) = self.end_block();
+        let (mean, variance) = Self::sum_block(&mut self.blocks[slot], &self.buffer, self.saturation_limit, span);
+        self.judge_block(slot, mean, variance)
+    }
+
+    /// Closes a whole block of the caller's samples (the open block is empty).
+    fn close_block_of(&mut self, block: &[[R; 3]; BLOCK]) -> Result<Option<Event>, AccumulatorError> {
+        self.buffered = BLOCK;
+        let (slot, span) = self.end_block();
+        let (mean, variance) = Self::sum_block(&mut self.blocks[slot], block, self.saturation_limit, span);
+        self.judge_block(slot, mean, variance)
+    }
+
+    /// The pose logic after a block of this mean and variance was summed into `blocks[slot]`.
+    #[inline(never)]
+    fn judge_block(&mut self, slot: usize, mean: [f32; 3], variance: f32) -> Result<Option<Event>, AccumulatorError> {
         let noise = self.update_noise(mean, variance);
         let previous = &self.blocks[self.previous_slot % 2];
         let drift = self.has_previous.then(|| {
@@ -988,17 +1043,17 @@ mod tests {
             let limit = [32_769, 32_767, 30_000, 16_384][round % 4];
             let centre = [32_760i32, -32_760, 29_990, 16_380, 0][round % 5];
             let spread = [1u64, 3, 12, 400][round % 4];
-            let mut axes = [[0i16; 32]; 3];
-            for axis in &mut axes {
-                for v in axis.iter_mut() {
+            let mut samples = [[0i16; 3]; 32];
+            for sample in &mut samples {
+                for v in sample.iter_mut() {
                     x = x.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
                     let offset = (x >> 33) % (2 * spread + 1);
                     *v = (centre + offset as i32 - spread as i32).clamp(-32_768, 32_767) as i16;
                 }
             }
             let (mut sum, mut sum_sq) = ([0i64; 3], [0i64; 3]);
-            let (mean, variance, saturated) = i16::full_block(&axes, limit, &mut sum, &mut sum_sq);
-            let truth = axes.iter().flatten().any(|v| v.saturated(limit));
+            let (mean, variance, saturated) = i16::full_block(&samples, limit, &mut sum, &mut sum_sq);
+            let truth = samples.iter().flatten().any(|v| v.saturated(limit));
             assert_eq!(saturated, truth, "round {round}");
             if truth {
                 saturated_blocks += 1;
