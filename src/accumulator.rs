@@ -937,6 +937,8 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
 #[cfg(test)]
 mod tests {
     use super::*;
+    extern crate std;
+    use std::vec::Vec;
 
     #[test]
     fn pose_count_saturates_and_its_sums_stay_exact() {
@@ -1063,6 +1065,115 @@ mod tests {
             }
         }
         assert!(saturated_blocks > 500 && cleared > 500, "{saturated_blocks} saturated, {cleared} cleared");
+    }
+
+    /// A stream of still holds (noise `noise`) and moves, with `hold` samples per hold, from `seed`.
+    fn stream(seed: u64, holds: usize, hold: usize, noise: f32) -> impl Iterator<Item = [f32; 3]> {
+        let mut x = seed;
+        let mut next = move || {
+            x = x.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            (x >> 40) as f32 / (1u64 << 24) as f32 - 0.5
+        };
+        (0..holds * hold).map(move |i| {
+            let (h, t) = (i / hold, i % hold);
+            let moving = t < hold / 5;
+            let base = [(h % 3) as f32 * 9000.0 - 9000.0, (h % 5) as f32 * 5000.0 - 10_000.0, 16_000.0];
+            let swing = if moving { 3000.0 * (t as f32 * 0.1).sin() } else { 0.0 };
+            [base[0] + swing + noise * next(), base[1] - swing + noise * next(), base[2] + noise * next()]
+        })
+    }
+
+    /// Every event with the number of samples taken when it came, pushing one at a time.
+    fn one_by_one<R: Reading, const P: usize, const B: usize>(
+        acc: &mut Accumulator<R, P, B>,
+        samples: &[[R; 3]],
+    ) -> Vec<(usize, Result<Option<Event>, AccumulatorError>)> {
+        let events = samples.iter().enumerate().map(|(i, &s)| (i + 1, acc.push(s)));
+        events.filter(|(_, e)| !matches!(e, Ok(None))).collect()
+    }
+
+    /// The same through `push_slice`, the stream cut into slices of the lengths `cuts` in turn.
+    fn by_slices<R: Reading, const P: usize, const B: usize>(
+        acc: &mut Accumulator<R, P, B>,
+        samples: &[[R; 3]],
+        cuts: &[usize],
+    ) -> Vec<(usize, Result<Option<Event>, AccumulatorError>)> {
+        let (mut events, mut start, mut cut) = (Vec::new(), 0, 0);
+        while start < samples.len() {
+            let end = (start + cuts[cut % cuts.len()]).min(samples.len());
+            cut += 1;
+            while start < end {
+                let (taken, event) = acc.push_slice(&samples[start..end]);
+                assert!(taken >= 1 && start + taken <= end, "{taken} taken of {}", end - start);
+                start += taken;
+                if !matches!(event, Ok(None)) {
+                    events.push((start, event));
+                } else {
+                    assert_eq!(start, end, "Ok(None) before the slice's end");
+                }
+            }
+        }
+        events
+    }
+
+    fn assert_same<R: Reading, const P: usize, const B: usize>(
+        a: &Accumulator<R, P, B>,
+        b: &Accumulator<R, P, B>,
+        what: &str,
+    ) {
+        assert_eq!(a.poses(), b.poses(), "{what}");
+        assert_eq!(a.rejections(), b.rejections(), "{what}");
+        assert_eq!(a.noise_variance().to_bits(), b.noise_variance().to_bits(), "{what}");
+        assert_eq!((a.samples_seen(), a.is_capturing()), (b.samples_seen(), b.is_capturing()), "{what}");
+    }
+
+    #[test]
+    fn push_slice_is_bit_for_bit_pushing_one_at_a_time() {
+        let cuts: [&[usize]; 5] = [&[32], &[1], &[64, 7, 32, 31, 33], &[100], &[5, 3, 200, 17]];
+        let limit = AccumulatorConfig { full_scale: 20_000.0, ..AccumulatorConfig::DEFAULT };
+        for (round, &cut) in cuts.iter().enumerate() {
+            for config in [AccumulatorConfig::DEFAULT, limit] {
+                let raw: Vec<[i16; 3]> =
+                    stream(round as u64, 30, 700, 6.0).map(|s| s.map(|v| v.round() as i16)).collect();
+                let mut a: Accumulator<i16, 8, 32> = Accumulator::new(config).unwrap();
+                let mut b: Accumulator<i16, 8, 32> = Accumulator::new(config).unwrap();
+                let events = one_by_one(&mut a, &raw);
+                assert!(events.iter().any(|e| e.1 == Err(AccumulatorError::Full)), "round {round}: fills up");
+                assert_eq!(events, by_slices(&mut b, &raw, cut), "i16 round {round}");
+                assert_same(&a, &b, "i16");
+                assert_eq!(a.finish(), b.finish());
+                assert_same(&a, &b, "i16 finished");
+            }
+            // f32, with non-finite samples (skipped, an error each) at places inside and across blocks.
+            let mut scaled: Vec<[f32; 3]> = stream(round as u64 + 9, 12, 500, 0.004).collect();
+            for (k, i) in [40usize, 41, 700, 1999, 2000, 3333].into_iter().enumerate() {
+                scaled[i][k % 3] = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY][k % 3];
+            }
+            let mut a: Accumulator<f32, 24, 16> = Accumulator::new(limit).unwrap();
+            let mut b: Accumulator<f32, 24, 16> = Accumulator::new(limit).unwrap();
+            let events = one_by_one(&mut a, &scaled);
+            let skipped = events.iter().filter(|e| e.1 == Err(AccumulatorError::NonFiniteSample)).count();
+            assert_eq!(skipped, 6, "round {round}");
+            assert_eq!(events, by_slices(&mut b, &scaled, cut), "f32 round {round}");
+            assert_same(&a, &b, "f32");
+            assert!(a.poses().len() >= 8, "round {round}: {} poses", a.poses().len());
+        }
+    }
+
+    #[test]
+    fn push_slice_sums_full_scale_blocks_exactly() {
+        // Whole blocks at the rails and at full scale through the slice path: exact sums, saturation seen.
+        let mut acc: Accumulator<i16, 4, 32> = Accumulator::new(AccumulatorConfig::DEFAULT).unwrap();
+        let block = [[i16::MAX, i16::MIN, i16::MAX - 1]; 32];
+        assert_eq!(acc.push_slice(&block), (32, Ok(None)));
+        let stats = &acc.blocks[acc.previous_slot % 2];
+        let n = 32i64;
+        assert_eq!(stats.sums.sum, [n * 32_767, -n * 32_768, n * 32_766]);
+        assert_eq!(stats.sums.sum_sq, [n * 32_767 * 32_767, n * 32_768 * 32_768, n * 32_766 * 32_766]);
+        assert!(stats.sums.saturated && stats.variance == 0.0);
+        let inside = [[i16::MAX - 1, i16::MIN + 1, 0]; 32];
+        assert_eq!(acc.push_slice(&inside), (32, Ok(None)));
+        assert!(!acc.blocks[acc.previous_slot % 2].sums.saturated);
     }
 
     #[test]
