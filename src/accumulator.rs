@@ -176,19 +176,19 @@ fn ratio_to_f32(total: i64, n: u32) -> f32 {
 /// pipeline on a Cortex-M4); each square (at most `2^30`) is one multiply-accumulate into the `i64`
 /// (`smlal`). Raw sums of a pose stay exact in `i64`: at most `2^31` samples, `2^31 * 2^30 = 2^61`.
 #[inline(always)]
-fn raw_i16_axis_sums<T: Copy>(values: &[T], axis: impl Fn(T) -> i16) -> (i32, i64) {
+fn raw_i16_axis_sums(samples: &[[i16; 3]], axis: usize) -> (i32, i64) {
     let (mut sum, mut sum_sq) = (0i32, 0i64);
-    let (eights, rest) = values.as_chunks::<8>();
-    for eight in eights {
-        let [a, b, c, d, e, f, g, h] = eight.map(&axis);
-        let (a, b, c, d) = (i64::from(a), i64::from(b), i64::from(c), i64::from(d));
-        let (e, f, g, h) = (i64::from(e), i64::from(f), i64::from(g), i64::from(h));
+    let axis = axis % 3;
+    let (eights, rest) = samples.as_chunks::<8>();
+    for s in eights {
+        let (a, b, c, d) = (i64::from(s[0][axis]), i64::from(s[1][axis]), i64::from(s[2][axis]), i64::from(s[3][axis]));
+        let (e, f, g, h) = (i64::from(s[4][axis]), i64::from(s[5][axis]), i64::from(s[6][axis]), i64::from(s[7][axis]));
         sum += (((a + b) + (c + d)) + ((e + f) + (g + h))) as i32;
         sum_sq += a * a + b * b + c * c + d * d;
         sum_sq += e * e + f * f + g * g + h * h;
     }
     for v in rest {
-        let x = i64::from(axis(*v));
+        let x = i64::from(v[axis]);
         sum += x as i32;
         sum_sq += x * x;
     }
@@ -199,7 +199,10 @@ fn raw_i16_axis_sums<T: Copy>(values: &[T], axis: impl Fn(T) -> i16) -> (i32, i6
 /// saturated)`, `n^2 variance = n sum_sq - sum^2` exact (at most `n^2 2^30 <= 2^62`).
 #[inline(always)]
 fn i16_axis(values: &[i16], limit: i32) -> (i32, i64, u64, bool) {
-    let (sum, sum_sq) = raw_i16_axis_sums(values, |v| v);
+    let (mut sum, mut sum_sq) = (0i32, 0i64);
+    for &v in values {
+        (sum, sum_sq) = (sum + i32::from(v), sum_sq + i64::from(v) * i64::from(v));
+    }
     let n = values.len() as u64;
     let spread = (n as i64 * sum_sq - i64::from(sum) * i64::from(sum)) as u64;
     // With d_i = n x_i - sum, sum d_i^2 = n spread: every |n x_i| <= |sum| + sqrt(n spread). None can reach
@@ -215,7 +218,7 @@ fn i16_axis(values: &[i16], limit: i32) -> (i32, i64, u64, bool) {
 /// else is live, so its loop keeps every value in a register (the samples are read with a stride).
 #[inline(never)]
 fn i16_block_axis(samples: &[[i16; 3]], axis: usize, sum: &mut i64, sum_sq: &mut i64) -> u64 {
-    let (s, sq) = raw_i16_axis_sums(samples, |v: [i16; 3]| v[axis % 3]);
+    let (s, sq) = raw_i16_axis_sums(samples, axis);
     (*sum, *sum_sq) = (i64::from(s), sq);
     (samples.len() as i64 * sq - i64::from(s) * i64::from(s)) as u64
 }
