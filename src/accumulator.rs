@@ -692,7 +692,7 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         self.buffer[i] = sample;
         self.buffered = i + 1;
         if i + 1 == BLOCK {
-            return self.close_block();
+            return self.close_block(None);
         }
         Ok(None)
     }
@@ -756,7 +756,7 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
                 && block.iter().flatten().all(|v| v.is_finite())
             {
                 taken += BLOCK;
-                let event = self.close_block_of(block);
+                let event = self.close_block(Some(block));
                 if !matches!(event, Ok(None)) {
                     return (taken, event);
                 }
@@ -802,25 +802,22 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         ((self.previous_slot + 1) % 2, (start_index, self.counted))
     }
 
-    // Once per BLOCK samples: kept out of line so that `push`, inlined into the caller's sample loop, stays
-    // small (inlined, its register pressure made every push save and restore all FPU registers).
+    /// Closes the full block: the buffer's (`None`), or a whole block of the caller's samples while the
+    /// buffer is empty. Once per BLOCK samples: kept out of line so that `push`, inlined into the
+    /// caller's sample loop, stays small (inlined, its register pressure made every push save and
+    /// restore all FPU registers).
     #[inline(never)]
-    fn close_block(&mut self) -> Result<Option<Event>, AccumulatorError> {
+    fn close_block(&mut self, whole: Option<&[[R; 3]; BLOCK]>) -> Result<Option<Event>, AccumulatorError> {
+        if whole.is_some() {
+            self.buffered = BLOCK;
+        }
         let (slot, span) = self.end_block();
-        let (mean, variance) = Self::sum_block(&mut self.blocks[slot], &self.buffer, self.saturation_limit, span);
-        self.judge_block(slot, mean, variance)
-    }
-
-    /// Closes a whole block of the caller's samples (the open block is empty).
-    fn close_block_of(&mut self, block: &[[R; 3]; BLOCK]) -> Result<Option<Event>, AccumulatorError> {
-        self.buffered = BLOCK;
-        let (slot, span) = self.end_block();
+        let block = whole.unwrap_or(&self.buffer);
         let (mean, variance) = Self::sum_block(&mut self.blocks[slot], block, self.saturation_limit, span);
         self.judge_block(slot, mean, variance)
     }
 
     /// The pose logic after a block of this mean and variance was summed into `blocks[slot]`.
-    #[inline(never)]
     fn judge_block(&mut self, slot: usize, mean: [f32; 3], variance: f32) -> Result<Option<Event>, AccumulatorError> {
         let noise = self.update_noise(mean, variance);
         let previous = &self.blocks[self.previous_slot % 2];
