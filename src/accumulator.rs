@@ -783,10 +783,10 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         let sums = &mut stats.sums;
         let (mut mean, variance, saturated) = R::full_block(block, limit, &mut sums.sum, &mut sums.sum_sq);
         (sums.n, sums.start_index, sums.end_index, sums.saturated) = (BLOCK as u32, start_index, end_index, saturated);
-        for (a, (m, reference)) in mean.iter_mut().zip(&mut sums.reference).enumerate() {
-            *reference = R::block_reference(block[0][a]);
-            // Raw sums have a zero reference (no `+ 0.0` at run time).
-            if R::RELATIVE {
+        // Raw sums keep the zero reference set by `new` (no store, no `+ 0.0` at run time).
+        if R::RELATIVE {
+            for (a, (m, reference)) in mean.iter_mut().zip(&mut sums.reference).enumerate() {
+                *reference = R::block_reference(block[0][a]);
                 *m += reference.to_f32();
             }
         }
