@@ -1,4 +1,5 @@
-//! Position averaging: feed samples one at a time; static intervals are found and averaged into [`Pose`]s.
+//! Position averaging: feed samples one at a time ([`Accumulator::push`]) or a sensor FIFO read at once
+//! ([`Accumulator::push_slice`]); static intervals are found and averaged into [`Pose`]s.
 //!
 //! Samples are grouped in blocks of `BLOCK`. Each block's per-axis variance and its mean's change from
 //! the previous block are compared with the *measured* noise (a leaky minimum of the block variances:
