@@ -1,4 +1,5 @@
-//! Position averaging: feed samples one at a time; static intervals are found and averaged into [`Pose`]s.
+//! Position averaging: feed samples one at a time ([`Accumulator::push`]) or a sensor FIFO read at once
+//! ([`Accumulator::push_slice`]); static intervals are found and averaged into [`Pose`]s.
 //!
 //! Samples are grouped in blocks of `BLOCK`. Each block's per-axis variance and its mean's change from
 //! the previous block are compared with the *measured* noise (a leaky minimum of the block variances:
@@ -68,12 +69,13 @@ pub trait Reading: Copy + Default {
         }
         out
     }
-    /// [`Reading::block_sums`] of a full block (the accumulator's buffer), written in place into `sum` and
-    /// `sum_sq`, with the block's statistics: `(mean, variance, saturated)`, the per-axis mean offset
-    /// from the reference and the population variance summed over the axes, in `f32` (no exact rounding
-    /// needed), and whether a sample is saturated.
+    /// [`Reading::block_sums`] of a full block of samples (the accumulator's buffer, or `N` samples of
+    /// the caller's slice), written in place into `sum` and `sum_sq`, with the block's statistics:
+    /// `(mean, variance, saturated)`, the per-axis mean offset from the reference and the population
+    /// variance summed over the axes, in `f32` (no exact rounding needed), and whether a sample is
+    /// saturated.
     fn full_block<const N: usize>(
-        axes: &[[Self; N]; 3],
+        samples: &[[Self; 3]; N],
         limit: Self::Limit,
         sum: &mut [Self::Sum; 3],
         sum_sq: &mut [Self::Sum; 3],
@@ -170,23 +172,24 @@ fn ratio_to_f32(total: i64, n: u32) -> f32 {
     if total < 0 { -v } else { v }
 }
 
-/// Raw sums `(sum x, sum x^2)` of one axis of a block of `i16` samples (at most `2^16`: the `i32` sum
+/// Raw sums `(sum x, sum x^2)` of one axis (`axis` of each value) of a block of `i16` samples (at most `2^16`: the `i32` sum
 /// is exact, `2^16 * 2^15 = 2^31`, and so is every partial sum), eight samples per step (their loads
 /// pipeline on a Cortex-M4); each square (at most `2^30`) is one multiply-accumulate into the `i64`
 /// (`smlal`). Raw sums of a pose stay exact in `i64`: at most `2^31` samples, `2^31 * 2^30 = 2^61`.
 #[inline(always)]
-fn raw_i16_axis_sums(values: &[i16]) -> (i32, i64) {
+fn raw_i16_axis_sums(samples: &[[i16; 3]], axis: usize) -> (i32, i64) {
     let (mut sum, mut sum_sq) = (0i32, 0i64);
-    let (eights, rest) = values.as_chunks::<8>();
-    for &[a, b, c, d, e, f, g, h] in eights {
-        let (a, b, c, d) = (i64::from(a), i64::from(b), i64::from(c), i64::from(d));
-        let (e, f, g, h) = (i64::from(e), i64::from(f), i64::from(g), i64::from(h));
+    let axis = axis % 3;
+    let (eights, rest) = samples.as_chunks::<8>();
+    for s in eights {
+        let (a, b, c, d) = (i64::from(s[0][axis]), i64::from(s[1][axis]), i64::from(s[2][axis]), i64::from(s[3][axis]));
+        let (e, f, g, h) = (i64::from(s[4][axis]), i64::from(s[5][axis]), i64::from(s[6][axis]), i64::from(s[7][axis]));
         sum += (((a + b) + (c + d)) + ((e + f) + (g + h))) as i32;
         sum_sq += a * a + b * b + c * c + d * d;
         sum_sq += e * e + f * f + g * g + h * h;
     }
-    for &v in rest {
-        let x = i64::from(v);
+    for v in rest {
+        let x = i64::from(v[axis]);
         sum += x as i32;
         sum_sq += x * x;
     }
@@ -197,7 +200,10 @@ fn raw_i16_axis_sums(values: &[i16]) -> (i32, i64) {
 /// saturated)`, `n^2 variance = n sum_sq - sum^2` exact (at most `n^2 2^30 <= 2^62`).
 #[inline(always)]
 fn i16_axis(values: &[i16], limit: i32) -> (i32, i64, u64, bool) {
-    let (sum, sum_sq) = raw_i16_axis_sums(values);
+    let (mut sum, mut sum_sq) = (0i32, 0i64);
+    for &v in values {
+        (sum, sum_sq) = (sum + i32::from(v), sum_sq + i64::from(v) * i64::from(v));
+    }
     let n = values.len() as u64;
     let spread = (n as i64 * sum_sq - i64::from(sum) * i64::from(sum)) as u64;
     // With d_i = n x_i - sum, sum d_i^2 = n spread: every |n x_i| <= |sum| + sqrt(n spread). None can reach
@@ -208,14 +214,14 @@ fn i16_axis(values: &[i16], limit: i32) -> (i32, i64, u64, bool) {
     (sum, sum_sq, spread, !clear && values.iter().any(|v| v.saturated(limit)))
 }
 
-/// One axis of a full block: its raw sums written to `sum` and `sum_sq`, its `n^2` variance
-/// `n sum_sq - sum^2` returned (exact, at most `2^62`). Out of line, once per axis: nothing else is
-/// live, so its loop keeps every value in a register.
+/// Axis `axis` of a full block of samples: its raw sums written to `sum` and `sum_sq`, its `n^2`
+/// variance `n sum_sq - sum^2` returned (exact, at most `2^62`). Out of line, once per axis: nothing
+/// else is live, so its loop keeps every value in a register (the samples are read with a stride).
 #[inline(never)]
-fn i16_block_axis(values: &[i16], sum: &mut i64, sum_sq: &mut i64) -> u64 {
-    let (s, sq) = raw_i16_axis_sums(values);
+fn i16_block_axis(samples: &[[i16; 3]], axis: usize, sum: &mut i64, sum_sq: &mut i64) -> u64 {
+    let (s, sq) = raw_i16_axis_sums(samples, axis);
     (*sum, *sum_sq) = (i64::from(s), sq);
-    (values.len() as i64 * sq - i64::from(s) * i64::from(s)) as u64
+    (samples.len() as i64 * sq - i64::from(s) * i64::from(s)) as u64
 }
 
 /// `false` when no sample of a block can be saturated, from its statistics: every sample lies within
@@ -252,7 +258,7 @@ impl Reading for i16 {
     }
     #[inline(always)]
     fn full_block<const N: usize>(
-        axes: &[[i16; N]; 3],
+        samples: &[[i16; 3]; N],
         limit: i32,
         sum: &mut [i64; 3],
         sum_sq: &mut [i64; 3],
@@ -261,13 +267,13 @@ impl Reading for i16 {
         // The three axes' n^2 variances (each at most 2^62) fit a u64.
         let (mut mean, mut n_squared_variance) = ([0.0; 3], 0u64);
         for a in 0..3 {
-            n_squared_variance += i16_block_axis(&axes[a], &mut sum[a], &mut sum_sq[a]);
+            n_squared_variance += i16_block_axis(samples, a, &mut sum[a], &mut sum_sq[a]);
             // A block's raw sum fits an i32 (at most 2^16 samples of at most 2^15).
             mean[a] = sum[a] as i32 as f32 * n_inverse;
         }
         let variance = u64_to_f32_halves(n_squared_variance) * n_inverse * n_inverse;
         let saturated =
-            i16_may_saturate(&mean, variance, N, limit) && axes.iter().flatten().any(|v| v.saturated(limit));
+            i16_may_saturate(&mean, variance, N, limit) && samples.iter().flatten().any(|v| v.saturated(limit));
         (mean, variance, saturated)
     }
     fn mean_and_variance(reference: i16, sum: i64, sum_sq: i64, n: u32) -> (f32, f32) {
@@ -318,15 +324,7 @@ impl Reading for f32 {
         f64::from(n)
     }
     fn axis_sums(values: &[f32], limit: f32) -> (f64, f64, bool) {
-        let (mut sum, mut sum_sq, mut saturated) = (0.0, 0.0, false);
-        let Some(&first) = values.first() else { return (sum, sum_sq, saturated) };
-        for &v in values {
-            let d = v.delta(first);
-            sum += d;
-            sum_sq += d * d;
-            saturated |= v.saturated(limit);
-        }
-        (sum, sum_sq, saturated)
+        f32_axis_sums(values.iter().copied(), limit)
     }
     fn mean_and_variance(reference: f32, sum: f64, sum_sq: f64, n: u32) -> (f32, f32) {
         let n = f64::from(n.max(1));
@@ -335,7 +333,7 @@ impl Reading for f32 {
         ((f64::from(reference) + m) as f32, if variance > 0.0 { variance as f32 } else { 0.0 })
     }
     fn full_block<const N: usize>(
-        axes: &[[f32; N]; 3],
+        samples: &[[f32; 3]; N],
         limit: f32,
         sum: &mut [f64; 3],
         sum_sq: &mut [f64; 3],
@@ -343,7 +341,7 @@ impl Reading for f32 {
         let n_inverse = 1.0 / N as f32;
         let (mut mean, mut variance, mut saturated) = ([0.0; 3], 0.0, false);
         for a in 0..3 {
-            let axis = Self::axis_sums(&axes[a], limit);
+            let axis = f32_axis_sums(samples.iter().map(|s| s[a]), limit);
             (sum[a], sum_sq[a]) = (axis.0, axis.1);
             saturated |= axis.2;
             mean[a] = sum[a] as f32 * n_inverse;
@@ -367,6 +365,19 @@ impl Reading for f32 {
     fn saturated(self, limit: f32) -> bool {
         self.abs() >= limit
     }
+}
+
+/// One axis of `f32` samples: `(sum, sum of squares, saturated)` relative to the first sample, in `f64`.
+fn f32_axis_sums(mut values: impl Iterator<Item = f32> + Clone, limit: f32) -> (f64, f64, bool) {
+    let (mut sum, mut sum_sq, mut saturated) = (0.0, 0.0, false);
+    let Some(first) = values.clone().next() else { return (sum, sum_sq, saturated) };
+    for v in &mut values {
+        let d = v.delta(first);
+        sum += d;
+        sum_sq += d * d;
+        saturated |= v.saturated(limit);
+    }
+    (sum, sum_sq, saturated)
 }
 
 /// `f32::min` as a comparison (the method is a library call on a Cortex-M4F): the other value when one
@@ -620,8 +631,8 @@ pub struct Accumulator<R: Reading, const POSES: usize, const BLOCK: usize> {
     config: AccumulatorConfig,
     poses: heapless::Vec<Pose, POSES>,
     rejections: Rejections,
-    /// The open block's samples, axis by axis, summed when it is full (a push only stores its sample).
-    buffer: [[R; BLOCK]; 3],
+    /// The open block's samples, summed when it is full (a push only stores its sample).
+    buffer: [[R; 3]; BLOCK],
     /// Samples in `buffer`.
     buffered: usize,
     /// Index of the open block's first sample.
@@ -653,7 +664,7 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
             config,
             poses: heapless::Vec::new(),
             rejections: Rejections::default(),
-            buffer: [[R::default(); BLOCK]; 3],
+            buffer: [[R::default(); 3]; BLOCK],
             buffered: 0,
             block_start: 0,
             saturation_limit: R::saturation_limit(config.full_scale),
@@ -679,11 +690,10 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
             self.drop_block();
             return Ok(None);
         }
-        let [x, y, z] = &mut self.buffer;
-        (x[i], y[i], z[i]) = (sample[0], sample[1], sample[2]);
+        self.buffer[i] = sample;
         self.buffered = i + 1;
         if i + 1 == BLOCK {
-            return self.close_block();
+            return self.close_block(None);
         }
         Ok(None)
     }
@@ -734,36 +744,82 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         self.block_start = self.counted;
     }
 
-    /// Sums the full buffer into `blocks[slot]` with its statistics (mean, total variance, which it
-    /// returns); the next block starts at the next sample.
+    /// Feeds the samples of `samples` in order, as [`Accumulator::push`] of each would, up to and
+    /// including the first that completes an event or is refused: returns how many samples were taken
+    /// and that push's result (`Ok(None)` when all were taken without an event). Call it again with the
+    /// rest. Whole blocks of the slice are summed where they lie (no copy, no per-sample bookkeeping):
+    /// the fast path for a sensor FIFO read. The events, poses and statistics are bit for bit those of
+    /// pushing one sample at a time.
+    pub fn push_slice(&mut self, samples: &[[R; 3]]) -> (usize, Result<Option<Event>, AccumulatorError>) {
+        let mut taken = 0;
+        while let Some(rest) = samples.get(taken..) {
+            if let (0, Some(block)) = (self.buffered, rest.first_chunk::<BLOCK>())
+                && block.iter().flatten().all(|v| v.is_finite())
+            {
+                taken += BLOCK;
+                let event = self.close_block(Some(block));
+                if !matches!(event, Ok(None)) {
+                    return (taken, event);
+                }
+                continue;
+            }
+            let Some(&sample) = rest.first() else { break };
+            taken += 1;
+            let event = self.push(sample);
+            if !matches!(event, Ok(None)) {
+                return (taken, event);
+            }
+        }
+        (taken, Ok(None))
+    }
+
+    /// Sums the full `block` into `stats` with its statistics (mean, total variance, which it returns).
     #[inline(always)]
-    fn take_block(&mut self, slot: usize) -> ([f32; 3], f32) {
-        let start_index = self.block_start;
-        self.drop_block();
-        let buffer = &self.buffer;
-        let block = &mut self.blocks[slot % 2];
-        let sums = &mut block.sums;
-        let (mut mean, variance, saturated) =
-            R::full_block(buffer, self.saturation_limit, &mut sums.sum, &mut sums.sum_sq);
-        (sums.n, sums.start_index, sums.end_index, sums.saturated) =
-            (BLOCK as u32, start_index, self.counted, saturated);
-        for ((m, reference), values) in mean.iter_mut().zip(&mut sums.reference).zip(buffer) {
-            *reference = R::block_reference(values[0]);
-            // Raw sums have a zero reference (no `+ 0.0` at run time).
-            if R::RELATIVE {
+    fn sum_block(
+        stats: &mut BlockStats<R>,
+        block: &[[R; 3]; BLOCK],
+        limit: R::Limit,
+        (start_index, end_index): (u32, u32),
+    ) -> ([f32; 3], f32) {
+        let sums = &mut stats.sums;
+        let (mut mean, variance, saturated) = R::full_block(block, limit, &mut sums.sum, &mut sums.sum_sq);
+        (sums.n, sums.start_index, sums.end_index, sums.saturated) = (BLOCK as u32, start_index, end_index, saturated);
+        // Raw sums keep the zero reference set by `new` (no store, no `+ 0.0` at run time).
+        if R::RELATIVE {
+            for (a, (m, reference)) in mean.iter_mut().zip(&mut sums.reference).enumerate() {
+                *reference = R::block_reference(block[0][a]);
                 *m += reference.to_f32();
             }
         }
-        (block.mean, block.variance) = (mean, variance);
+        (stats.mean, stats.variance) = (mean, variance);
         (mean, variance)
     }
 
-    // Once per BLOCK samples: kept out of line so that `push`, inlined into the caller's sample loop, stays
-    // small (inlined, its register pressure made every push save and restore all FPU registers).
+    /// Ends the open block (its samples are `BLOCK` from `block_start`): its index span, and the slot
+    /// its statistics go to.
+    fn end_block(&mut self) -> (usize, (u32, u32)) {
+        let start_index = self.block_start;
+        self.drop_block();
+        ((self.previous_slot + 1) % 2, (start_index, self.counted))
+    }
+
+    /// Closes the full block: the buffer's (`None`), or a whole block of the caller's samples while the
+    /// buffer is empty. Once per BLOCK samples: kept out of line so that `push`, inlined into the
+    /// caller's sample loop, stays small (inlined, its register pressure made every push save and
+    /// restore all FPU registers).
     #[inline(never)]
-    fn close_block(&mut self) -> Result<Option<Event>, AccumulatorError> {
-        let slot = (self.previous_slot + 1) % 2;
-        let (mean, variance) = self.take_block(slot);
+    fn close_block(&mut self, whole: Option<&[[R; 3]; BLOCK]>) -> Result<Option<Event>, AccumulatorError> {
+        if whole.is_some() {
+            self.buffered = BLOCK;
+        }
+        let (slot, span) = self.end_block();
+        let block = whole.unwrap_or(&self.buffer);
+        let (mean, variance) = Self::sum_block(&mut self.blocks[slot], block, self.saturation_limit, span);
+        self.judge_block(slot, mean, variance)
+    }
+
+    /// The pose logic after a block of this mean and variance was summed into `blocks[slot]`.
+    fn judge_block(&mut self, slot: usize, mean: [f32; 3], variance: f32) -> Result<Option<Event>, AccumulatorError> {
         let noise = self.update_noise(mean, variance);
         let previous = &self.blocks[self.previous_slot % 2];
         let drift = self.has_previous.then(|| {
@@ -882,6 +938,8 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
 #[cfg(test)]
 mod tests {
     use super::*;
+    extern crate std;
+    use std::vec::Vec;
 
     #[test]
     fn pose_count_saturates_and_its_sums_stay_exact() {
@@ -988,17 +1046,17 @@ mod tests {
             let limit = [32_769, 32_767, 30_000, 16_384][round % 4];
             let centre = [32_760i32, -32_760, 29_990, 16_380, 0][round % 5];
             let spread = [1u64, 3, 12, 400][round % 4];
-            let mut axes = [[0i16; 32]; 3];
-            for axis in &mut axes {
-                for v in axis.iter_mut() {
+            let mut samples = [[0i16; 3]; 32];
+            for sample in &mut samples {
+                for v in sample.iter_mut() {
                     x = x.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
                     let offset = (x >> 33) % (2 * spread + 1);
                     *v = (centre + offset as i32 - spread as i32).clamp(-32_768, 32_767) as i16;
                 }
             }
             let (mut sum, mut sum_sq) = ([0i64; 3], [0i64; 3]);
-            let (mean, variance, saturated) = i16::full_block(&axes, limit, &mut sum, &mut sum_sq);
-            let truth = axes.iter().flatten().any(|v| v.saturated(limit));
+            let (mean, variance, saturated) = i16::full_block(&samples, limit, &mut sum, &mut sum_sq);
+            let truth = samples.iter().flatten().any(|v| v.saturated(limit));
             assert_eq!(saturated, truth, "round {round}");
             if truth {
                 saturated_blocks += 1;
@@ -1008,6 +1066,115 @@ mod tests {
             }
         }
         assert!(saturated_blocks > 500 && cleared > 500, "{saturated_blocks} saturated, {cleared} cleared");
+    }
+
+    /// A stream of still holds (noise `noise`) and moves, with `hold` samples per hold, from `seed`.
+    fn stream(seed: u64, holds: usize, hold: usize, noise: f32) -> impl Iterator<Item = [f32; 3]> {
+        let mut x = seed;
+        let mut next = move || {
+            x = x.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            (x >> 40) as f32 / (1u64 << 24) as f32 - 0.5
+        };
+        (0..holds * hold).map(move |i| {
+            let (h, t) = (i / hold, i % hold);
+            let moving = t < hold / 5;
+            let base = [(h % 3) as f32 * 9000.0 - 9000.0, (h % 5) as f32 * 5000.0 - 10_000.0, 16_000.0];
+            let swing = if moving { 3000.0 * (t as f32 * 0.1).sin() } else { 0.0 };
+            [base[0] + swing + noise * next(), base[1] - swing + noise * next(), base[2] + noise * next()]
+        })
+    }
+
+    /// Every event with the number of samples taken when it came, pushing one at a time.
+    fn one_by_one<R: Reading, const P: usize, const B: usize>(
+        acc: &mut Accumulator<R, P, B>,
+        samples: &[[R; 3]],
+    ) -> Vec<(usize, Result<Option<Event>, AccumulatorError>)> {
+        let events = samples.iter().enumerate().map(|(i, &s)| (i + 1, acc.push(s)));
+        events.filter(|(_, e)| !matches!(e, Ok(None))).collect()
+    }
+
+    /// The same through `push_slice`, the stream cut into slices of the lengths `cuts` in turn.
+    fn by_slices<R: Reading, const P: usize, const B: usize>(
+        acc: &mut Accumulator<R, P, B>,
+        samples: &[[R; 3]],
+        cuts: &[usize],
+    ) -> Vec<(usize, Result<Option<Event>, AccumulatorError>)> {
+        let (mut events, mut start, mut cut) = (Vec::new(), 0, 0);
+        while start < samples.len() {
+            let end = (start + cuts[cut % cuts.len()]).min(samples.len());
+            cut += 1;
+            while start < end {
+                let (taken, event) = acc.push_slice(&samples[start..end]);
+                assert!(taken >= 1 && start + taken <= end, "{taken} taken of {}", end - start);
+                start += taken;
+                if !matches!(event, Ok(None)) {
+                    events.push((start, event));
+                } else {
+                    assert_eq!(start, end, "Ok(None) before the slice's end");
+                }
+            }
+        }
+        events
+    }
+
+    fn assert_same<R: Reading, const P: usize, const B: usize>(
+        a: &Accumulator<R, P, B>,
+        b: &Accumulator<R, P, B>,
+        what: &str,
+    ) {
+        assert_eq!(a.poses(), b.poses(), "{what}");
+        assert_eq!(a.rejections(), b.rejections(), "{what}");
+        assert_eq!(a.noise_variance().to_bits(), b.noise_variance().to_bits(), "{what}");
+        assert_eq!((a.samples_seen(), a.is_capturing()), (b.samples_seen(), b.is_capturing()), "{what}");
+    }
+
+    #[test]
+    fn push_slice_is_bit_for_bit_pushing_one_at_a_time() {
+        let cuts: [&[usize]; 5] = [&[32], &[1], &[64, 7, 32, 31, 33], &[100], &[5, 3, 200, 17]];
+        let limit = AccumulatorConfig { full_scale: 20_000.0, ..AccumulatorConfig::DEFAULT };
+        for (round, &cut) in cuts.iter().enumerate() {
+            for config in [AccumulatorConfig::DEFAULT, limit] {
+                let raw: Vec<[i16; 3]> =
+                    stream(round as u64, 30, 700, 6.0).map(|s| s.map(|v| v.round() as i16)).collect();
+                let mut a: Accumulator<i16, 8, 32> = Accumulator::new(config).unwrap();
+                let mut b: Accumulator<i16, 8, 32> = Accumulator::new(config).unwrap();
+                let events = one_by_one(&mut a, &raw);
+                assert!(events.iter().any(|e| e.1 == Err(AccumulatorError::Full)), "round {round}: fills up");
+                assert_eq!(events, by_slices(&mut b, &raw, cut), "i16 round {round}");
+                assert_same(&a, &b, "i16");
+                assert_eq!(a.finish(), b.finish());
+                assert_same(&a, &b, "i16 finished");
+            }
+            // f32, with non-finite samples (skipped, an error each) at places inside and across blocks.
+            let mut scaled: Vec<[f32; 3]> = stream(round as u64 + 9, 12, 500, 0.004).collect();
+            for (k, i) in [40usize, 41, 700, 1999, 2000, 3333].into_iter().enumerate() {
+                scaled[i][k % 3] = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY][k % 3];
+            }
+            let mut a: Accumulator<f32, 24, 16> = Accumulator::new(limit).unwrap();
+            let mut b: Accumulator<f32, 24, 16> = Accumulator::new(limit).unwrap();
+            let events = one_by_one(&mut a, &scaled);
+            let skipped = events.iter().filter(|e| e.1 == Err(AccumulatorError::NonFiniteSample)).count();
+            assert_eq!(skipped, 6, "round {round}");
+            assert_eq!(events, by_slices(&mut b, &scaled, cut), "f32 round {round}");
+            assert_same(&a, &b, "f32");
+            assert!(a.poses().len() >= 8, "round {round}: {} poses", a.poses().len());
+        }
+    }
+
+    #[test]
+    fn push_slice_sums_full_scale_blocks_exactly() {
+        // Whole blocks at the rails and at full scale through the slice path: exact sums, saturation seen.
+        let mut acc: Accumulator<i16, 4, 32> = Accumulator::new(AccumulatorConfig::DEFAULT).unwrap();
+        let block = [[i16::MAX, i16::MIN, i16::MAX - 1]; 32];
+        assert_eq!(acc.push_slice(&block), (32, Ok(None)));
+        let stats = &acc.blocks[acc.previous_slot % 2];
+        let n = 32i64;
+        assert_eq!(stats.sums.sum, [n * 32_767, -n * 32_768, n * 32_766]);
+        assert_eq!(stats.sums.sum_sq, [n * 32_767 * 32_767, n * 32_768 * 32_768, n * 32_766 * 32_766]);
+        assert!(stats.sums.saturated && stats.variance == 0.0);
+        let inside = [[i16::MAX - 1, i16::MIN + 1, 0]; 32];
+        assert_eq!(acc.push_slice(&inside), (32, Ok(None)));
+        assert!(!acc.blocks[acc.previous_slot % 2].sums.saturated);
     }
 
     #[test]

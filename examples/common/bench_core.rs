@@ -4,7 +4,7 @@
 //!
 //! | symbol | what one call does |
 //! |---|---|
-//! | `accumulate_fifo` | `Accumulator<i16, 24, 32>::push` of each sample of one FIFO read (`FIFO_SAMPLES` samples, push inlined in the loop as in a firmware's read loop; the report gives cycles per sample) |
+//! | `accumulate_fifo` | `Accumulator<i16, 24, 32>::push_slice` of one FIFO read (`FIFO_SAMPLES` samples: whole blocks are summed where they lie, as a firmware with a sensor FIFO does; the report gives cycles per sample) |
 //! | `accumulate_sample` | `Accumulator<i16, 24, 32>::push` of one raw sample through a call (a second accumulator fed the same stream sample by sample) |
 //! | `apply_sample` | `Params::apply_in_place` of a batch of `APPLY_BATCH` samples (the pose means; the report gives cycles per sample) |
 //! | `taga_generation` | one `Ga::step` on the normalised 24-pose problem, population `POP` (called `GENERATIONS` = 10 times) |
@@ -62,13 +62,16 @@ pub fn accumulate_sample(acc: &mut Acc, sample: [i16; 3]) -> Result<Option<Event
     acc.push(sample)
 }
 
-/// One FIFO read of samples into the accumulator; the last event, or the first error.
+/// One FIFO read of samples into the accumulator (`push_slice` until all are taken); the last event,
+/// or the first error.
 #[unsafe(no_mangle)]
 #[inline(never)]
-pub fn accumulate_fifo(acc: &mut Acc, samples: &[[i16; 3]]) -> Result<Option<Event>, AccumulatorError> {
+pub fn accumulate_fifo(acc: &mut Acc, mut samples: &[[i16; 3]]) -> Result<Option<Event>, AccumulatorError> {
     let mut last = None;
-    for &sample in samples {
-        if let Some(event) = acc.push(sample)? {
+    while !samples.is_empty() {
+        let (taken, event) = acc.push_slice(samples);
+        samples = samples.get(taken..).unwrap_or_default();
+        if let Some(event) = event? {
             last = Some(event);
         }
     }

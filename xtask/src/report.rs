@@ -51,10 +51,12 @@ const fn budget(key: &'static str, limit: u64, unit: &'static str, enforced: boo
 }
 
 /// The budgets, goals of the firmware issue (24 poses, the bench's device population), Cortex-M4F.
-pub const BUDGETS: [Budget; 6] = [
+pub const BUDGETS: [Budget; 7] = [
     budget("full_calibration_cycles", 2_000_000, "cycles", true, 2_000_000),
     budget("lm_cycles", 100_000, "cycles", true, 100_000),
     budget("accumulate_cycles_per_sample", 30, "cycles", false, 65),
+    // The FIFO path (`Accumulator::push_slice` of a 32-sample read): 38.5 measured.
+    budget("accumulate_fifo_cycles_per_sample", 30, "cycles", false, 43),
     budget("apply_cycles_per_sample", 25, "cycles", false, 31),
     budget("library_flash_bytes", 16 * 1024, "bytes", false, 21_600),
     budget("solve_ram_bytes", 4 * 1024, "bytes", true, 3_810),
@@ -125,7 +127,7 @@ pub struct TargetReport {
     pub functions: BTreeMap<&'static str, FunctionFigures>,
     /// Apply's cycles per sample (its calls take a batch).
     pub apply_cycles_per_sample: u64,
-    /// Accumulate's cycles per sample when a FIFO read's samples are pushed in one call's loop.
+    /// Accumulate's cycles per sample when a FIFO read is fed through `Accumulator::push_slice` in one call.
     pub fifo_cycles_per_sample: u64,
     /// Accumulate's instructions per sample in the same loop.
     pub fifo_instructions_per_sample: u64,
@@ -327,6 +329,7 @@ fn budget_figure(report: &TargetReport, key: &str) -> Option<u64> {
         "full_calibration_cycles" => Some(report.functions["full_calibration"].cycles),
         "lm_cycles" => Some(report.functions["lm"].cycles),
         "accumulate_cycles_per_sample" => Some(report.functions["accumulate_sample"].cycles),
+        "accumulate_fifo_cycles_per_sample" => Some(report.fifo_cycles_per_sample),
         "apply_cycles_per_sample" => Some(report.apply_cycles_per_sample),
         "library_flash_bytes" => Some(report.flash_bytes.library),
         "solve_ram_bytes" => Some(report.ram_bytes.solve),
@@ -390,7 +393,7 @@ fn budget_table(s: &mut String, report: &Report, r: &TargetReport) {
     let generation = format!("one TAGA generation, 24 poses, pop. {} (mean)", opt(r.population));
     let rows = [
         ("accumulate_sample", "accumulate one sample (mean per call)", "accumulate_cycles_per_sample"),
-        ("accumulate_fifo", fifo.as_str(), ""),
+        ("accumulate_fifo", fifo.as_str(), "accumulate_fifo_cycles_per_sample"),
         ("apply_sample", apply.as_str(), "apply_cycles_per_sample"),
         ("taga_generation", generation.as_str(), ""),
         ("lm", "LM alone from the coarse start", "lm_cycles"),
