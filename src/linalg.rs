@@ -340,7 +340,7 @@ fn factor_solve<const N: usize>(l: &Matrix<N>, d: &[f32; N], b: &mut [f32; N], c
 
 /// Solves `a x = b` for a symmetric positive definite `a` given by its lower triangle, in place, with
 /// the entries of `x` flagged in `held` fixed at 0: `a`'s lower triangle is overwritten by its unscaled
-/// `L P L^T` factors ([`factor`]) and `b` by `x`. No square roots, no scaling, no copies: the Levenberg-Marquardt
+/// `L P L^T` factors (`factor`) and `b` by `x`. No square roots, no scaling, no copies: the Levenberg-Marquardt
 /// step on the device (f32 rounding decides where the LM stops: the scaled form took it 10 iterations
 /// instead of 4 from the coarse start on the bench).
 pub fn ldlt_solve_holding_in_place<const N: usize>(
