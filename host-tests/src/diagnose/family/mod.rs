@@ -10,6 +10,7 @@ mod motion;
 mod nonlinearity;
 mod ringing;
 mod settling;
+mod smooth;
 mod temperature;
 
 use rand_core::SeedableRng;
