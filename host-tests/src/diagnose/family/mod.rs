@@ -12,6 +12,7 @@ mod ringing;
 mod settling;
 mod smooth;
 mod temperature;
+mod tremor;
 
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
