@@ -19,7 +19,7 @@
 //! ```
 
 use crate::accumulator::Pose;
-use crate::ellipsoid::{EllipsoidError, check_input, half_axes_near, largest, mid_range};
+use crate::ellipsoid::{EllipsoidError, check_input, half_axes_near, mid_range};
 use crate::frame::{Deviation, Frame, FrameError};
 use crate::ga::{GaError, SearchBox};
 use crate::model::{PARAM_COUNT, Params};
@@ -197,13 +197,13 @@ impl CoarseCalibration {
     }
 }
 
-/// Whether every axis, by the half-range `half` of its readings, was pointed both up and down: it then
-/// spans about twice gravity, like the widest one; one that spans much less was never reversed, and
-/// its centre (hence its dominant poses) is unknown.
-fn check_reversed(half: [f32; 3]) -> Result<(), CoarseError> {
-    let widest = largest(half);
+/// Whether every axis, by the half-range `half` of its readings (the largest `widest`), was pointed
+/// both up and down: it then spans about twice gravity, like the widest one; one that spans much less
+/// was never reversed, and its centre (hence its dominant poses) is unknown.
+fn check_reversed(half: [f32; 3], widest: f32) -> Result<(), CoarseError> {
     for a in 0..3 {
-        if widest > 0.0 && half[a] < MIN_SPAN_FRACTION * widest {
+        // Never true when all are 0.
+        if half[a] < MIN_SPAN_FRACTION * widest {
             // In [0, 75): the cast to `u8` needs no clamp (`u32` is one instruction).
             let span_pct = (100.0 * half[a] / widest) as u32 as u8;
             return Err(CoarseError::NotReversed { axis: a as u8, span_pct });
@@ -220,17 +220,14 @@ pub(crate) fn face_means<'a>(
     gravity: f32,
 ) -> Result<([f32; 3], [f32; 3], [[u16; 2]; 3]), CoarseError> {
     // Centre and half-range per axis from the extremes: removes the large offsets of raw counts.
-    let (mid, half) = mid_range(means.clone());
-    check_reversed(half)?;
+    let (mid, half, widest) = mid_range(means.clone());
+    check_reversed(half, widest)?;
     let mut sums = [[0.0f32; 2]; 3];
     let mut counts = [[0u16; 2]; 3];
     for m in means {
-        let mut u = [0.0; 3];
-        for a in 0..3 {
-            if half[a] > 0.0 {
-                u[a] = (m[a] - mid[a]) / half[a];
-            }
-        }
+        // Every half-range is positive here, or all are 0 (all means equal): then `u` is NaN, near
+        // no half-axis.
+        let u = [(m[0] - mid[0]) / half[0], (m[1] - mid[1]) / half[1], (m[2] - mid[2]) / half[2]];
         let near = half_axes_near(u, DOMINANCE);
         // At most one half-axis is within 25 deg (all six only for u = 0, which points nowhere).
         if near != 0 && near != 0x3f {

@@ -34,7 +34,7 @@
 
 use crate::accumulator::Pose;
 use crate::linalg::{
-    DETERMINED_PIVOT, Matrix, add_normal_row, larger, smaller, solve_spd_holding_weak_in_place, sqrt_f32,
+    DETERMINED_PIVOT, Held, Matrix, add_normal_row, larger, smaller, solve_spd_holding_weak_in_place, sqrt_f32,
 };
 use crate::model::{PARAM_COUNT, Params, norm_squared};
 
@@ -388,7 +388,9 @@ impl Fitting<'_> {
         lower_factor([ata[3][3] - shift, ata[4][4] - shift, ata[5][5] - shift], [ata[4][3], ata[5][3], ata[5][4]])?;
         // `atb` becomes the quadric coefficients; weakly determined cross terms are held at 0.
         let held = solve_spd_holding_weak_in_place(&mut ata, &mut atb, DETERMINED_PIVOT).ok()?;
-        if (0..6).any(|i| held.contains(i)) {
+        // Only cross terms may be held.
+        let cross_terms = Held::NONE.with(6).with(7).with(8);
+        if held.union(cross_terms) != cross_terms {
             return None;
         }
         // Quadric cross terms xy, xz, yz map to Mxx, Myy, Mzz.
@@ -500,8 +502,9 @@ fn lower_factor(diagonal: [f32; 3], off: [f32; 3]) -> Option<Params> {
     })
 }
 
-/// Per-axis centre and half-width of the range of the means.
-pub(crate) fn mid_range<'a>(means: impl Iterator<Item = &'a [f32; 3]>) -> ([f32; 3], [f32; 3]) {
+/// Per-axis centre and half-width of the range of the means, and the largest half-width (0 if none is
+/// positive).
+pub(crate) fn mid_range<'a>(means: impl Iterator<Item = &'a [f32; 3]>) -> ([f32; 3], [f32; 3], f32) {
     let mut lo = [f32::INFINITY; 3];
     let mut hi = [f32::NEG_INFINITY; 3];
     for m in means {
@@ -510,15 +513,12 @@ pub(crate) fn mid_range<'a>(means: impl Iterator<Item = &'a [f32; 3]>) -> ([f32;
             hi[a] = larger(m[a], hi[a]);
         }
     }
+    let mut widest = 0.0f32;
     for a in 0..3 {
         (lo[a], hi[a]) = (0.5 * (hi[a] + lo[a]), 0.5 * (hi[a] - lo[a]));
+        widest = larger(hi[a], widest);
     }
-    (lo, hi)
-}
-
-/// The largest of `v` and 0.
-pub(crate) fn largest(v: [f32; 3]) -> f32 {
-    v.iter().fold(0.0f32, |x, &y| larger(y, x))
+    (lo, hi, widest)
 }
 
 /// The half-axes ([`Directions`] bits) within `acos(cos)` of the direction of `u`; all six for `u = 0`.
@@ -534,8 +534,8 @@ pub(crate) fn half_axes_near(u: [f32; 3], cos: f32) -> u8 {
 /// Half-axes with no pose mean within 60 deg, seen from the per-axis mid-range of the means (the
 /// centre is unknown when the fit fails).
 pub fn missing_directions<'a>(means: impl Iterator<Item = &'a [f32; 3]> + Clone) -> Directions {
-    let (mid, half) = mid_range(means.clone());
-    let widest = larger(largest(half), f32::MIN_POSITIVE);
+    let (mid, _, widest) = mid_range(means.clone());
+    let widest = larger(widest, f32::MIN_POSITIVE);
     // cos 60 deg = 0.5.
     let mut seen = 0;
     for m in means {

@@ -135,22 +135,14 @@ impl<const MAX_POSES: usize> NormalizedPoses<MAX_POSES> {
         if poses.len() > MAX_POSES {
             return Err(InitError::TooManyPoses { got: poses.len(), capacity: MAX_POSES });
         }
-        // Every pose, listed by index; the estimate reorders the list, its first `used` entries are
-        // the poses it kept.
+        // A list of the poses by index (capacity checked above); the estimate fills and reorders it, its
+        // first `used` entries are the poses it kept.
         self.source.clear();
-        for i in 0..poses.len() {
-            // Capacity checked above.
-            let _ = self.source.push(i as u16);
-        }
+        let _ = self.source.resize_default(poses.len());
         let used = initial_estimate(&mut self.initial, &mut self.frame, poses, &mut self.source, init, gravity, rule)?;
         self.source.truncate(used);
-        let (frame, initial) = (self.frame, &self.initial);
-        self.start = frame.to_deviation(&initial.params);
-        for i in 0..PARAM_COUNT {
-            if initial.held[i] {
-                self.start[i] = 0.0;
-            }
-        }
+        start_deviation(&self.initial, &self.frame, &mut self.start);
+        let frame = &self.frame;
         self.poses.clear();
         for m in kept(poses, &self.source) {
             // As many as the indices.
@@ -190,9 +182,9 @@ impl<const MAX_POSES: usize> NormalizedPoses<MAX_POSES> {
     }
 }
 
-/// The estimate `init` asks for (see [`Init`]) and its frame, written into `initial` and `frame`,
-/// from the poses listed in `list` (every pose, in order); returns how many it uses: the first
-/// entries of `list`, which it reorders.
+/// The estimate `init` asks for (see [`Init`]) and its frame, written into `initial` and `frame`;
+/// `list`, as long as `poses`, is filled with the indices of the poses it uses first; returns how
+/// many it uses.
 #[inline(always)]
 fn initial_estimate(
     initial: &mut Initial,
@@ -211,29 +203,27 @@ fn initial_estimate(
     // terms kept here.
     let mut fitted = None;
     let mut ellipsoid_error = None;
+    every_pose(list);
     if init != Init::SixPosition {
         let mut fitting = Fitting::new(poses, gravity, &mut initial.params, &mut initial.excluded);
         match fitting.robust(list, rule) {
             Ok(()) => fitted = Some((fitting.center, fitting.held)),
             Err(e) if init == Init::Ellipsoid => return Err(InitError::Ellipsoid(e)),
             Err(e) => {
-                // Every pose again, in order.
-                for (i, entry) in list.iter_mut().enumerate() {
-                    *entry = i as u16;
-                }
+                every_pose(list);
                 ellipsoid_error = Some(e);
             }
         }
     }
-    // When the six faces are the fallback, the ellipsoid's error is the one reported.
-    let error = |e: CoarseError| ellipsoid_error.map_or(InitError::Coarse(e), InitError::Ellipsoid);
     // The normalising frame: the ellipsoid's centre and gains `1 / S`, or the six faces' own
     // (exactly: the paper's path).
-    let (offset, gain) = match fitted {
-        Some((center, _)) => (center, initial.params.scale.map(|s| 1.0 / s)),
-        None => face_means(kept(poses, list), gravity).map(|(offset, gain, _)| (offset, gain)).map_err(error)?,
-    };
-    *frame = Frame::new(offset, gain, gravity).map_err(|e| error(e.into()))?;
+    let frame_or_error = match fitted {
+        Some((center, _)) => Ok((center, initial.params.scale.map(|s| 1.0 / s))),
+        None => face_means(kept(poses, list), gravity).map(|(offset, gain, _)| (offset, gain)),
+    }
+    .and_then(|(offset, gain)| Ok(Frame::new(offset, gain, gravity)?));
+    // When the six faces are the fallback, the ellipsoid's error is the one reported.
+    *frame = frame_or_error.map_err(|e| ellipsoid_error.map_or(InitError::Coarse(e), InitError::Ellipsoid))?;
     let (kind, held) = match fitted {
         Some((_, held)) => (Init::Ellipsoid, held),
         None => {
@@ -245,4 +235,72 @@ fn initial_estimate(
     initial.kind = kind;
     initial.held = held_parameters(&held);
     Ok(list.len() - initial.excluded.as_slice().len())
+}
+
+/// Every pose, in order: `list[i] = i`.
+fn every_pose(list: &mut [u16]) {
+    for (i, entry) in list.iter_mut().enumerate() {
+        *entry = i as u16;
+    }
+}
+
+/// [`Frame::to_deviation`] of `initial`'s model in `frame`, its frame, bit for bit, held parameters
+/// at 0, written into `start`: the frame's offset is the model's centre, whose image `Ka c` is the
+/// model's bias (the ellipsoid computes `B` so, and [`Frame::to_params`] the six faces' model), so the
+/// bias deviations are exactly 0; only non-orthogonality terms are ever held.
+fn start_deviation(initial: &Initial, frame: &Frame, start: &mut Deviation) {
+    let (p, k) = (&initial.params, frame.gain);
+    *start = [0.0; PARAM_COUNT];
+    for a in 0..3 {
+        start[3 + a] = p.scale[a] * k[a] - 1.0;
+        // Mxx and Myy are relative to the x gain, Mzz to the y gain.
+        if !initial.held[6 + a] {
+            start[6 + a] = p.nonorth[a] * k[a / 2];
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Poses on a known model: the six faces (two turns each) and four diagonals.
+    fn poses() -> [Pose; 16] {
+        let truth = Params { bias: [0.3, -0.2, 0.1], scale: [1.02, 0.97, 1.01], nonorth: [0.01, -0.02, 0.015] };
+        let d = 0.577_350_3 * 9.80665;
+        let dirs: [[f32; 3]; 16] = [
+            [9.80665, 0.1, 0.0],
+            [9.80665, 0.0, 0.1],
+            [-9.80665, 0.1, 0.0],
+            [-9.80665, 0.0, -0.1],
+            [0.1, 9.80665, 0.0],
+            [0.0, 9.80665, 0.1],
+            [0.1, -9.80665, 0.0],
+            [0.0, -9.80665, -0.1],
+            [0.1, 0.0, 9.80665],
+            [0.0, 0.1, 9.80665],
+            [0.1, 0.0, -9.80665],
+            [0.0, -0.1, -9.80665],
+            [d, d, d],
+            [-d, d, -d],
+            [d, -d, -d],
+            [-d, -d, d],
+        ];
+        dirs.map(|g| Pose::from_mean(truth.invert(g).unwrap(), 100))
+    }
+
+    #[test]
+    fn the_start_is_the_deviation_of_the_initial_model_bit_for_bit() {
+        for init in [Init::Ellipsoid, Init::SixPosition] {
+            let norm = NormalizedPoses::<16>::prepare(&poses(), init, 9.80665, &OutlierRule::DEFAULT).unwrap();
+            assert_eq!(norm.initial().kind, init);
+            let mut expected = norm.frame().to_deviation(&norm.initial().params);
+            for (x, &held) in expected.iter_mut().zip(&norm.initial().held) {
+                if held {
+                    *x = 0.0;
+                }
+            }
+            assert_eq!(norm.start().map(f32::to_bits), expected.map(f32::to_bits), "{init:?}");
+        }
+    }
 }

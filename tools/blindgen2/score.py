@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Score `accelcal diagnose --json` on a directory written by generate.py.
 
-    python3 tools/blindgen2/score.py DIR [--accelcal PATH] [--json] [--jobs N] [--timeout S]
+    python3 tools/blindgen2/score.py DIR [DIR ...] [--accelcal PATH] [--json] [--jobs N] [--timeout S]
+        [--require-right-visible F] [--max-false-alarms F] [--require-ooc-honest F] [--max-refusals N]
 
 For each log in DIR/manifest.json runs the CLI, records verdict, gap.ratio_before,
 shrink and wall time (a non-zero exit is a refusal; its message is kept), writes
@@ -9,6 +10,9 @@ DIR/results.json and prints per family and overall:
   logs, clearly visible (ratio_before >= 2), right among visible, false alarms on clean
   logs (verdict != none, all clean logs), out-of-catalogue honest (none/unexplained, all
   ooc logs), refusals, median shrink of the right visible ones, slowest log (s).
+Several directories are scored together (their logs pooled; results.json written in each).
+The --require/--max options make it a gate: exit status 1, with the reason, when the
+overall figures miss them (CI runs it so on a few seeds).
 """
 
 import argparse
@@ -105,28 +109,77 @@ def fmt_row(name, s, w=20):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("dir")
+    ap.add_argument("dirs", nargs="+", metavar="dir")
     ap.add_argument("--accelcal", default=DEFAULT_CLI)
     ap.add_argument("--json", action="store_true", help="machine output on stdout")
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--timeout", type=float, default=600.0)
     ap.add_argument("--logs", action="store_true", help="also print one line per log")
     ap.add_argument("--by-shape", action="store_true", help="also a table per family/shape")
+    ap.add_argument("--require-right-visible", type=float, metavar="F",
+                    help="fail unless at least this fraction of the clearly visible logs is right")
+    ap.add_argument("--max-false-alarms", type=float, metavar="F",
+                    help="fail if more than this fraction of the clean logs is not answered none")
+    ap.add_argument("--require-ooc-honest", type=float, metavar="F",
+                    help="fail unless at least this fraction of the out-of-catalogue logs is none/unexplained")
+    ap.add_argument("--max-refusals", type=int, metavar="N", help="fail if more than N logs are refused")
     a = ap.parse_args(argv)
     if not os.path.exists(a.accelcal):
         sys.exit(f"no CLI at {a.accelcal}: build it with `cargo build --release -p accelcal-host` or pass --accelcal")
-    with open(os.path.join(a.dir, "manifest.json")) as fh:
-        manifest = json.load(fh)
-    with ThreadPoolExecutor(max_workers=max(1, a.jobs)) as ex:
-        rows = list(ex.map(lambda e: run_one(a.accelcal, a.dir, e, a.timeout), manifest))
+    rows = []
+    for d in a.dirs:
+        with open(os.path.join(d, "manifest.json")) as fh:
+            manifest = json.load(fh)
+        with ThreadPoolExecutor(max_workers=max(1, a.jobs)) as ex:
+            part = list(ex.map(lambda e, d=d: run_one(a.accelcal, d, e, a.timeout), manifest))
+        write_results(d, part)
+        rows += [dict(r, file=os.path.join(os.path.basename(os.path.normpath(d)), r["file"])) if len(a.dirs) > 1
+                 else r for r in part]
+    report(a, rows)
+    failures = gate_failures(a, summarise(rows))
+    for f in failures:
+        print(f"GATE FAILED: {f}")
+    if failures:
+        sys.exit(1)
+
+
+def write_results(d, rows):
+    """DIR/results.json: the per-family and overall figures and every log's row, for this directory alone."""
+    fams = list(dict.fromkeys(r["family"] for r in rows))
+    per = {f: summarise([r for r in rows if r["family"] == f]) for f in fams}
+    with open(os.path.join(d, "results.json"), "w") as fh:
+        json.dump(dict(per_family=per, overall=summarise(rows), logs=rows), fh, indent=1)
+
+
+def fraction(k, n):
+    return k / n if n else None
+
+
+def gate_failures(a, s):
+    """The --require/--max options the overall figures `s` miss, as sentences."""
+    out = []
+    rv = fraction(s["right_visible"], s["visible"])
+    if a.require_right_visible is not None and (rv is None or rv < a.require_right_visible):
+        out.append(f"right where visible {s['right_visible']}/{s['visible']} < {a.require_right_visible:.0%}")
+    fa = fraction(s["false_alarms"], s["clean_logs"])
+    if a.max_false_alarms is not None and fa is not None and fa > a.max_false_alarms:
+        out.append(f"false alarms {s['false_alarms']}/{s['clean_logs']} > {a.max_false_alarms:.0%}")
+    oo = fraction(s["ooc_honest"], s["ooc_logs"])
+    if a.require_ooc_honest is not None and oo is not None and oo < a.require_ooc_honest:
+        out.append(f"out-of-catalogue honest {s['ooc_honest']}/{s['ooc_logs']} < {a.require_ooc_honest:.0%}")
+    if a.max_refusals is not None and s["refusals"] > a.max_refusals:
+        out.append(f"refusals {s['refusals']} > {a.max_refusals}")
+    return out
+
+
+def report(a, rows):
+    """Prints the tables (or the JSON with --json) for the pooled rows."""
     fams = []
     for r in rows:
         if r["family"] not in fams:
             fams.append(r["family"])
     per = {f: summarise([r for r in rows if r["family"] == f]) for f in fams}
     overall = summarise(rows)
-    with open(os.path.join(a.dir, "results.json"), "w") as fh:
-        json.dump(dict(per_family=per, overall=overall, logs=rows), fh, indent=1)
     if a.json:
         json.dump(dict(per_family=per, overall=overall, logs=rows), sys.stdout, indent=1)
         print()
@@ -160,7 +213,7 @@ def main(argv=None):
     refused = [r for r in rows if r["refused"]]
     for r in refused:
         print(f"refused {r['file']}: {r['message']}")
-    print(f"(visible: gap.ratio_before >= {VISIBLE:g}; per-log rows in {os.path.join(a.dir, 'results.json')})")
+    print(f"(visible: gap.ratio_before >= {VISIBLE:g}; per-log rows in results.json of {', '.join(a.dirs)})")
 
 
 if __name__ == "__main__":
