@@ -109,7 +109,32 @@ pub(crate) fn lstsq(rows: &[Vec<f64>], r: &[f64], train: &[usize]) -> Option<Vec
 }
 
 pub(crate) fn cholesky_solve(a: &[Vec<f64>], b: &[f64], ridge: f64) -> Option<Vec<f64>> {
-    let p = b.len();
+    cholesky_solve_many(a, &[b], ridge)?.pop()
+}
+
+/// `a x = b` for each right-hand side `b` (`a` symmetric positive definite, its lower triangle
+/// read, plus `ridge` on the diagonal), one factorisation.
+pub(crate) fn cholesky_solve_many(a: &[Vec<f64>], rhs: &[&[f64]], ridge: f64) -> Option<Vec<Vec<f64>>> {
+    let l = cholesky(a, ridge)?;
+    let p = l.len();
+    rhs.iter()
+        .map(|b| {
+            let mut y = vec![0.0; p];
+            for i in 0..p {
+                y[i] = (b[i] - (0..i).map(|k| l[i][k] * y[k]).sum::<f64>()) / l[i][i];
+            }
+            let mut x = vec![0.0; p];
+            for i in (0..p).rev() {
+                x[i] = (y[i] - (i + 1..p).map(|k| l[k][i] * x[k]).sum::<f64>()) / l[i][i];
+            }
+            x.iter().all(|v| v.is_finite()).then_some(x)
+        })
+        .collect()
+}
+
+/// The lower Cholesky factor of `a + ridge I` (`None`: not positive definite).
+fn cholesky(a: &[Vec<f64>], ridge: f64) -> Option<Vec<Vec<f64>>> {
+    let p = a.len();
     let mut l = vec![vec![0.0; p]; p];
     for i in 0..p {
         for j in 0..=i {
@@ -127,15 +152,7 @@ pub(crate) fn cholesky_solve(a: &[Vec<f64>], b: &[f64], ridge: f64) -> Option<Ve
             }
         }
     }
-    let mut y = vec![0.0; p];
-    for i in 0..p {
-        y[i] = (b[i] - (0..i).map(|k| l[i][k] * y[k]).sum::<f64>()) / l[i][i];
-    }
-    let mut x = vec![0.0; p];
-    for i in (0..p).rev() {
-        x[i] = (y[i] - (i + 1..p).map(|k| l[k][i] * x[k]).sum::<f64>()) / l[i][i];
-    }
-    x.iter().all(|v| v.is_finite()).then_some(x)
+    Some(l)
 }
 
 pub(crate) fn predict(rows: &[Vec<f64>], r: &[f64], x: &[f64], i: usize) -> f64 {

@@ -2,7 +2,7 @@
 //! rest and pooled over every hold (time segments, not the pose means it is judged on) and given to
 //! the simulator; judged by how well the noise model predicts the nominal model's held-out scatter.
 
-use super::{Candidate, Context, Evaluation, Family, Variant};
+use super::{Candidate, Context, Evaluation, Family, Variant, tremor};
 use crate::csvio::Table;
 use crate::diagnose::gap::PoseData;
 use crate::diagnose::gap::{Noise, expected_cv_ms, quantisation_step, residual_noise_draws, row_time, simulate_gap};
@@ -103,6 +103,19 @@ impl Family for ColoredNoise {
     }
 
     fn evaluate(&self, ctx: &Context<'_>) -> Evaluation {
+        // Motion in the tremor band is no sensor noise: the motion family measures it.
+        if tremor::in_holds(ctx.table, ctx.poses, ctx.m.rate).is_some() {
+            let mut e = ctx.not_testable(self.name());
+            e.candidate.detail = "the holds move at 2-20 Hz: motion, not sensor noise".into();
+            return e;
+        }
+        self.noise_model(ctx)
+    }
+}
+
+impl ColoredNoise {
+    /// The noise model measured in the holds, judged on the withheld poses' scatter.
+    pub(crate) fn noise_model(&self, ctx: &Context<'_>) -> Evaluation {
         let m = ctx.m;
         let estimates = hold_estimates(ctx);
         let best = self.best_noise(ctx, &estimates);
@@ -120,7 +133,7 @@ impl Family for ColoredNoise {
         let scale: V3 = std::array::from_fn(|a| m.model.ka[a][a]);
         let mg = |v: V3, a: usize| m.to_mg(v[a].sqrt() * scale[a]);
         let candidate = Candidate {
-            effect: self.name(),
+            effect: "colored-noise",
             applicable,
             heldout_ratio,
             heldout_gain: if applicable { ctx.gain(heldout_ratio) } else { 0.0 },

@@ -4,7 +4,7 @@
 //! every hold shows the drift's course), a smooth wander: piecewise-linear in time with knots
 //! evenly spaced over the log.
 
-use super::{Context, Family, Variant};
+use super::{Context, Evaluation, Family, Variant, smooth, standard_evaluation};
 use crate::diagnose::gap::PoseData;
 use crate::diagnose::math::V3;
 use crate::diagnose::within::{Within, WithinVariant};
@@ -85,6 +85,14 @@ impl Family for Drift {
                 })
             })
             .collect()
+    }
+
+    fn evaluate(&self, ctx: &Context<'_>) -> Evaluation {
+        let mut e = standard_evaluation(self, ctx);
+        if let Some(fit) = smooth::best(ctx) {
+            smooth::add(ctx, &mut e, fit);
+        }
+        e
     }
 
     fn variants(&self, ctx: &Context<'_>) -> Vec<Variant> {

@@ -10,7 +10,9 @@ mod motion;
 mod nonlinearity;
 mod ringing;
 mod settling;
+mod smooth;
 mod temperature;
+mod tremor;
 
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;

@@ -6,7 +6,7 @@
 
 use accelcal::model::PARAM_COUNT;
 
-use super::{Context, Family, Fitted, Variant, ringing};
+use super::{Context, Evaluation, Family, Fitted, Variant, colored_noise, ringing, standard_evaluation, tremor};
 use crate::diagnose::SEGMENTS;
 use crate::diagnose::locate::{within_chi2_from, within_chi2_of};
 
@@ -23,6 +23,22 @@ impl Family for Motion {
 
     fn variants(&self, _ctx: &Context<'_>) -> Vec<Variant> {
         Vec::new()
+    }
+
+    /// Dropping moving poses, or, when every hold moves in the tremor band (hand-held, a vibrating
+    /// support), the scatter the motion gives the pose means, measured in the holds as for colored
+    /// noise: the better on withheld poses.
+    fn evaluate(&self, ctx: &Context<'_>) -> Evaluation {
+        let dropped = standard_evaluation(self, ctx);
+        let Some(ratio) = tremor::in_holds(ctx.table, ctx.poses, ctx.m.rate) else { return dropped };
+        let mut shaken = colored_noise::ColoredNoise.noise_model(ctx);
+        let c = &mut shaken.candidate;
+        if !c.applicable || (dropped.candidate.applicable && dropped.candidate.evidence() >= c.evidence()) {
+            return dropped;
+        }
+        c.effect = self.name();
+        c.detail = format!("the holds move at 2-20 Hz ({ratio:.1}x white noise): their means scatter as {}", c.detail);
+        shaken
     }
 
     fn fit(&self, ctx: &Context<'_>) -> Option<Fitted> {

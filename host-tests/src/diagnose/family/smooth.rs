@@ -1,0 +1,285 @@
+//! Drift as a slow wander: a bias that moves smoothly in time, with no fixed shape (a warm-up,
+//! a Brownian wander low-passed by the sensor's thermal mass). Per axis it is a uniform cubic
+//! spline over the log (4 to 18 basis functions), whose neighbouring coefficients' differences are
+//! penalised (first differences: a random walk's steps, a Brownian prior; second: an integrated
+//! random walk's) with a prior standard deviation relative to the noise of a pose mean: a
+//! penalised spline (P-spline), not `3 x basis` free parameters, so a log of 16 poses can still
+//! withhold some. Each pose's column is the spline averaged over its hold; when the log has the
+//! within-pose channel, the spline's course during each hold is stacked with the pose means (as in
+//! `joint.rs`). Basis and prior are chosen on withheld pose means; the penalty charges the fit's
+//! effective parameters (the trace of the pose rows' hat matrix beyond the calibration's).
+
+use super::{Context, Evaluation};
+use crate::diagnose::PARAMETER_PENALTY;
+use crate::diagnose::math::{V3, cholesky_solve_many, dot, rms};
+
+/// Knot counts tried.
+const KNOTS: [usize; 4] = [4, 6, 10, 18];
+
+/// Prior step standard deviations between knots, in pose-mean noise standard deviations.
+const STEP_SIGMAS: [f64; 6] = [0.3, 1.0, 3.0, 10.0, 30.0, 100.0];
+
+/// One penalised spline: knots, the order of the differences its prior penalises and their prior
+/// standard deviation (in pose-mean noise standard deviations).
+#[derive(Clone, Copy)]
+struct Shape {
+    knots: usize,
+    order: usize,
+    step: f64,
+}
+
+impl Shape {
+    fn detail(&self, t_end: f64, edf: f64) -> String {
+        let h = t_end / (self.knots - 3) as f64;
+        let what = if self.order == 1 { "steps" } else { "bends" };
+        format!(
+            "bias wandering smoothly in time (cubic spline, {} basis functions {h:.0} s apart, {what} of {} pose-noise sigmas, {edf:.1} effective params)",
+            self.knots, self.step
+        )
+    }
+}
+
+/// The best penalised wander.
+pub(crate) struct SmoothFit {
+    ratio: f64,
+    after: Vec<Option<f64>>,
+    edf: f64,
+    detail: String,
+}
+
+/// Basis function `j` of `count` uniform cubic B-splines over `0..t_end` at `t` (their sum is 1 on
+/// `0..t_end`; centres `h` apart from `-h` to `t_end + h`).
+fn bspline(j: usize, count: usize, t_end: f64, t: f64) -> f64 {
+    let h = t_end / (count - 3) as f64;
+    let x = ((t - (j as f64 - 1.0) * h) / h).abs();
+    if x < 1.0 {
+        (4.0 - 6.0 * x * x + 3.0 * x * x * x) / 6.0
+    } else if x < 2.0 {
+        (2.0 - x).powi(3) / 6.0
+    } else {
+        0.0
+    }
+}
+
+/// The stacked design of one knot count: whitened pose rows (calibration columns, then `3 knots`
+/// wander columns: the bias at each knot along the pose direction, averaged over the hold), then,
+/// when the log has the within-pose channel, its segments' rows (the wander's course during each
+/// hold, already whitened); their targets and folds (a segment in its pose's fold).
+fn design(ctx: &Context<'_>, knots: usize, t_end: f64) -> (Vec<Vec<f64>>, Vec<f64>, Vec<usize>) {
+    let w = 1.0 / ctx.e_white.sqrt();
+    let base = ctx.base_rows.first().map_or(0, Vec::len);
+    let effect = |_: usize, t: f64, _: std::ops::Range<usize>| -> Vec<V3> {
+        (0..knots).flat_map(|j| (0..3).map(move |a| axis(a, bspline(j, knots, t_end, t)))).collect()
+    };
+    let pose_extra: Vec<Vec<f64>> = match &ctx.within {
+        Some(within) => within.variant(ctx.m, 3 * knots, String::new(), &effect).pose_extra,
+        None => ctx
+            .poses
+            .iter()
+            .zip(ctx.directions())
+            .map(|(p, u)| effect(0, p.t_mid(), 0..0).iter().map(|e| dot(*u, *e)).collect())
+            .collect(),
+    };
+    let mut rows: Vec<Vec<f64>> =
+        ctx.base_rows.iter().zip(&pose_extra).map(|(b, e)| b.iter().chain(e).map(|x| x * w).collect()).collect();
+    let mut r: Vec<f64> = ctx.m.r.iter().map(|x| x * w).collect();
+    let mut fold = ctx.fold.clone();
+    if let Some(within) = &ctx.within {
+        let v = within.variant(ctx.m, 3 * knots, String::new(), &effect);
+        for (i, row) in v.rows.iter().enumerate() {
+            rows.push(std::iter::repeat_n(0.0, base).chain(row.iter().copied()).collect());
+            r.push(within.d[i]);
+            fold.push(ctx.fold[within.pose[i]]);
+        }
+    }
+    (rows, r, fold)
+}
+
+/// `v` along axis `a`.
+fn axis(a: usize, v: f64) -> V3 {
+    std::array::from_fn(|i| if i == a { v } else { 0.0 })
+}
+
+/// The prior's normal matrix per axis: the knots' differences of `order` (1: a random walk's
+/// steps, 2: an integrated random walk's, a smooth wander) have standard deviation `step`
+/// (whitened like the pose rows: `w` is their weight), added to `a` on the wander columns.
+fn add_prior(a: &mut [Vec<f64>], base: usize, knots: usize, order: usize, step: f64, w: f64) {
+    let weights: &[f64] = if order == 1 { &[-1.0, 1.0] } else { &[1.0, -2.0, 1.0] };
+    let c = (w / step).powi(2);
+    for first in 0..=knots - weights.len() {
+        for axis in 0..3 {
+            let col = |k: usize| base + 3 * (first + k) + axis;
+            for (j, wj) in weights.iter().enumerate() {
+                for (k, wk) in weights.iter().enumerate() {
+                    a[col(j)][col(k)] += c * wj * wk;
+                }
+            }
+        }
+    }
+}
+
+/// Normal equations `sum x x^T`, `sum x r` over the rows of each fold.
+struct FoldNormals {
+    a: Vec<Vec<Vec<f64>>>,
+    b: Vec<Vec<f64>>,
+}
+
+impl FoldNormals {
+    fn new(rows: &[Vec<f64>], r: &[f64], fold: &[usize], folds: usize) -> Self {
+        let p = rows.first().map_or(0, Vec::len);
+        let mut out = Self { a: vec![vec![vec![0.0; p]; p]; folds], b: vec![vec![0.0; p]; folds] };
+        for ((row, ri), &f) in rows.iter().zip(r).zip(fold) {
+            for j in 0..p {
+                out.b[f][j] -= row[j] * ri;
+                for k in 0..=j {
+                    out.a[f][j][k] += row[j] * row[k];
+                }
+            }
+        }
+        out
+    }
+
+    /// The sums over every fold but `skip` (all of them for `None`), lower triangle.
+    fn without(&self, skip: Option<usize>) -> (Vec<Vec<f64>>, Vec<f64>) {
+        let p = self.b.first().map_or(0, Vec::len);
+        let (mut a, mut b) = (vec![vec![0.0; p]; p], vec![0.0; p]);
+        for f in (0..self.b.len()).filter(|f| Some(*f) != skip) {
+            for j in 0..p {
+                b[j] += self.b[f][j];
+                for k in 0..=j {
+                    a[j][k] += self.a[f][j][k];
+                }
+            }
+        }
+        (a, b)
+    }
+}
+
+/// A symmetric system (lower triangle given) solved with Jacobi scaling: the solution for each
+/// right-hand side.
+fn solve_scaled(a: &[Vec<f64>], rhs: &[&[f64]]) -> Option<Vec<Vec<f64>>> {
+    let p = a.len();
+    let d: Vec<f64> = (0..p).map(|j| if a[j][j] > 0.0 { a[j][j].sqrt() } else { 1.0 }).collect();
+    let scaled: Vec<Vec<f64>> =
+        (0..p).map(|j| (0..p).map(|k| a[j.max(k)][j.min(k)] / (d[j] * d[k])).collect()).collect();
+    let scaled_rhs: Vec<Vec<f64>> = rhs.iter().map(|b| b.iter().zip(&d).map(|(v, s)| v / s).collect()).collect();
+    let refs: Vec<&[f64]> = scaled_rhs.iter().map(Vec::as_slice).collect();
+    let solved = cholesky_solve_many(&scaled, &refs, 1e-10)?;
+    Some(solved.into_iter().map(|x| x.iter().zip(&d).map(|(v, s)| v / s).collect()).collect())
+}
+
+/// Penalised held-out ratio, in-sample pose residuals (output unit) and effective parameters of
+/// one shape, from the design's fold normals.
+fn score(
+    ctx: &Context<'_>,
+    design: &(Vec<Vec<f64>>, Vec<f64>, Vec<usize>),
+    normals: &FoldNormals,
+    shape: Shape,
+) -> Option<(f64, Vec<Option<f64>>, f64)> {
+    let (rows, r, fold) = design;
+    let (n, base) = (ctx.poses.len(), ctx.base_rows.first()?.len());
+    let w = 1.0 / ctx.e_white.sqrt();
+    let predict = |x: &[f64], i: usize| r[i] + rows[i].iter().zip(x).map(|(a, b)| a * b).sum::<f64>();
+    let mut ss = 0.0;
+    for f in 0..ctx.folds {
+        let (mut a, b) = normals.without(Some(f));
+        add_prior(&mut a, base, shape.knots, shape.order, shape.step, w);
+        let x = solve_scaled(&a, &[&b])?.pop()?;
+        ss += (0..n).filter(|&i| fold[i] == f).map(|i| predict(&x, i).powi(2)).sum::<f64>();
+    }
+    let (mut a, b) = normals.without(None);
+    add_prior(&mut a, base, shape.knots, shape.order, shape.step, w);
+    let mut rhs: Vec<&[f64]> = vec![&b];
+    rhs.extend(rows[..n].iter().map(Vec::as_slice));
+    let solved = solve_scaled(&a, &rhs)?;
+    // Effective parameters: the trace of the pose rows' hat matrix less the calibration's.
+    let trace: f64 =
+        rows[..n].iter().zip(&solved[1..]).map(|(row, y)| row.iter().zip(y).map(|(p, q)| p * q).sum::<f64>()).sum();
+    let edf = (trace - base as f64).max(0.0);
+    let ratio = ((ss + PARAMETER_PENALTY * edf) / n as f64).sqrt();
+    let after = (0..n).map(|i| Some(predict(&solved[0], i) / w)).collect();
+    Some((ratio, after, edf))
+}
+
+/// The knot count and prior step that predict the withheld pose means best.
+pub(crate) fn best(ctx: &Context<'_>) -> Option<SmoothFit> {
+    if !ctx.pose_level || !(ctx.e_white > 0.0) {
+        return None;
+    }
+    let t_end = ctx.poses.last()?.t_end.max(1e-9);
+    let mut best: Option<SmoothFit> = None;
+    let shapes = KNOTS.iter().flat_map(|&knots| {
+        [1, 2].into_iter().flat_map(move |order| STEP_SIGMAS.iter().map(move |&step| Shape { knots, order, step }))
+    });
+    let mut designs = Vec::new();
+    for shape in shapes {
+        if designs.last().is_none_or(|(k, _, _)| *k != shape.knots) {
+            let d = design(ctx, shape.knots, t_end);
+            let normals = FoldNormals::new(&d.0, &d.1, &d.2, ctx.folds);
+            designs.push((shape.knots, d, normals));
+        }
+        let (_, d, normals) = designs.last()?;
+        let Some((ratio, after, edf)) = score(ctx, d, normals, shape) else { continue };
+        if best.as_ref().is_none_or(|b| ratio < b.ratio) {
+            best = Some(SmoothFit { ratio, after, edf, detail: shape.detail(t_end, edf) });
+        }
+    }
+    best
+}
+
+/// Puts the wander in the candidate's pose-level line when it predicts the withheld pose means
+/// better than the family's other shapes.
+pub(crate) fn add(ctx: &Context<'_>, e: &mut Evaluation, fit: SmoothFit) {
+    let gain = ctx.gain(fit.ratio);
+    let c = &mut e.candidate;
+    c.variants.push((fit.detail.clone(), fit.ratio));
+    if c.applicable && c.heldout_gain >= gain {
+        return;
+    }
+    let kept: Vec<f64> = fit.after.iter().flatten().copied().collect();
+    c.applicable = true;
+    (c.heldout_ratio, c.heldout_gain, c.extra_params) = (fit.ratio, gain, fit.edf.round() as usize);
+    c.ratio_after = ctx.m.to_mg(rms(&kept)) / ctx.m.gap.sim_rmse_mg;
+    c.detail = fit.detail;
+    e.after = fit.after;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_splines_sum_to_one_over_the_log_and_are_local() {
+        for count in KNOTS {
+            for k in 0..=100 {
+                let t = 300.0 * k as f64 / 100.0;
+                let sum: f64 = (0..count).map(|j| bspline(j, count, 300.0, t)).sum();
+                assert!((sum - 1.0).abs() < 1e-12, "{count} bases at t = {t}: sum {sum}");
+                let nonzero = (0..count).filter(|&j| bspline(j, count, 300.0, t) > 0.0).count();
+                assert!(nonzero <= 4, "{count} bases at t = {t}: {nonzero} non-zero");
+            }
+        }
+    }
+
+    #[test]
+    fn the_prior_leaves_a_constant_and_penalises_steps() {
+        // One axis' knots at 1, 1, 1, 1 (a constant): no penalty of either order; at 0, 0, 1, 1 (a
+        // step of 1): (w / step)^2 for the first order.
+        let (base, knots, w, step) = (0, 4, 2.0, 0.5);
+        for order in [1, 2] {
+            let mut a = vec![vec![0.0; 3 * knots]; 3 * knots];
+            add_prior(&mut a, base, knots, order, step, w);
+            let quad = |b: &[f64]| -> f64 {
+                let x: Vec<f64> = (0..3 * knots).map(|c| if c % 3 == 0 { b[c / 3] } else { 0.0 }).collect();
+                (0..x.len()).map(|j| (0..x.len()).map(|k| x[j] * a[j][k] * x[k]).sum::<f64>()).sum()
+            };
+            assert!(quad(&[1.0; 4]).abs() < 1e-12, "order {order}");
+            let expected = if order == 1 { 16.0 } else { 2.0 * 16.0 };
+            assert!(
+                (quad(&[0.0, 0.0, 1.0, 1.0]) - expected).abs() < 1e-9,
+                "order {order}: {}",
+                quad(&[0.0, 0.0, 1.0, 1.0])
+            );
+        }
+    }
+}
