@@ -37,7 +37,10 @@ impl Family for Motion {
             return dropped;
         }
         c.effect = self.name();
-        c.detail = format!("the holds move at 2-20 Hz ({ratio:.1}x white noise): their means scatter as {}", c.detail);
+        c.detail = format!(
+            "the holds move at 2-20 Hz (noise density near 10 Hz {ratio:.1}x that near 2 Hz): their means scatter as {}",
+            c.detail
+        );
         shaken
     }
 

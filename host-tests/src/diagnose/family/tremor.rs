@@ -1,61 +1,67 @@
 //! Motion in the holds at 2-20 Hz (a hand's physiological tremor at 8-12 Hz, a vibrating support):
-//! no noise of a sensor at rest (random walk, flicker, Gauss-Markov with a correlation time of
-//! half a second or more) puts power there. Measured in the second half of every hold (a mount's
-//! ringing after placement decays within the hold: that is settling) as the variance within short
-//! blocks of [`BLOCK_S`] (slower motion and the hold's mean removed) over the white noise of
-//! successive differences (which a tremor sampled well above its frequency barely moves).
+//! no noise of a sensor at rest puts more power there than below it. White noise has a flat spectrum;
+//! a digital low-pass filter, a Gauss-Markov noise, flicker and random walk all have a spectrum that
+//! does not rise with frequency. Measured in both halves of every hold (a mount's ringing after
+//! placement decays within the hold: that is settling) as the noise density near 10 Hz over the
+//! density near 2 Hz: `tau * AVAR(tau)` (overlapping Allan variance, which is flat in `tau` for white
+//! noise) at [`SHORT_S`] over the same at [`LONG_S`]. A tremor at 8-12 Hz gives several times more at
+//! the half period than at two and a half periods; a filtered or correlated noise gives 1 or less.
 
 use crate::csvio::Table;
 use crate::diagnose::gap::PoseData;
-use crate::diagnose::math::median;
-use crate::diagnose::within::white_from_differences;
 
-/// Block length, s: one tremor cycle (8-12 Hz); a Gauss-Markov noise of correlation time 0.5 s puts
-/// a tenth of its variance or less inside it.
-const BLOCK_S: f64 = 0.1;
+/// The short time scale, s: half a period of a 10 Hz tremor.
+const SHORT_S: f64 = 0.05;
 
-/// Fewest samples per block (below it the blocks see no tremor cycle).
-const MIN_BLOCK: usize = 4;
+/// The long time scale, s: two and a half periods of a 10 Hz tremor (its Allan variance nearly
+/// cancels there), the noise floor below the tremor band.
+const LONG_S: f64 = 0.25;
 
-/// The holds' median excess ratio above which they move in the tremor band.
+/// The holds' density ratio above which they move in the tremor band.
 pub(crate) const TREMOR_RATIO: f64 = 1.5;
 
-/// Median over the holds of the within-block variance (per sample, axes summed) of the first and
-/// of the second half of each hold over the white variance of successive differences: 1 for white
-/// noise; `None` when the sample rate gives blocks too short or no noise is measurable.
+/// The density ratio (`SHORT_S` over `LONG_S`, pooled over the holds) of the first and of the
+/// second half of every hold: about 1 for white noise, at most about 1 for filtered or correlated
+/// noise; `None` when the sample rate or the holds are too short or no noise is measurable.
 pub(crate) fn band_ratios(table: &Table, poses: &[PoseData], rate: f64) -> Option<(f64, f64)> {
-    let block = (BLOCK_S * rate).round() as usize;
-    let white: f64 = white_from_differences(table, poses).iter().sum();
-    if block < MIN_BLOCK || !(white > 0.0) {
+    let (short, long) = ((SHORT_S * rate).round() as usize, (LONG_S * rate).round() as usize);
+    if short < 2 {
         return None;
     }
-    let ratio = |rows: &[[f64; 3]]| {
-        let blocks = rows.len() / block;
-        (blocks > 0).then(|| {
-            let total: f64 = rows.chunks_exact(block).map(block_variance).sum();
-            total / (blocks * (block - 1)) as f64 / white
-        })
-    };
-    let (mut first, mut second) = (Vec::new(), Vec::new());
-    for p in poses {
-        let mid = p.rows.start + p.rows.len() / 2;
-        if let (Some(a), Some(b)) = (ratio(&table.samples[p.rows.start..mid]), ratio(&table.samples[mid..p.rows.end])) {
-            first.push(a);
-            second.push(b);
+    let half_ratio = |second: bool| {
+        let (mut num, mut den) = ([0.0; 2], [0.0; 2]);
+        for p in poses {
+            let mid = p.rows.start + p.rows.len() / 2;
+            let rows = if second { &table.samples[mid..p.rows.end] } else { &table.samples[p.rows.start..mid] };
+            if let (Some(a), Some(b)) = (scaled_allan(rows, short), scaled_allan(rows, long)) {
+                (num, den) = ([num[0] + a.0, num[1] + a.1], [den[0] + b.0, den[1] + b.1]);
+            }
         }
-    }
-    (!first.is_empty()).then(|| (median(&first), median(&second)))
+        (num[1] > 0.0 && den[0] > 0.0).then(|| (num[0] / num[1]) / (den[0] / den[1]))
+    };
+    Some((half_ratio(false)?, half_ratio(true)?))
 }
 
-/// Sum over the axes of the squared deviations from the block's mean.
-fn block_variance(block: &[[f64; 3]]) -> f64 {
-    let n = block.len() as f64;
-    (0..3)
-        .map(|a| {
-            let mean = block.iter().map(|s| s[a]).sum::<f64>() / n;
-            block.iter().map(|s| (s[a] - mean).powi(2)).sum::<f64>()
+/// `m * AVAR` of the rows for blocks of `m` samples (overlapping Allan variance, axes summed), as a
+/// sum of terms and their count; `None` when the rows hold fewer than two blocks.
+fn scaled_allan(rows: &[[f64; 3]], m: usize) -> Option<(f64, f64)> {
+    let terms = (rows.len() + 1).checked_sub(2 * m).filter(|t| *t > 0)?;
+    let mut cumulative = vec![[0.0; 3]; rows.len() + 1];
+    for (i, r) in rows.iter().enumerate() {
+        cumulative[i + 1] = std::array::from_fn(|a| cumulative[i][a] + r[a]);
+    }
+    let sum: f64 = (0..terms)
+        .map(|i| {
+            (0..3)
+                .map(|a| {
+                    let d = cumulative[i + 2 * m][a] - 2.0 * cumulative[i + m][a] + cumulative[i][a];
+                    d * d
+                })
+                .sum::<f64>()
         })
-        .sum()
+        .sum();
+    // (d / m)^2 / 2 per term, times m.
+    Some((sum / (2.0 * m as f64), terms as f64))
 }
 
 /// The holds' excess in the tremor band (the second halves' ratio) when they move there for the
@@ -95,12 +101,28 @@ mod tests {
         let (first, second) = band_ratios(&table, &poses, 200.0).unwrap();
         assert!((first - 1.0).abs() < 0.1 && (second - 1.0).abs() < 0.1, "white: {first} {second}");
         assert!(in_holds(&table, &poses, 200.0).is_none());
-        // Tremor variance 4.5e-6 g^2 over white 3e-6 (three axes): a ratio of about 2.5.
+        // A 3 mg tremor at 10 Hz over 1 mg white noise per axis: (3 + 36) / (3 + 7), about 3.8.
         let tremor = |t: f64| 0.003 * (std::f64::consts::TAU * 10.0 * t).sin();
         let (table, poses) = holds(&tremor);
         assert!(in_holds(&table, &poses, 200.0).is_some_and(|r| r > 2.0), "{:?}", band_ratios(&table, &poses, 200.0));
         let ringing = |t: f64| 0.03 * (-t / 0.4).exp() * (std::f64::consts::TAU * 10.0 * t).sin();
         let (table, poses) = holds(&ringing);
         assert!(in_holds(&table, &poses, 200.0).is_none(), "{:?}", band_ratios(&table, &poses, 200.0));
+    }
+
+    #[test]
+    fn a_low_passed_noise_is_not_tremor() {
+        // The white holds through a moving average of 8 samples (a 200 Hz sensor's ~12 Hz digital
+        // low-pass): their successive differences shrink far more than their variance.
+        let (mut table, _) = holds(&|_| 0.0);
+        let raw = table.samples.clone();
+        for (i, s) in table.samples.iter_mut().enumerate() {
+            let window = &raw[i.saturating_sub(7)..=i];
+            *s = std::array::from_fn(|a| window.iter().map(|r| r[a]).sum::<f64>() / window.len() as f64);
+        }
+        let poses: Vec<PoseData> = (0..4).map(|k| pose_data(&table, 800 * k, 800 * (k + 1), 200.0)).collect();
+        let (first, second) = band_ratios(&table, &poses, 200.0).unwrap();
+        assert!(first < 1.1 && second < 1.1, "low-passed: {first} {second}");
+        assert!(in_holds(&table, &poses, 200.0).is_none());
     }
 }
