@@ -869,8 +869,12 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         if !(self.has_previous && quiet && last.variance <= self.config.enter_factor * noise) {
             return None;
         }
-        // A block (BLOCK <= 2^16 samples) merged into an empty pose of its reference: the block's sums.
-        self.pose = Some(last.sums);
+        // A block (BLOCK <= 2^16 samples) merged into an empty pose of its reference: the block's sums,
+        // copied field by field in place (each copy inlined; the whole struct's was a memcpy call).
+        let last = &last.sums;
+        let pose = self.pose.insert(Sums::new(last.reference, last.start_index));
+        (pose.sum, pose.sum_sq) = (last.sum, last.sum_sq);
+        (pose.n, pose.end_index, pose.saturated) = (last.n, last.end_index, last.saturated);
         Some(Event::StillnessDetected)
     }
 

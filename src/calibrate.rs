@@ -27,7 +27,7 @@ pub use crate::init::{Init, InitError, Initial, NormalizedPoses};
 use crate::linalg::{Held, larger};
 use crate::model::{PARAM_COUNT, Params};
 use crate::solve::{LmConfig, NewtonConfig, SolveError, SolveTermination, levenberg_marquardt_holding, newton_holding};
-use crate::verdict::{PoseSet, Verdict, VerdictBounds, information_in_place, judge, parameters_to_hold};
+use crate::verdict::{PoseSet, Verdict, VerdictBounds, information_in_place, judge_run, parameters_to_hold};
 
 /// The recommended seeded generator for the GA: 32-bit state arithmetic, fast on a Cortex-M4.
 #[cfg(feature = "default-rng")]
@@ -430,8 +430,8 @@ impl<const MAX_POSES: usize> Prepared<MAX_POSES> {
         // The GA moves held genes within its smallest interval; they are held exactly.
         let x: Deviation = core::array::from_fn(|i| if self.held.contains(i) { self.start[i] } else { run.x[i] });
         let before = config.before.unwrap_or_else(|| frame.to_params(&[0.0; PARAM_COUNT]));
-        let mut verdict = judge(&x, frame, &set, &before, &config.bounds, self.held, initial.excluded);
-        verdict.failures.not_converged = run.solver_termination == Some(SolveTermination::MaxIterations);
+        let not_converged = run.solver_termination == Some(SolveTermination::MaxIterations);
+        // The verdict is judged last, straight into the result (no copy of it: no memcpy call).
         Calibration {
             params: frame.to_params(&x),
             initial: *initial,
@@ -442,7 +442,7 @@ impl<const MAX_POSES: usize> Prepared<MAX_POSES> {
             iterations: run.iterations,
             ga_termination: run.ga_termination,
             solver_termination: run.solver_termination,
-            verdict,
+            verdict: judge_run(&x, frame, &set, &before, &config.bounds, self.held, &initial.excluded, not_converged),
         }
     }
 }

@@ -167,6 +167,15 @@ impl PoseList {
         self.len == 0
     }
 
+    /// `*self = *other` in two halves of the indices: at this alignment the whole copy is a `memcpy`
+    /// call, the halves are inlined.
+    pub(crate) fn copy_from(&mut self, other: &Self) {
+        const HALF: usize = MAX_EXCLUDED / 2;
+        self.len = other.len;
+        self.index[..HALF].copy_from_slice(&other.index[..HALF]);
+        self.index[HALF..].copy_from_slice(&other.index[HALF..]);
+    }
+
     fn push(&mut self, i: u16) {
         if let Some(slot) = self.index.get_mut(usize::from(self.len)) {
             *slot = i;

@@ -241,9 +241,17 @@ fn add_block_rows<const RHS: bool>(
 /// roots (the Levenberg-Marquardt step). Entries flagged in `held` get an identity row and column; a
 /// column whose diagonal is not positive and finite, or whose remaining pivot is not above `min_pivot`
 /// (it is, to that precision, a combination of the columns before it), is flagged in `held` and treated
-/// the same. Returns the scaling `D` (0 where held).
+/// the same. Returns the scaling `D` (0 where held). With `below`, the entries below the diagonal are
+/// read from it instead of from `a` (whose diagonal is still read): a factorisation into scratch
+/// without copying the matrix there first.
 #[inline(never)]
-fn factor<const N: usize>(a: &mut Matrix<N>, held: &mut Held, min_pivot: f32, cholesky: bool) -> [f32; N] {
+fn factor<const N: usize>(
+    below: Option<&Matrix<N>>,
+    a: &mut Matrix<N>,
+    held: &mut Held,
+    min_pivot: f32,
+    cholesky: bool,
+) -> [f32; N] {
     const { assert!(N <= 16, "a `Held` mask has 16 entries") };
     let mut d = [0.0f32; N];
     // The weight of column `k` in the elimination: its pivot (unscaled), 1 (Cholesky).
@@ -264,7 +272,11 @@ fn factor<const N: usize>(a: &mut Matrix<N>, held: &mut Held, min_pivot: f32, ch
             if held.contains(i) {
                 break;
             }
-            let scaled = if held.contains(j) { 0.0 } else { a[i][j] * d[i] * d[j] };
+            let entry = match below {
+                Some(m) if j < i => m[i][j],
+                _ => a[i][j],
+            };
+            let scaled = if held.contains(j) { 0.0 } else { entry * d[i] * d[j] };
             // The Cholesky form subtracts the sum, the other each term: kept as they were measured.
             let mut s = if cholesky { 0.0 } else { scaled };
             for k in 0..j {
@@ -348,24 +360,38 @@ pub fn ldlt_solve_holding_in_place<const N: usize>(
     b: &mut [f32; N],
     held: Held,
 ) -> Result<(), LinalgError> {
-    solve_in_place(a, b, held, false)
+    solve_in_place(None, a, b, held, false)
+}
+
+/// [`ldlt_solve_holding_in_place`] of the matrix whose diagonal is `a`'s and whose entries below it are
+/// `below`'s (its diagonal and upper triangle are not read), without assembling it: `a`'s lower triangle is
+/// overwritten by the factors, `below` is left as it is (a damped system solved again and again).
+pub fn ldlt_solve_holding_split<const N: usize>(
+    below: &Matrix<N>,
+    a: &mut Matrix<N>,
+    b: &mut [f32; N],
+    held: Held,
+) -> Result<(), LinalgError> {
+    solve_in_place(Some(below), a, b, held, false)
 }
 
 /// [`ldlt_solve_holding_in_place`] with nothing held.
 pub fn ldlt_solve_in_place<const N: usize>(a: &mut Matrix<N>, b: &mut [f32; N]) -> Result<(), LinalgError> {
-    solve_in_place(a, b, Held::NONE, false)
+    solve_in_place(None, a, b, Held::NONE, false)
 }
 
-/// [`factor`] (in the `cholesky` form or not, holding `held`) and [`factor_solve`]; an error when the
+/// [`factor`] (in the `cholesky` form or not, holding `held`, entries below the diagonal from `below` when
+/// given) and [`factor_solve`]; an error when the
 /// factorisation flagged an entry not held or the solution is not finite.
 fn solve_in_place<const N: usize>(
+    below: Option<&Matrix<N>>,
     a: &mut Matrix<N>,
     b: &mut [f32; N],
     held: Held,
     cholesky: bool,
 ) -> Result<(), LinalgError> {
     let mut flagged = held;
-    let d = factor(a, &mut flagged, 0.0, cholesky);
+    let d = factor(below, a, &mut flagged, 0.0, cholesky);
     if flagged != held {
         return Err(LinalgError::Singular);
     }
@@ -391,9 +417,13 @@ pub fn spd_inverse_in_place<const N: usize>(a: &mut Matrix<N>) -> Result<(), Lin
 /// those rows and columns of the result are 0. `a` is left unchanged on an error.
 #[inline(never)]
 pub fn spd_inverse_holding_in_place<const N: usize>(a: &mut Matrix<N>, held: Held) -> Result<(), LinalgError> {
-    let mut l = *a;
+    // The factors go to scratch that only receives `a`'s diagonal: no copy of the matrix (and no memcpy).
+    let mut l = [[0.0; N]; N];
+    for i in 0..N {
+        l[i][i] = a[i][i];
+    }
     let mut flagged = held;
-    let d = factor(&mut l, &mut flagged, 0.0, true);
+    let d = factor(Some(a), &mut l, &mut flagged, 0.0, true);
     if flagged != held {
         return Err(LinalgError::Singular);
     }
@@ -423,7 +453,7 @@ pub fn weak_pivots<const N: usize>(a: &Matrix<N>, min_pivot: f32) -> Held {
 /// [`weak_pivots`] without a copy: `a`'s lower triangle is overwritten by the factors.
 pub fn weak_pivots_in_place<const N: usize>(a: &mut Matrix<N>, min_pivot: f32) -> Held {
     let mut weak = Held::NONE;
-    factor(a, &mut weak, min_pivot, true);
+    factor(None, a, &mut weak, min_pivot, true);
     weak
 }
 
@@ -436,7 +466,7 @@ pub fn solve_spd_holding_weak_in_place<const N: usize>(
     min_pivot: f32,
 ) -> Result<Held, LinalgError> {
     let mut held = Held::NONE;
-    let d = factor(a, &mut held, min_pivot, true);
+    let d = factor(None, a, &mut held, min_pivot, true);
     factor_solve(a, &d, b, true);
     if b.iter().all(|&v| finite(v)) { Ok(held) } else { Err(LinalgError::Singular) }
 }
@@ -456,7 +486,7 @@ pub fn solve_spd_holding_in_place<const N: usize>(
     b: &mut [f32; N],
     held: Held,
 ) -> Result<(), LinalgError> {
-    solve_in_place(a, b, held, true)
+    solve_in_place(None, a, b, held, true)
 }
 
 #[cfg(test)]
@@ -505,7 +535,7 @@ mod tests {
         let a = spd4();
         let mut l = a;
         let mut held = Held::NONE;
-        let d = factor(&mut l, &mut held, 0.0, true);
+        let d = factor(None, &mut l, &mut held, 0.0, true);
         assert_eq!(held, Held::NONE);
         // The factor's diagonal is stored as its reciprocal.
         let factor = |i: usize, k: usize| if i == k { 1.0 / l[i][i] } else { l[i][k] };

@@ -17,7 +17,7 @@
 //! ```
 
 use crate::frame::{Deviation, NormPose, modulus_error_gradient, objective, residual_jacobian};
-use crate::linalg::{Held, Matrix, add_normal_row, finite, larger, ldlt_solve_holding_in_place, solve_lu};
+use crate::linalg::{Held, Matrix, add_normal_row, finite, larger, ldlt_solve_holding_split, solve_lu};
 use crate::model::PARAM_COUNT;
 
 /// Why a solve could not produce parameters.
@@ -237,6 +237,7 @@ pub fn levenberg_marquardt_holding(
     let mut lambda = config.initial_damping;
     let mut jtj = [[0.0; PARAM_COUNT]; PARAM_COUNT];
     let mut jte = [0.0; PARAM_COUNT];
+    let mut damped = [[0.0; PARAM_COUNT]; PARAM_COUNT];
     // The normal equations are built (in place) at the start and after each accepted step.
     let mut rebuild = true;
     let mut iterations = 0;
@@ -250,13 +251,13 @@ pub fn levenberg_marquardt_holding(
             normal_equations(&x, poses, None, &mut jtj, &mut jte);
             rebuild = false;
         }
-        let mut damped = jtj;
-        for (i, row) in damped.iter_mut().enumerate() {
-            row[i] += lambda * larger(jtj[i][i], 1e-12);
+        // The damped matrix is `jtj` below the diagonal (read from there: no copy) and this diagonal.
+        for i in 0..PARAM_COUNT {
+            damped[i][i] = jtj[i][i] + lambda * larger(jtj[i][i], 1e-12);
         }
         // Solved for `J^T e`, the step is its negative (exactly: rounding is symmetric).
         let mut step = jte;
-        if ldlt_solve_holding_in_place(&mut damped, &mut step, held).is_err() {
+        if ldlt_solve_holding_split(&jtj, &mut damped, &mut step, held).is_err() {
             if lambda < 1e10 {
                 lambda *= 10.0;
                 continue;

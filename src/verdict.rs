@@ -86,8 +86,10 @@ impl Default for VerdictBounds {
     }
 }
 
-/// Which bound failed (all `false` on a pass).
+/// Which bound failed (all `false` on a pass). Word-aligned: its copies are word copies, inlined (no
+/// `memcpy` call on the calibration path).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[repr(align(4))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize))]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Failures {
@@ -418,7 +420,6 @@ fn rmse_of_mg(sum: f32, n: usize, g: f32) -> f32 {
 /// Judges `x` (deviation in `frame`) on the poses of `set` against `bounds`; `before` is the model the
 /// RMSE before calibration is computed with; `held` (the parameters held at nominal) and `excluded`
 /// (the poses left out) become the verdict's [`Warnings`].
-#[inline(never)] // its matrices need not share a stack frame with the solvers'
 pub fn judge(
     x: &Deviation,
     frame: &Frame,
@@ -427,6 +428,22 @@ pub fn judge(
     bounds: &VerdictBounds,
     held: Held,
     excluded: PoseList,
+) -> Verdict {
+    judge_run(x, frame, set, before, bounds, held, &excluded, false)
+}
+
+/// [`judge`] of a run that did (`not_converged`) or did not stop at its iteration limit.
+#[inline(never)] // its matrices need not share a stack frame with the solvers'
+#[allow(clippy::too_many_arguments)] // the calibration's one call: `judge`'s and the solver's outcome
+pub(crate) fn judge_run(
+    x: &Deviation,
+    frame: &Frame,
+    set: &PoseSet<'_>,
+    before: &Params,
+    bounds: &VerdictBounds,
+    held: Held,
+    excluded: &PoseList,
+    not_converged: bool,
 ) -> Verdict {
     let params = frame.to_params(x);
     let fitted = PARAM_COUNT - held.count();
@@ -445,9 +462,11 @@ pub fn judge(
         implausible: !params.is_finite()
             || params.scale.iter().any(|&s| !(s > 0.0))
             || x.iter().any(|v| !(v.abs() <= PLAUSIBLE_DEVIATION)),
+        not_converged,
         ..Failures::default()
     };
-    let mut warnings = Warnings { held: [false; PARAM_COUNT], excluded };
+    let mut warnings = Warnings { held: [false; PARAM_COUNT], excluded: PoseList::EMPTY };
+    warnings.excluded.copy_from(excluded);
     let structurally_undetermined = undetermined_parameters(x, set.norm);
     for i in 0..PARAM_COUNT {
         if held.contains(i) {
