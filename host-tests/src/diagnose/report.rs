@@ -156,6 +156,9 @@ pub struct Diagnosis {
     pub explained: bool,
     /// Step 4.
     pub shrink: f64,
+    /// Why no calibration (and so no gap) was made, when the verdict rests on the holds alone (a log
+    /// whose holds move too much to keep enough still poses).
+    pub not_calibrated: Option<String>,
 }
 
 impl Diagnosis {
@@ -198,6 +201,7 @@ pub struct DiagnosisDocument<'a> {
     candidates_ranked: Vec<RankedCandidate<'a>>,
     probes: &'a [Probe],
     verdict: VerdictSummary<'a>,
+    not_calibrated: Option<&'a str>,
 }
 
 /// `noise`: white noise per axis and the longest rest.
@@ -308,6 +312,7 @@ impl Diagnosis {
             candidates_ranked: self.ranked().into_iter().map(RankedCandidate::from).collect(),
             probes: &self.probes,
             verdict: self.verdict_document(),
+            not_calibrated: self.not_calibrated.as_deref(),
         }
     }
 
@@ -426,6 +431,7 @@ mod tests {
             unexplained_where: Some("one orientation: +z".into()),
             explained: false,
             shrink: 0.0,
+            not_calibrated: None,
         }
     }
 
