@@ -224,17 +224,6 @@ fn moving_holds(table: &Table, opts: &DiagnoseOptions, still_poses: usize, rate:
         within_detail: String::new(),
         variants: Vec::new(),
     };
-    let nan_gap = Gap {
-        real_rmse_mg: f64::NAN,
-        sim_rmse_mg: f64::NAN,
-        sim_spread_mg: f64::NAN,
-        z: f64::NAN,
-        significant: false,
-        ratio_before: f64::NAN,
-        real_rmse_after_mg: f64::NAN,
-        sim_rmse_after_mg: f64::NAN,
-        ratio_after: f64::NAN,
-    };
     Some(Diagnosis {
         file: table.file.clone(),
         samples: table.samples.len(),
@@ -244,7 +233,7 @@ fn moving_holds(table: &Table, opts: &DiagnoseOptions, still_poses: usize, rate:
         repeats: 0,
         params: accelcal::model::Params::IDENTITY,
         white_mg: [f64::NAN; 3],
-        gap: nan_gap,
+        gap: Gap::UNMEASURED,
         poses: Vec::new(),
         allan: Allan { rest_s: 0.0, tau_s: Vec::new(), adev_mg: Vec::new(), white_mg: Vec::new() },
         candidates: vec![candidate],

@@ -33,6 +33,21 @@ pub struct Gap {
     pub ratio_after: f64,
 }
 
+impl Gap {
+    /// No gap measured (no calibration could be made): every figure NaN, not significant.
+    pub const UNMEASURED: Self = Self {
+        real_rmse_mg: f64::NAN,
+        sim_rmse_mg: f64::NAN,
+        sim_spread_mg: f64::NAN,
+        z: f64::NAN,
+        significant: false,
+        ratio_before: f64::NAN,
+        real_rmse_after_mg: f64::NAN,
+        sim_rmse_after_mg: f64::NAN,
+        ratio_after: f64::NAN,
+    };
+}
+
 /// One pose in the report.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PoseReport {
