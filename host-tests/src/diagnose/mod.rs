@@ -62,6 +62,7 @@
 
 mod family;
 mod gap;
+mod holds;
 mod locate;
 pub(crate) mod math;
 mod probe;
@@ -156,7 +157,11 @@ pub fn diagnose(table: &Table, opts: &DiagnoseOptions) -> Result<Diagnosis, Diag
     if opts.folds < 2 || opts.repeats < 2 {
         return Err(err("diagnose needs at least 2 folds and 2 repeats"));
     }
-    let m = gap::measure(table, opts)?;
+    // A log with holds too disturbed to calibrate is answered `motion` (holds.rs), not refused.
+    let m = match gap::measure(table, opts) {
+        Ok(m) => m,
+        Err(e) => return holds::answer_refusal(table, opts, e),
+    };
     // Too few poses to withhold some (a short log that calibrate still accepts): the gap is measured and
     // answered (`none` or `unexplained`), with no catalogue candidate tested.
     let ctx = family::Context::new(table, &m, opts);
