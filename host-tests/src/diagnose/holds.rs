@@ -22,7 +22,7 @@ const WINDOW_S: f64 = 0.25;
 const HOLD_TOLERANCE_G: f64 = 0.1;
 
 /// Shortest hold, seconds.
-const MIN_HOLD_S: f64 = 1.5;
+const MIN_HOLD_S: f64 = 2.0;
 
 /// Fewest holds for a hold structure (the six faces).
 const MIN_HOLDS: usize = 6;
@@ -65,9 +65,12 @@ fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
     (0..3).map(|i| (a[i] - b[i]).powi(2)).sum::<f64>().sqrt()
 }
 
-/// The residual of a hold about its mean, per sample and axis.
-fn residual(samples: &[[f64; 3]], h: Hold) -> Vec<[f64; 3]> {
-    let rows = &samples[h.first..h.end];
+/// Windows left out at each end of a hold (the end of the rotation into it, the start of the next).
+const EDGE_WINDOWS: usize = 2;
+
+/// The residual of a hold about its mean, per sample and axis, its [`EDGE_WINDOWS`] left out.
+fn residual(samples: &[[f64; 3]], h: Hold, window: usize) -> Vec<[f64; 3]> {
+    let rows = &samples[h.first + EDGE_WINDOWS * window..h.end - EDGE_WINDOWS * window];
     let m = window_mean(rows);
     rows.iter().map(|s| std::array::from_fn(|a| s[a] - m[a])).collect()
 }
@@ -139,8 +142,7 @@ impl HoldMotion {
         };
         format!(
             "the holds were not still: {} of {} holds had motion ({kind}, strongest near {:.1} Hz) of ~{:.1} mg RMS \
-             over {:.1} mg of noise; the still detector kept {} poses, calibration needs at least 6 in different \
-             directions: hold the sensor on a rigid support",
+             over {:.1} mg of noise; the still detector kept {} poses, too few to calibrate: hold the sensor on a rigid support",
             self.disturbed, self.holds, self.peak_hz, self.motion_mg, self.white_mg, self.kept_poses
         )
     }
@@ -183,8 +185,8 @@ fn summarise(
     if disturbed.is_empty() {
         return None;
     }
-    let parts: Vec<Vec<[f64; 3]>> = disturbed.iter().map(|h| residual(&t.samples, *h)).collect();
-    let white = median(&holds.iter().map(|h| white_variance(&residual(&t.samples, *h))).collect::<Vec<_>>());
+    let parts: Vec<Vec<[f64; 3]>> = disturbed.iter().map(|h| residual(&t.samples, *h, window)).collect();
+    let white = median(&holds.iter().map(|h| white_variance(&residual(&t.samples, *h, window))).collect::<Vec<_>>());
     let total = median(&parts.iter().map(|r| mean_square(r)).collect::<Vec<_>>());
     let mg = |v: f64| v.max(0.0).sqrt() / g * 1000.0;
     Some(HoldMotion {
