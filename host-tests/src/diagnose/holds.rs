@@ -30,6 +30,10 @@ const MIN_HOLDS: usize = 6;
 /// Lowest and highest frequency of the motion spectrum, Hz, and its step.
 const BAND_HZ: (f64, f64, f64) = (0.25, 25.0, 0.25);
 
+/// Motion RMS over the noise RMS below which the holds are not clearly moving (a filtered sensor's
+/// correlated noise can also split holds): the log is then refused as before.
+const MIN_MOTION_OVER_NOISE: f64 = 2.0;
+
 /// A window whose RMS exceeds this many times the hold's median window RMS is a tap.
 const TAP_FACTOR: f64 = 4.0;
 
@@ -189,6 +193,9 @@ fn summarise(
     let white = median(&holds.iter().map(|h| white_variance(&residual(&t.samples, *h, window))).collect::<Vec<_>>());
     let total = median(&parts.iter().map(|r| mean_square(r)).collect::<Vec<_>>());
     let mg = |v: f64| v.max(0.0).sqrt() / g * 1000.0;
+    if mg(total - white) < MIN_MOTION_OVER_NOISE * mg(white) {
+        return None;
+    }
     Some(HoldMotion {
         holds: holds.len(),
         disturbed: disturbed.len(),
