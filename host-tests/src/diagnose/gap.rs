@@ -227,8 +227,31 @@ impl Measured {
     }
 }
 
+/// Why step 1 could not run.
+#[derive(Debug)]
+pub(crate) enum Refusal {
+    /// The still poses found cannot be calibrated (too few, or too few orientations): the log may be
+    /// one whose holds move (`holds.rs`).
+    NotCalibrated {
+        /// Still poses the detector kept.
+        still_poses: usize,
+        /// The sample rate used, Hz.
+        rate: f64,
+        /// The message.
+        error: DiagnoseError,
+    },
+    /// Any other reason.
+    Other(DiagnoseError),
+}
+
+impl From<DiagnoseError> for Refusal {
+    fn from(e: DiagnoseError) -> Self {
+        Self::Other(e)
+    }
+}
+
 /// The poses of the table (the CSV reader's accumulation) and the sample rate.
-fn read_poses(table: &Table) -> Result<(Vec<Pose>, Vec<PoseData>, f64), DiagnoseError> {
+fn read_poses(table: &Table) -> Result<(Vec<Pose>, Vec<PoseData>, f64), Refusal> {
     let acc =
         csvio::accumulate(table, &AccumulateOptions::default()).map_err(|e| err(format!("{}: {e}", table.file)))?;
     let rate = acc.sample_rate_hz.or_else(|| table.sample_rate_hz()).filter(|r| *r > 0.0).unwrap_or(1.0);
@@ -236,11 +259,9 @@ fn read_poses(table: &Table) -> Result<(Vec<Pose>, Vec<PoseData>, f64), Diagnose
     // gap is not significant and the answer is `none`).
     let min_poses = 6;
     if acc.poses.len() < min_poses {
-        return Err(err(format!(
-            "{}: {} static poses found, diagnose needs at least {min_poses}",
-            table.file,
-            acc.poses.len()
-        )));
+        let error =
+            err(format!("{}: {} static poses found, diagnose needs at least {min_poses}", table.file, acc.poses.len()));
+        return Err(Refusal::NotCalibrated { still_poses: acc.poses.len(), rate, error });
     }
     let poses = acc.spans.iter().map(|s| pose_data(table, s.first_row, s.last_row + 1, rate)).collect();
     Ok((acc.poses, poses, rate))
@@ -355,11 +376,15 @@ pub(crate) fn quantisation_step(table: &Table) -> V3 {
 }
 
 /// Step 1: the library's nominal fit and the simulated experiment.
-pub(crate) fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Measured, DiagnoseError> {
+pub(crate) fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Measured, Refusal> {
     let gravity = opts.gravity;
     let (lib_poses, poses, rate) = read_poses(table)?;
     let config = CalibrationConfig { gravity: gravity as f32, ..CalibrationConfig::DEFAULT };
-    let cal = calib::run(&lib_poses, &config, opts.seed).map_err(|e| err(format!("{}: {e}", table.file)))?;
+    let cal = calib::run(&lib_poses, &config, opts.seed).map_err(|e| Refusal::NotCalibrated {
+        still_poses: lib_poses.len(),
+        rate,
+        error: err(format!("{}: {e}", table.file)),
+    })?;
     let model = Model::from_params(&cal.params);
     let means: Vec<V3> = poses.iter().map(|p| p.mean).collect();
     let calibrated: Vec<V3> = means.iter().map(|m| model.apply(*m)).collect();
@@ -369,7 +394,7 @@ pub(crate) fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Measured,
     let white_noise = Noise { white, walk: [0.0; 3], floor: quantisation };
     let sims = simulate_gap(&model, &directions, &poses, &white_noise, gravity, opts.repeats, opts.seed);
     if sims.len() < 2 {
-        return Err(err(format!("{}: the simulated experiment could not be calibrated", table.file)));
+        return Err(err(format!("{}: the simulated experiment could not be calibrated", table.file)).into());
     }
     let gap = gap_before(rms(&r) / gravity * 1000.0, &sims);
     Ok(Measured {

@@ -1,345 +1,289 @@
-//! Logs the pose detector cannot calibrate although they have a hold structure: the sensor was put
-//! in several orientations and held, but the holds were not still (sway, tremor, taps). They get the
-//! verdict `motion` with what a user needs to redo them: how many holds, how many the still
-//! detector rejected, the band and the size of the motion in mg. A log with no hold structure is
-//! still an error.
-//!
-//! Holds are found by a plain orientation detector that does not ask for stillness: runs of
-//! 0.25 s windows whose mean stays within [`HOLD_TOLERANCE_G`] of the run's first window, at least
-//! [`MIN_HOLD_S`] long. A hold is disturbed when the pose detector kept less than half of it.
+//! Holds found without the still-pose detector, for a log of which it keeps too few poses to
+//! calibrate. A calibration session still shows its hold structure when the holds move: stretches of
+//! at least [`MIN_HOLD_S`] during which the orientation stays put (short-window means within
+//! [`HOLD_SPREAD_G`] of the stretch's first). When most of those holds move — their short windows
+//! vary far more than the log's quietest windows (shaking), a window jumps (a tap), the window means
+//! wander (sway), or the holds carry power in the tremor band (`family/tremor.rs`) — the answer is
+//! `motion`, with that evidence, instead of a refusal. A log whose holds are as quiet as its quietest
+//! windows gets no answer here: the caller keeps the detector's error.
 
-use crate::csvio::{self, AccumulateOptions, Table};
+use std::ops::Range;
 
+use super::gap::pose_data;
 use super::math::median;
-use super::report::{Allan, Candidate, Diagnosis, Gap};
-use super::{DiagnoseError, DiagnoseOptions, EFFECT_NAMES};
+use crate::csvio::Table;
+use crate::diagnose::family::tremor;
 
-/// Window the hold detector averages, seconds.
+/// Window of the scan, s: several periods of a hand's tremor, far shorter than a hold.
 const WINDOW_S: f64 = 0.25;
 
-/// Largest change of a window mean from a hold's first window, in g (about 6 deg of tilt): sway
-/// stays within, a rotation to the next orientation does not.
-const HOLD_TOLERANCE_G: f64 = 0.1;
+/// Shortest hold, s.
+const MIN_HOLD_S: f64 = 1.0;
 
-/// Shortest hold, seconds.
-const MIN_HOLD_S: f64 = 2.0;
+/// How far (fraction of the log's median |a|, about 1 g: ~3 deg) a hold's window means may lie from
+/// its first window's: larger than a sway or a tremor moves a 0.25 s mean, smaller than a rotation.
+const HOLD_SPREAD_G: f64 = 0.05;
 
-/// Fewest holds for a hold structure (the six faces).
+/// Share of [`HOLD_SPREAD_G`] the means of a steady window's two neighbours may differ by (a move
+/// turns the orientation by far more in half a second; a sway or a tremor by less).
+const STEADY_SHARE: f64 = 0.4;
+
+/// Holds closer in time than this many windows, at the same orientation, are one hold split by a
+/// disturbance.
+const MERGE_GAP_WINDOWS: usize = 2;
+
+/// A hold shakes when its median window variance exceeds the log's quietest windows' (10th
+/// percentile) by this factor.
+const SHAKE_FACTOR: f64 = 3.0;
+
+/// A hold has a tap when one window's variance exceeds the quietest windows' by this factor.
+const TAP_FACTOR: f64 = 20.0;
+
+/// A hold sways when its window means scatter this many times more than the quietest holds' do.
+const SWAY_FACTOR: f64 = 6.0;
+
+/// Fewest holds for a hold structure (what `diagnose` needs of still poses).
 const MIN_HOLDS: usize = 6;
 
-/// Lowest and highest frequency of the motion spectrum, Hz, and its step.
-const BAND_HZ: (f64, f64, f64) = (0.25, 25.0, 0.25);
-
-/// Motion RMS over the noise RMS below which the holds are not clearly moving (a filtered sensor's
-/// correlated noise can also split holds): the log is then refused as before.
-const MIN_MOTION_OVER_NOISE: f64 = 2.0;
-
-/// A window whose RMS exceeds this many times the hold's median window RMS is a tap.
-const TAP_FACTOR: f64 = 4.0;
-
-/// One hold: its rows `[first, end)`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct Hold {
-    pub(crate) first: usize,
-    pub(crate) end: usize,
+/// One window: its mean and the variance of its high-pass part (half the mean square of successive
+/// differences, axes summed; a slow trend, as at the ends of a move, hardly enters), input unit.
+struct Window {
+    mean: [f64; 3],
+    variance: f64,
 }
 
-/// The holds of a log: runs of windows of `window` rows whose means stay near the first one.
-pub(crate) fn find_holds(samples: &[[f64; 3]], window: usize, tolerance: f64, min_windows: usize) -> Vec<Hold> {
-    let means: Vec<[f64; 3]> = samples.chunks_exact(window).map(window_mean).collect();
-    let mut holds = Vec::new();
-    let mut start = 0;
-    while start < means.len() {
-        let anchor = means[start];
-        let len = means[start..].iter().take_while(|m| distance(**m, anchor) < tolerance).count();
-        if len >= min_windows {
-            holds.push(Hold { first: start * window, end: (start + len) * window });
-        }
-        start += len.max(1);
-    }
-    holds
-}
-
-fn window_mean(w: &[[f64; 3]]) -> [f64; 3] {
-    let n = w.len() as f64;
-    std::array::from_fn(|a| w.iter().map(|s| s[a]).sum::<f64>() / n)
-}
-
-fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
-    (0..3).map(|i| (a[i] - b[i]).powi(2)).sum::<f64>().sqrt()
-}
-
-/// Windows left out at each end of a hold (the end of the rotation into it, the start of the next).
-const EDGE_WINDOWS: usize = 2;
-
-/// The residual of a hold about its mean, per sample and axis, its [`EDGE_WINDOWS`] left out.
-fn residual(samples: &[[f64; 3]], h: Hold, window: usize) -> Vec<[f64; 3]> {
-    let rows = &samples[h.first + EDGE_WINDOWS * window..h.end - EDGE_WINDOWS * window];
-    let m = window_mean(rows);
-    rows.iter().map(|s| std::array::from_fn(|a| s[a] - m[a])).collect()
-}
-
-fn mean_square(r: &[[f64; 3]]) -> f64 {
-    r.iter().map(|v| v.iter().map(|x| x * x).sum::<f64>()).sum::<f64>() / r.len().max(1) as f64
-}
-
-/// White variance (3 axes summed) from successive differences, which a slow motion barely moves.
-fn white_variance(r: &[[f64; 3]]) -> f64 {
-    let d: Vec<[f64; 3]> = r.windows(2).map(|w| std::array::from_fn(|a| w[1][a] - w[0][a])).collect();
-    mean_square(&d) / 2.0
-}
-
-/// Power of the residual (axes summed) at frequency `f_hz`.
-fn power_at(r: &[[f64; 3]], rate: f64, f_hz: f64) -> f64 {
-    let w = std::f64::consts::TAU * f_hz / rate;
-    (0..3)
-        .map(|a| {
-            let (c, s) = r.iter().enumerate().fold((0.0, 0.0), |(c, s), (i, v)| {
-                let p = w * i as f64;
-                (c + v[a] * p.cos(), s + v[a] * p.sin())
-            });
-            (c * c + s * s) / r.len().max(1) as f64
-        })
-        .sum()
-}
-
-/// The frequency of the largest motion power, pooled over the holds.
-fn peak_frequency(parts: &[Vec<[f64; 3]>], rate: f64) -> f64 {
-    let (lo, hi, step) = BAND_HZ;
-    let top = hi.min(0.45 * rate);
-    let count = ((top - lo) / step).floor().max(0.0) as usize + 1;
-    (0..count)
-        .map(|k| lo + step * k as f64)
-        .map(|f| (f, parts.iter().map(|r| power_at(r, rate, f)).sum::<f64>()))
-        .max_by(|a, b| a.1.total_cmp(&b.1))
-        .map_or(f64::NAN, |(f, _)| f)
-}
-
-/// Holds whose motion comes in short bursts (taps, nudges): one window far above the hold's median.
-fn tapped(r: &[[f64; 3]], window: usize) -> bool {
-    let rms: Vec<f64> = r.chunks_exact(window).map(|w| mean_square(w).sqrt()).collect();
-    let typical = median(&rms);
-    rms.len() >= 4 && rms.iter().any(|v| *v > TAP_FACTOR * typical)
-}
-
-/// How the motion was measured.
-#[derive(Debug, Clone, PartialEq)]
+/// What moves in the holds, counted per hold.
+#[derive(Debug, Default, PartialEq)]
 pub(crate) struct HoldMotion {
     pub(crate) holds: usize,
+    pub(crate) split: usize,
+    pub(crate) shaking: usize,
+    pub(crate) taps: usize,
+    pub(crate) sway: usize,
+    pub(crate) tremor: usize,
+    /// Holds with at least one of the above.
     pub(crate) disturbed: usize,
-    pub(crate) kept_poses: usize,
-    pub(crate) peak_hz: f64,
-    pub(crate) motion_mg: f64,
-    pub(crate) white_mg: f64,
-    pub(crate) tapped: usize,
+    /// RMS of the disturbed holds' motion beyond the quietest windows' noise, mg.
+    pub(crate) motion_rms_mg: f64,
 }
 
 impl HoldMotion {
-    /// What a user reads.
-    pub(crate) fn detail(&self) -> String {
-        let kind = if self.tapped * 2 > self.disturbed {
-            "short bursts (taps, nudges)"
-        } else if self.peak_hz < 2.0 {
-            "a slow sway"
-        } else {
-            "tremor or vibration"
-        };
+    /// Most holds move: the still-pose detector had reason to keep few.
+    pub(crate) fn explains_few_poses(&self) -> bool {
+        self.holds >= MIN_HOLDS && self.disturbed >= 3 && 2 * self.disturbed >= self.holds
+    }
+
+    /// The evidence, for the report.
+    pub(crate) fn describe(&self, still_poses: usize) -> String {
         format!(
-            "the holds were not still: {} of {} holds had motion ({kind}, strongest near {:.1} Hz) of ~{:.1} mg RMS \
-             over {:.1} mg of noise; the still detector kept {} poses, too few to calibrate: hold the sensor on a rigid support",
-            self.disturbed, self.holds, self.peak_hz, self.motion_mg, self.white_mg, self.kept_poses
+            "the still-pose detector kept {still_poses} poses, too few to calibrate; the log holds {} orientations for \
+             >= {MIN_HOLD_S} s and {} of them move (~{:.2} mg RMS beyond the quietest windows): {} shake, {} in the \
+             2-20 Hz band, {} with taps, {} sway, {} split",
+            self.holds, self.disturbed, self.motion_rms_mg, self.shaking, self.tremor, self.taps, self.sway, self.split
         )
     }
 }
 
-/// The motion in a log's holds, or `None` when it has no hold structure or no disturbed hold.
-pub(crate) fn measure(table: &Table) -> Option<HoldMotion> {
-    let rate = table.sample_rate_hz().filter(|r| r.is_finite() && *r > 0.0)?;
-    let window = ((WINDOW_S * rate).round() as usize).max(4);
-    let g = table.samples.iter().map(|s| distance(*s, [0.0; 3])).collect::<Vec<_>>();
-    let g = median(&g);
-    if !(g.is_finite() && g > 0.0) {
+/// The holds of the table and how they move; `None` without a usable sample rate.
+pub(crate) fn scan(table: &Table, rate: f64) -> Option<HoldMotion> {
+    let width = (WINDOW_S * rate).round() as usize;
+    let one_g = table.median_magnitude;
+    if width < 4 || !(one_g > 0.0) {
         return None;
     }
+    let windows = windows(&table.samples, width);
     let min_windows = (MIN_HOLD_S / WINDOW_S).ceil() as usize;
-    let holds = find_holds(&table.samples, window, HOLD_TOLERANCE_G * g, min_windows);
-    if holds.len() < MIN_HOLDS {
-        return None;
+    let (holds, split) = merged(hold_runs(&windows, HOLD_SPREAD_G * one_g, min_windows), &windows, one_g);
+    let quiet = quietest_variance(&windows, &holds)?;
+    // The quietest holds' scatter of window means: a hold sways when its means scatter far more.
+    let calm_scatter = low_decile(holds.iter().map(|h| mean_scatter(&windows[settled(h)])).collect())?;
+    let mut motion = HoldMotion { holds: holds.len(), ..HoldMotion::default() };
+    let mut excess = Vec::new();
+    for (hold, was_split) in holds.iter().zip(split) {
+        let late = &windows[settled(hold)];
+        let variances: Vec<f64> = late.iter().map(|w| w.variance).collect();
+        let shakes = median(&variances) > SHAKE_FACTOR * quiet;
+        let tapped = variances.iter().any(|v| *v > TAP_FACTOR * quiet);
+        let sways = mean_scatter(late) > SWAY_FACTOR * calm_scatter;
+        let rows = settled(hold).start * width..settled(hold).end * width;
+        let tremble = tremor_ratio(table, rows, rate).is_some_and(|r| r > tremor::TREMOR_RATIO);
+        let flags = [shakes, tremble, tapped, sways, was_split];
+        for (count, flag) in
+            [&mut motion.shaking, &mut motion.tremor, &mut motion.taps, &mut motion.sway, &mut motion.split]
+                .into_iter()
+                .zip(flags)
+        {
+            *count += usize::from(flag);
+        }
+        if flags.iter().any(|f| *f) {
+            motion.disturbed += 1;
+            excess.push((median(&variances) - quiet).max(0.0));
+        }
     }
-    let spans = csvio::accumulate(table, &AccumulateOptions::default()).map(|a| a.spans).unwrap_or_default();
-    let kept = |h: &Hold| {
-        let covered: usize =
-            spans.iter().map(|s| (s.last_row + 1).min(h.end).saturating_sub(s.first_row.max(h.first))).sum();
-        2 * covered >= h.end - h.first
+    motion.motion_rms_mg = (excess.iter().sum::<f64>() / excess.len().max(1) as f64).sqrt() / one_g * 1000.0;
+    Some(motion)
+}
+
+/// The windows of a hold looked at: its first third (a settling transient) and its last window (the
+/// start of the next move) left out.
+fn settled(hold: &Range<usize>) -> Range<usize> {
+    hold.start + hold.len() / 3..hold.end - 1
+}
+
+/// Consecutive windows of `width` samples (a partial last window dropped).
+fn windows(samples: &[[f64; 3]], width: usize) -> Vec<Window> {
+    samples
+        .chunks_exact(width)
+        .map(|chunk| {
+            let n = chunk.len() as f64;
+            let mean: [f64; 3] = std::array::from_fn(|a| chunk.iter().map(|s| s[a]).sum::<f64>() / n);
+            let variance = chunk.windows(2).map(|p| distance(&p[1], &p[0]).powi(2)).sum::<f64>() / (2.0 * (n - 1.0));
+            Window { mean, variance }
+        })
+        .collect()
+}
+
+fn distance(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt()
+}
+
+/// Runs of at least `min_windows` steady windows (their neighbours' means within [`STEADY_SHARE`] of [`HOLD_SPREAD_G`] of each
+/// other: not part of a move) whose means stay within `spread` of the run's first.
+fn hold_runs(windows: &[Window], spread: f64, min_windows: usize) -> Vec<Range<usize>> {
+    let steady = |k: usize| {
+        k > 0 && k + 1 < windows.len() && distance(&windows[k + 1].mean, &windows[k - 1].mean) <= spread * STEADY_SHARE
     };
-    let disturbed: Vec<Hold> = holds.iter().filter(|h| !kept(h)).copied().collect();
-    summarise(table, &holds, &disturbed, spans.len(), window, rate, g)
+    let mut runs = Vec::new();
+    let mut start = 0;
+    for k in 0..=windows.len() {
+        let continues = k < windows.len() && steady(k) && distance(&windows[k].mean, &windows[start].mean) <= spread;
+        if continues {
+            continue;
+        }
+        if k - start >= min_windows {
+            runs.push(start..k);
+        }
+        start = if k < windows.len() && steady(k) { k } else { k + 1 };
+    }
+    runs
 }
 
-/// The evidence from the disturbed holds (`None` when none is).
-fn summarise(
-    t: &Table,
-    holds: &[Hold],
-    disturbed: &[Hold],
-    kept: usize,
-    window: usize,
-    rate: f64,
-    g: f64,
-) -> Option<HoldMotion> {
-    if disturbed.is_empty() {
-        return None;
-    }
-    let parts: Vec<Vec<[f64; 3]>> = disturbed.iter().map(|h| residual(&t.samples, *h, window)).collect();
-    let white = median(&holds.iter().map(|h| white_variance(&residual(&t.samples, *h, window))).collect::<Vec<_>>());
-    let total = median(&parts.iter().map(|r| mean_square(r)).collect::<Vec<_>>());
-    let mg = |v: f64| v.max(0.0).sqrt() / g * 1000.0;
-    if mg(total - white) < MIN_MOTION_OVER_NOISE * mg(white) {
-        return None;
-    }
-    Some(HoldMotion {
-        holds: holds.len(),
-        disturbed: disturbed.len(),
-        kept_poses: kept,
-        peak_hz: peak_frequency(&parts, rate),
-        motion_mg: mg(total - white),
-        white_mg: mg(white),
-        tapped: parts.iter().filter(|r| tapped(r, window)).count(),
-    })
-}
-
-/// The `motion` verdict for a log whose holds were too disturbed to calibrate.
-pub(crate) fn motion_diagnosis(table: &Table, opts: &DiagnoseOptions, motion: &HoldMotion) -> Diagnosis {
-    let nan = f64::NAN;
-    let gap = Gap {
-        real_rmse_mg: nan,
-        sim_rmse_mg: nan,
-        sim_spread_mg: nan,
-        z: nan,
-        significant: true,
-        ratio_before: nan,
-        real_rmse_after_mg: nan,
-        sim_rmse_after_mg: nan,
-        ratio_after: nan,
+/// `runs` with neighbours at one orientation (means within [`HOLD_SPREAD_G`]) and at most
+/// [`MERGE_GAP_WINDOWS`] apart joined; whether each was split.
+fn merged(runs: Vec<Range<usize>>, windows: &[Window], one_g: f64) -> (Vec<Range<usize>>, Vec<bool>) {
+    let mean_of = |r: &Range<usize>| -> [f64; 3] {
+        std::array::from_fn(|a| windows[r.clone()].iter().map(|w| w.mean[a]).sum::<f64>() / r.len() as f64)
     };
-    let candidates = EFFECT_NAMES.iter().map(|e| candidate(e, motion)).collect();
-    Diagnosis {
-        file: table.file.clone(),
-        samples: table.samples.len(),
-        units: table.units.to_string(),
-        gravity: opts.gravity,
-        seed: opts.seed,
-        repeats: 0,
-        params: accelcal::model::Params::IDENTITY,
-        white_mg: [motion.white_mg / 3f64.sqrt(); 3],
-        gap,
-        poses: Vec::new(),
-        allan: Allan { rest_s: nan, tau_s: Vec::new(), adev_mg: Vec::new(), white_mg: Vec::new() },
-        candidates,
-        probes: Vec::new(),
-        heldout_ratio_nominal: nan,
-        verdict: "motion",
-        unexplained_where: None,
-        explained: true,
-        shrink: 0.0,
+    let (mut holds, mut split): (Vec<Range<usize>>, Vec<bool>) = (Vec::new(), Vec::new());
+    for run in runs {
+        if let Some(last) = holds.last_mut()
+            && run.start - last.end <= MERGE_GAP_WINDOWS
+            && distance(&mean_of(last), &mean_of(&run)) <= HOLD_SPREAD_G * one_g
+        {
+            last.end = run.end;
+            if let Some(s) = split.last_mut() {
+                *s = true;
+            }
+            continue;
+        }
+        holds.push(run);
+        split.push(false);
     }
+    (holds, split)
 }
 
-fn candidate(effect: &'static str, motion: &HoldMotion) -> Candidate {
-    let is_motion = effect == "motion";
-    Candidate {
-        effect,
-        applicable: is_motion,
-        heldout_ratio: f64::NAN,
-        heldout_gain: f64::NAN,
-        ratio_after: f64::NAN,
-        extra_params: 0,
-        detail: if is_motion { motion.detail() } else { String::new() },
-        within_gain: f64::NAN,
-        within_detail: String::new(),
-        variants: Vec::new(),
-    }
+/// The 10th percentile of the holds' window variances (settled part): the noise of the log's
+/// quietest stretches.
+fn quietest_variance(windows: &[Window], holds: &[Range<usize>]) -> Option<f64> {
+    low_decile(holds.iter().flat_map(|h| &windows[settled(h)]).map(|w| w.variance).collect())
 }
 
-/// `Err(e)` from the gap's measurement answered as `motion` when the log has disturbed holds.
-pub(crate) fn answer_refusal(
-    table: &Table,
-    opts: &DiagnoseOptions,
-    e: DiagnoseError,
-) -> Result<Diagnosis, DiagnoseError> {
-    match measure(table) {
-        Some(motion) => Ok(motion_diagnosis(table, opts, &motion)),
-        None => Err(e),
+/// Variance of the window means about their mean (axes summed): the hold's slow motion plus the
+/// noise of a window mean.
+fn mean_scatter(windows: &[Window]) -> f64 {
+    if windows.len() < 2 {
+        return 0.0;
     }
+    let n = windows.len() as f64;
+    let mean: [f64; 3] = std::array::from_fn(|a| windows.iter().map(|w| w.mean[a]).sum::<f64>() / n);
+    windows.iter().map(|w| distance(&w.mean, &mean).powi(2)).sum::<f64>() / (n - 1.0)
+}
+
+/// The 10th percentile of `values` (`None` when empty or zero).
+fn low_decile(mut values: Vec<f64>) -> Option<f64> {
+    if values.is_empty() {
+        return None;
+    }
+    values.sort_by(f64::total_cmp);
+    let q = values[values.len() / 10];
+    (q > 0.0).then_some(q)
+}
+
+/// The hold's tremor-band density ratio (the smaller of its halves'), see `family/tremor.rs`.
+fn tremor_ratio(table: &Table, rows: Range<usize>, rate: f64) -> Option<f64> {
+    let end = rows.end.min(table.samples.len());
+    let hold = [pose_data(table, rows.start, end, rate)];
+    tremor::band_ratios(table, &hold, rate).map(|(first, second)| first.min(second))
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    /// Six faces held 3 s each at 100 Hz with 1 mg noise, joined by 0.5 s rotations; `shake(i, t)`
-    /// adds motion to hold `i`.
-    fn faces(shake: impl Fn(usize, f64) -> f64) -> Table {
-        let faces =
-            [[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]];
+    /// A log of `holds` poses (4 s each at 100 Hz, 1 s moves between them) in g, with white noise of
+    /// 1 mg and `shake(hold, t)` added to x during the holds.
+    pub(crate) fn log(holds: usize, shake: impl Fn(usize, f64) -> f64) -> Table {
+        use rand_core::SeedableRng;
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(3);
+        let mut noise = || 0.001 * crate::sim::random::standard_normal(&mut rng);
         let mut text = String::from("t,ax,ay,az\n");
-        let (mut row, mut seed) = (0usize, 7u64);
-        let mut noise = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 0.0035
+        let dirs = |k: usize| {
+            let (theta, phi) = (0.3 + 1.1 * k as f64, 0.7 * k as f64);
+            [theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos()]
         };
-        for (i, f) in faces.iter().enumerate() {
-            let next = faces[(i + 1) % 6];
-            for k in 0..350 {
-                let t = k as f64 / 100.0;
-                let s = if k < 300 { 0.0 } else { (k - 300) as f64 / 50.0 };
-                let v: [f64; 3] = std::array::from_fn(|a| f[a] * (1.0 - s) + next[a] * s);
-                let x = v[0] + noise() + if k < 300 { shake(i, t) } else { 0.0 };
-                text += &format!("{},{x},{},{}\n", row as f64 / 100.0, v[1] + noise(), v[2] + noise());
-                row += 1;
+        let mut i = 0;
+        for k in 0..holds {
+            for j in 0..500 {
+                let t = j as f64 / 100.0;
+                let (d, moving) = if j < 100 {
+                    let (a, b) = (dirs(k.max(1) - 1), dirs(k));
+                    let f = t;
+                    (std::array::from_fn(|c| a[c] + (b[c] - a[c]) * f), true)
+                } else {
+                    (dirs(k), false)
+                };
+                let extra = if moving { 0.0 } else { shake(k, t) };
+                let s: [f64; 3] = std::array::from_fn(|c| d[c] + noise() + if c == 0 { extra } else { 0.0 });
+                text.push_str(&format!("{},{},{},{}\n", i as f64 / 100.0, s[0], s[1], s[2]));
+                i += 1;
             }
         }
-        crate::csvio::read_csv_str("faces", &text, &crate::csvio::ReadOptions::default()).unwrap()
-    }
-
-    pub(super) fn shaken() -> Table {
-        faces(|i, s| if i == 0 { 0.0 } else { 0.03 * (std::f64::consts::TAU * 0.75 * s).sin() })
+        crate::csvio::read_csv_str("holds", &text, &crate::csvio::ReadOptions::default()).unwrap()
     }
 
     #[test]
-    fn the_plain_detector_finds_six_holds() {
-        let t = faces(|_, _| 0.0);
-        let holds = find_holds(&t.samples, 25, 0.1, 6);
-        assert_eq!(holds.len(), 6, "{holds:?}");
+    fn quiet_holds_are_found_and_not_called_moving() {
+        let m = scan(&log(10, |_, _| 0.0), 100.0).unwrap();
+        assert_eq!(m.holds, 10, "{m:?}");
+        assert_eq!(m.disturbed, 0, "{m:?}");
+        assert!(!m.explains_few_poses());
     }
 
     #[test]
-    fn a_slow_sway_in_five_holds_is_motion_near_its_frequency() {
-        let t = shaken();
-        let m = measure(&t).expect("five swaying holds");
-        assert_eq!((m.holds, m.disturbed, m.kept_poses), (6, 5, 1), "{m:?}");
-        assert!((m.peak_hz - 0.75).abs() <= 0.25, "{m:?}");
-        // A 30 mg sine is 21 mg RMS.
-        assert!(m.motion_mg > 15.0 && m.motion_mg < 25.0, "{m:?}");
-        let d = answer_refusal(&t, &DiagnoseOptions::DEFAULT, DiagnoseError(String::new())).unwrap();
-        assert_eq!(d.verdict, "motion");
-        let detail = &d.candidates.iter().find(|c| c.effect == "motion").unwrap().detail;
-        assert!(detail.contains("5 of 6 holds") && detail.contains("slow sway"), "{detail}");
-        let full = crate::diagnose::diagnose(&t, &DiagnoseOptions::DEFAULT).unwrap();
-        assert_eq!(full.verdict, "motion");
+    fn a_tremor_in_most_holds_is_motion() {
+        // 10 Hz, 8 mg in the odd holds and in three of the even ones.
+        let m =
+            scan(&log(10, |k, t| if k % 2 == 1 || k < 6 { 0.008 * (62.83 * t).sin() } else { 0.0 }), 100.0).unwrap();
+        assert_eq!(m.holds, 10, "{m:?}");
+        assert!(m.disturbed >= 7 && m.explains_few_poses(), "{m:?}");
+        assert!(m.tremor >= 7, "{m:?}");
     }
 
     #[test]
-    fn no_hold_structure_stays_an_error() {
-        let text: String = std::iter::once("t,ax,ay,az\n".to_string())
-            .chain((0..2000).map(|i| format!("{},0.0,{},1.0\n", i as f64 * 0.01, (i as f64 * 0.05).sin())))
-            .collect();
-        let t = crate::csvio::read_csv_str("turning", &text, &crate::csvio::ReadOptions::default()).unwrap();
-        assert!(measure(&t).is_none());
-        assert!(crate::diagnose::diagnose(&t, &DiagnoseOptions::DEFAULT).is_err());
-    }
-
-    #[test]
-    fn still_holds_are_not_motion() {
-        assert!(measure(&faces(|_, _| 0.0)).is_none());
+    fn a_sway_in_most_holds_is_motion() {
+        // 2 Hz, 5 mg (about 0.3 deg) in six holds of eight; the two others are still.
+        let m = scan(&log(8, |k, t| if k % 4 == 0 { 0.0 } else { 0.005 * (12.57 * t).sin() }), 100.0).unwrap();
+        assert_eq!(m.holds, 8, "{m:?}");
+        assert!(m.sway == 6 && m.disturbed == 6 && m.explains_few_poses(), "{m:?}");
     }
 }

@@ -62,6 +62,7 @@
 
 mod family;
 mod gap;
+mod hold_motion;
 mod holds;
 mod locate;
 pub(crate) mod math;
@@ -157,10 +158,14 @@ pub fn diagnose(table: &Table, opts: &DiagnoseOptions) -> Result<Diagnosis, Diag
     if opts.folds < 2 || opts.repeats < 2 {
         return Err(err("diagnose needs at least 2 folds and 2 repeats"));
     }
-    // A log with holds too disturbed to calibrate is answered `motion` (holds.rs), not refused.
     let m = match gap::measure(table, opts) {
         Ok(m) => m,
-        Err(e) => return holds::answer_refusal(table, opts, e),
+        Err(gap::Refusal::Other(e)) => return Err(e),
+        Err(gap::Refusal::NotCalibrated { still_poses, rate, error }) => {
+            // The holds' own scan first, then the plain one against what the still detector kept.
+            let plain = || hold_motion::measure(table).map(|m| hold_motion::motion_diagnosis(table, opts, &m));
+            return moving_holds(table, opts, still_poses, rate).or_else(plain).ok_or(error);
+        }
     };
     // Too few poses to withhold some (a short log that calibrate still accepts): the gap is measured and
     // answered (`none` or `unexplained`), with no catalogue candidate tested.
@@ -194,6 +199,7 @@ pub fn diagnose(table: &Table, opts: &DiagnoseOptions) -> Result<Diagnosis, Diag
         unexplained_where: None,
         explained: decision.winner.is_some(),
         shrink: decision.shrink,
+        not_calibrated: None,
     };
     if d.verdict == "unexplained" {
         d.unexplained_where = Some(decision.probe_where.unwrap_or_else(|| locate::unexplained_location(&d)));
@@ -203,6 +209,45 @@ pub fn diagnose(table: &Table, opts: &DiagnoseOptions) -> Result<Diagnosis, Diag
         }
     }
     Ok(d)
+}
+
+/// The answer for a log whose still poses cannot be calibrated but whose holds mostly move
+/// (`holds.rs`): `motion`, with the evidence, no gap measured; `None` when the holds do not move.
+fn moving_holds(table: &Table, opts: &DiagnoseOptions, still_poses: usize, rate: f64) -> Option<Diagnosis> {
+    let motion = holds::scan(table, rate).filter(holds::HoldMotion::explains_few_poses)?;
+    let candidate = Candidate {
+        effect: "motion",
+        applicable: true,
+        heldout_ratio: f64::NAN,
+        heldout_gain: f64::NAN,
+        ratio_after: f64::NAN,
+        extra_params: 0,
+        detail: motion.describe(still_poses),
+        within_gain: f64::NAN,
+        within_detail: String::new(),
+        variants: Vec::new(),
+    };
+    Some(Diagnosis {
+        file: table.file.clone(),
+        samples: table.samples.len(),
+        units: table.units.to_string(),
+        gravity: opts.gravity,
+        seed: opts.seed,
+        repeats: 0,
+        params: accelcal::model::Params::IDENTITY,
+        white_mg: [f64::NAN; 3],
+        gap: Gap::UNMEASURED,
+        poses: Vec::new(),
+        allan: Allan { rest_s: 0.0, tau_s: Vec::new(), adev_mg: Vec::new(), white_mg: Vec::new() },
+        candidates: vec![candidate],
+        heldout_ratio_nominal: f64::NAN,
+        probes: Vec::new(),
+        verdict: "motion",
+        unexplained_where: None,
+        explained: true,
+        shrink: f64::NAN,
+        not_calibrated: Some(format!("{} still poses: too few to calibrate", still_poses)),
+    })
 }
 
 #[cfg(test)]
@@ -253,6 +298,19 @@ mod tests {
         let e = diagnose(&table, &DiagnoseOptions::DEFAULT).unwrap_err();
         assert!(e.to_string().contains("static poses"), "{e}");
         assert!(diagnose(&table, &DiagnoseOptions { gravity: f64::NAN, ..DiagnoseOptions::DEFAULT }).is_err());
+    }
+
+    #[test]
+    fn holds_that_move_too_much_to_calibrate_are_answered_motion_quiet_ones_are_not() {
+        // Ten holds, eight with a 2 Hz sway of 20 mg (the detector keeps the two still ones).
+        let table = holds::tests::log(10, |k, t| if k % 5 == 0 { 0.0 } else { 0.020 * (12.57 * t).sin() });
+        let d = diagnose(&table, &DiagnoseOptions::DEFAULT).unwrap();
+        assert_eq!(d.verdict, "motion", "{}", d.to_text());
+        assert!(d.not_calibrated.is_some() && d.candidates[0].detail.contains("8 of them move"), "{}", d.to_text());
+        assert!(d.to_json()["not_calibrated"].is_string());
+        // Three still holds: too few, and nothing moves: the detector's error stays.
+        let e = diagnose(&holds::tests::log(3, |_, _| 0.0), &DiagnoseOptions::DEFAULT).unwrap_err();
+        assert!(e.to_string().contains("static poses"), "{e}");
     }
 
     #[test]

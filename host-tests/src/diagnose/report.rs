@@ -33,6 +33,21 @@ pub struct Gap {
     pub ratio_after: f64,
 }
 
+impl Gap {
+    /// No gap measured (no calibration could be made): every figure NaN, not significant.
+    pub const UNMEASURED: Self = Self {
+        real_rmse_mg: f64::NAN,
+        sim_rmse_mg: f64::NAN,
+        sim_spread_mg: f64::NAN,
+        z: f64::NAN,
+        significant: false,
+        ratio_before: f64::NAN,
+        real_rmse_after_mg: f64::NAN,
+        sim_rmse_after_mg: f64::NAN,
+        ratio_after: f64::NAN,
+    };
+}
+
 /// One pose in the report.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PoseReport {
@@ -156,6 +171,9 @@ pub struct Diagnosis {
     pub explained: bool,
     /// Step 4.
     pub shrink: f64,
+    /// Why no calibration (and so no gap) was made, when the verdict rests on the holds alone (a log
+    /// whose holds move too much to keep enough still poses).
+    pub not_calibrated: Option<String>,
 }
 
 impl Diagnosis {
@@ -198,6 +216,7 @@ pub struct DiagnosisDocument<'a> {
     candidates_ranked: Vec<RankedCandidate<'a>>,
     probes: &'a [Probe],
     verdict: VerdictSummary<'a>,
+    not_calibrated: Option<&'a str>,
 }
 
 /// `noise`: white noise per axis and the longest rest.
@@ -308,6 +327,7 @@ impl Diagnosis {
             candidates_ranked: self.ranked().into_iter().map(RankedCandidate::from).collect(),
             probes: &self.probes,
             verdict: self.verdict_document(),
+            not_calibrated: self.not_calibrated.as_deref(),
         }
     }
 
@@ -426,6 +446,7 @@ mod tests {
             unexplained_where: Some("one orientation: +z".into()),
             explained: false,
             shrink: 0.0,
+            not_calibrated: None,
         }
     }
 

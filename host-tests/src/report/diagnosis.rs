@@ -75,6 +75,14 @@ impl Diagnosis {
             self.poses.len(),
             self.seed
         );
+        if let Some(why) = &self.not_calibrated {
+            let _ = writeln!(s, "1. gap: not measured ({why})");
+            for c in &self.candidates {
+                let _ = writeln!(s, "3. {}: {}", c.effect, c.detail);
+            }
+            let _ = writeln!(s, "   verdict: {}", self.verdict);
+            return s;
+        }
         let _ = writeln!(
             s,
             "1. gap: real modulus RMSE {:.4} mg, simulated {:.4} +- {:.4} mg ({} repeats, white noise {:.3}/{:.3}/{:.3} mg): ratio {:.2}, z {:.1} -> {}",

@@ -12,7 +12,7 @@ mod ringing;
 mod settling;
 mod smooth;
 mod temperature;
-mod tremor;
+pub(super) mod tremor;
 
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
