@@ -12,7 +12,7 @@ use crate::csvio::{self, AccumulateOptions, Table};
 
 use super::math::median;
 use super::report::{Allan, Candidate, Diagnosis, Gap};
-use super::{DiagnoseError, DiagnoseOptions, EFFECT_NAMES};
+use super::{DiagnoseOptions, EFFECT_NAMES};
 
 /// Window the hold detector averages, seconds.
 const WINDOW_S: f64 = 0.25;
@@ -251,18 +251,6 @@ fn candidate(effect: &'static str, motion: &HoldMotion) -> Candidate {
     }
 }
 
-/// `Err(e)` from the gap's measurement answered as `motion` when the log has disturbed holds.
-pub(crate) fn answer_refusal(
-    table: &Table,
-    opts: &DiagnoseOptions,
-    e: DiagnoseError,
-) -> Result<Diagnosis, DiagnoseError> {
-    match measure(table) {
-        Some(motion) => Ok(motion_diagnosis(table, opts, &motion)),
-        None => Err(e),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -311,7 +299,7 @@ mod tests {
         assert!((m.peak_hz - 0.75).abs() <= 0.25, "{m:?}");
         // A 30 mg sine is 21 mg RMS.
         assert!(m.motion_mg > 15.0 && m.motion_mg < 25.0, "{m:?}");
-        let d = answer_refusal(&t, &DiagnoseOptions::DEFAULT, DiagnoseError(String::new())).unwrap();
+        let d = motion_diagnosis(&t, &DiagnoseOptions::DEFAULT, &m);
         assert_eq!(d.verdict, "motion");
         let detail = &d.candidates.iter().find(|c| c.effect == "motion").unwrap().detail;
         assert!(detail.contains("5 of 6 holds") && detail.contains("slow sway"), "{detail}");
