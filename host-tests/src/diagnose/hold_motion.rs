@@ -34,6 +34,10 @@ const BAND_HZ: (f64, f64, f64) = (0.25, 25.0, 0.25);
 /// correlated noise can also split holds): the log is then refused as before.
 const MIN_MOTION_OVER_NOISE: f64 = 2.0;
 
+/// Smallest motion named, mg RMS: a digital low-pass (5 Hz bandwidth) makes the successive
+/// differences understate the noise, whose correlated part then reads as sub-mg motion.
+const MIN_MOTION_MG: f64 = 2.0;
+
 /// A window whose RMS exceeds this many times the hold's median window RMS is a tap.
 const TAP_FACTOR: f64 = 4.0;
 
@@ -193,7 +197,7 @@ fn summarise(
     let white = median(&holds.iter().map(|h| white_variance(&residual(&t.samples, *h, window))).collect::<Vec<_>>());
     let total = median(&parts.iter().map(|r| mean_square(r)).collect::<Vec<_>>());
     let mg = |v: f64| v.max(0.0).sqrt() / g * 1000.0;
-    if mg(total - white) < MIN_MOTION_OVER_NOISE * mg(white) {
+    if mg(total - white) < (MIN_MOTION_OVER_NOISE * mg(white)).max(MIN_MOTION_MG) {
         return None;
     }
     Some(HoldMotion {
