@@ -64,7 +64,6 @@
 
 mod family;
 mod gap;
-mod hold_motion;
 mod holds;
 mod locate;
 pub(crate) mod math;
@@ -164,9 +163,7 @@ pub fn diagnose(table: &Table, opts: &DiagnoseOptions) -> Result<Diagnosis, Diag
         Ok(m) => m,
         Err(gap::Refusal::Other(e)) => return Err(e),
         Err(gap::Refusal::NotCalibrated { still_poses, rate, error }) => {
-            // The holds' own scan first, then the plain one against what the still detector kept.
-            let plain = || hold_motion::measure(table).map(|m| hold_motion::motion_diagnosis(table, opts, &m));
-            return moving_holds(table, opts, still_poses, rate).or_else(plain).ok_or(error);
+            return moving_holds(table, opts, still_poses, rate).ok_or(error);
         }
     };
     // Too few poses to withhold some (a short log that calibrate still accepts): the gap is measured and
