@@ -48,10 +48,8 @@
 //! - `colored-noise`: a bias random walk and/or a bias-instability floor measured on the longest
 //!   rest (detrended quadratically in time and linearly in temperature) and pooled over every hold
 //!   (each cleared of its line), from the overlapping Allan variance in excess of white noise (two
-//!   white levels: successive differences, at least `q^2 / 12`, and the holds' median variance),
-//!   a flat floor also as flicker (1/f) spreading the pose means by `ln(T / tau) / (2 ln 2)` times
-//!   its level over a session of `T` with holds of `tau`; the level the withheld poses' scatter
-//!   agrees with best is given to the simulator.
+//!   white levels: successive differences, at least `q^2 / 12`, and the holds' median variance);
+//!   the level the withheld poses' scatter agrees with best is given to the simulator.
 //!
 //! ```
 //! use accelcal_host::diagnose::{diagnose, DiagnoseOptions};
