@@ -52,11 +52,9 @@ impl ColoredNoise {
     /// means): `(ratio, walk, floor)`.
     fn best_noise(&self, ctx: &Context<'_>, estimates: &[(V3, V3)]) -> Option<(f64, V3, V3)> {
         let zero = [0.0; 3];
-        let flicker = flicker_factor(ctx.poses);
         let mut best: Option<(f64, V3, V3)> = None;
         for &(walk, floor) in estimates {
-            let spread = floor.map(|f| f * flicker);
-            for (w, f) in [(walk, floor), (walk, zero), (zero, floor), (zero, spread)] {
+            for (w, f) in [(walk, floor), (walk, zero), (zero, floor)] {
                 if !(ctx.pose_level && w.iter().chain(&f).any(|v| *v > 0.0)) {
                     continue;
                 }
@@ -68,23 +66,6 @@ impl ColoredNoise {
         }
         best
     }
-}
-
-/// How much more a flicker (1/f) noise scatters the pose means about the session's mean than its Allan
-/// variance plateau within a hold says: for a density `h / f`, the Allan variance is flat at
-/// `2 ln 2 h`, and an average over a hold of `tau` differs from the mean of a session of `T` by about
-/// `h ln(T / tau)` (the power between `1 / T` and `1 / tau`): the factor `ln(T / tau) / (2 ln 2)`,
-/// at least 1, with `tau` the median hold and `T` the time from the first hold's start to the last's
-/// end.
-fn flicker_factor(poses: &[PoseData]) -> f64 {
-    let durations: Vec<f64> = poses.iter().map(PoseData::duration).collect();
-    let tau = crate::diagnose::math::median(&durations);
-    let (Some(first), Some(last)) = (poses.first(), poses.last()) else { return 1.0 };
-    let session = last.t_end - first.t_start;
-    if !(tau > 0.0 && session > tau) {
-        return 1.0;
-    }
-    ((session / tau).ln() / (2.0 * std::f64::consts::LN_2)).max(1.0)
 }
 
 /// The colored noise measured in the holds: on the longest rest, and pooled over every hold
