@@ -24,6 +24,10 @@ use super::within::{Within, WithinFit, WithinVariant};
 use super::{CV_NOISE_DRAWS, DiagnoseOptions, OVERSHOOT_WEIGHT, PARAMETER_PENALTY};
 use crate::csvio::Table;
 
+/// Fewest training poses beyond a design's columns (9 calibration parameters plus the probe's) for
+/// an out-of-catalogue probe's held-out test (see [`Context::leaves_residual_dof`]).
+const MIN_RESIDUAL_DOF: usize = 3;
+
 /// Logs of at most this many poses are cross-validated leaving one pose out.
 const LEAVE_ONE_OUT_BELOW: usize = 16;
 
@@ -223,6 +227,18 @@ impl<'a> Context<'a> {
         Some((ms / self.e_white).sqrt())
     }
 
+    /// Every fold's training poses outnumber the columns of the design with `extra` by
+    /// [`MIN_RESIDUAL_DOF`]: a design that (nearly) interpolates its training poses predicts the
+    /// withheld ones by chance, not by physics.
+    pub(crate) fn leaves_residual_dof(&self, extra: &[Vec<f64>]) -> bool {
+        let columns = self.base_rows.first().map_or(0, Vec::len) + extra.first().map_or(0, Vec::len);
+        let dropped = &self.none_dropped;
+        (0..self.folds).all(|f| {
+            let train = (0..dropped.len()).filter(|&i| self.fold[i] != f && !dropped[i]).count();
+            train >= columns + MIN_RESIDUAL_DOF
+        })
+    }
+
     /// The variant with the smallest penalised held-out ratio.
     pub(crate) fn best_of(&self, variants: Vec<Variant>) -> Option<Fitted> {
         if !self.pose_level {
@@ -326,5 +342,26 @@ impl<'a> Context<'a> {
             c.applicable = true;
             e.after = after;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diagnose::gap;
+    use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
+
+    #[test]
+    fn a_design_that_would_interpolate_its_training_poses_leaves_no_residual_dof() {
+        let table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "sim").unwrap();
+        let opts = DiagnoseOptions::DEFAULT;
+        let m = gap::measure(&table, &opts).unwrap();
+        let ctx = Context::new(&table, &m, &opts).unwrap();
+        let n = m.poses.len();
+        let fewest_train = (0..ctx.folds).map(|f| (0..n).filter(|&i| ctx.fold[i] != f).count()).min().unwrap();
+        let columns = |k: usize| vec![vec![0.0; k]; n];
+        let most = fewest_train - ctx.base_rows[0].len() - MIN_RESIDUAL_DOF;
+        assert!(ctx.leaves_residual_dof(&columns(most)), "{most} extra columns on {n} poses");
+        assert!(!ctx.leaves_residual_dof(&columns(most + 1)), "{} extra columns on {n} poses", most + 1);
     }
 }
