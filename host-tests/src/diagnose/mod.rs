@@ -311,6 +311,21 @@ mod tests {
     }
 
     #[test]
+    fn a_bias_step_at_one_time_is_unexplained_and_located_not_given_a_catalogue_name() {
+        use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
+        let mut table = to_table(&generate(&random_scenario(EffectClass::None, 0)), "step").unwrap();
+        // A 4 mg step of every axis half way through (the table's unit: its median |a| is 1 g).
+        let step = 0.004 * table.median_magnitude;
+        let half = table.samples.len() / 2;
+        for s in &mut table.samples[half..] {
+            s.iter_mut().for_each(|v| *v += step);
+        }
+        let d = diagnose(&table, &DiagnoseOptions::DEFAULT).unwrap();
+        assert_eq!(d.verdict, "unexplained", "{}", d.to_text());
+        assert!(d.unexplained_where.as_deref().is_some_and(|w| w.contains("bias step")), "{}", d.to_text());
+    }
+
+    #[test]
     fn model_inverts() {
         let p = Params { bias: [0.1, -0.2, 0.05], scale: [0.98, 1.01, 1.02], nonorth: [0.01, -0.02, 0.005] };
         let m = Model::from_params(&p);

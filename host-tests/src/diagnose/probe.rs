@@ -1,5 +1,5 @@
 //! Probes for gaps outside the catalogue: shapes no physical family of the catalogue has (a
-//! periodic bias, cross-axis products, a bias following the direction of the last rotation),
+//! periodic bias, a bias step at one time, cross-axis products, a bias following the direction of the last rotation),
 //! judged by the same held-out criterion. A probe never becomes a verdict: when one explains the
 //! withheld poses better than every family, the verdict is `unexplained` and the probe says where
 //! the gap lies.
@@ -39,6 +39,30 @@ fn periodic(ctx: &Context<'_>) -> Vec<Variant> {
     out
 }
 
+/// A bias step at one time: `u . s` on the poses after the step, for every step between two poses
+/// with at least [`STEP_SIDE_POSES`] poses on each side. The step's search is charged as the
+/// periodic one's: `ln` of the places searched.
+fn bias_step(ctx: &Context<'_>) -> Vec<Variant> {
+    let n = ctx.poses.len();
+    let places = (STEP_SIDE_POSES..=n.saturating_sub(STEP_SIDE_POSES)).count();
+    let params = 3 + ((places.max(1) as f64).ln().ceil() as usize).max(1);
+    (STEP_SIDE_POSES..=n.saturating_sub(STEP_SIDE_POSES))
+        .map(|first_after| {
+            let extra = ctx
+                .directions()
+                .iter()
+                .enumerate()
+                .map(|(i, u)| u.iter().map(|x| if i >= first_after { *x } else { 0.0 }).collect())
+                .collect();
+            let at = 0.5 * (ctx.poses[first_after - 1].t_mid() + ctx.poses[first_after].t_mid());
+            Variant { extra, params, detail: format!("a bias step at {at:.0} s") }
+        })
+        .collect()
+}
+
+/// Fewest poses on each side of a probed bias step.
+const STEP_SIDE_POSES: usize = 2;
+
 /// Cross-axis products `c_a f_b f_c / g` per axis.
 fn cross_axis(ctx: &Context<'_>) -> Vec<Variant> {
     let g = ctx.m.gravity;
@@ -67,8 +91,12 @@ type MakeVariants = fn(&Context<'_>) -> Vec<Variant>;
 
 /// Every probe with its held-out gain.
 pub(crate) fn run(ctx: &Context<'_>) -> Vec<Probe> {
-    let probes: [(&'static str, MakeVariants); 3] =
-        [("periodic", periodic), ("cross-axis", cross_axis), ("rotation-direction", rotation_direction)];
+    let probes: [(&'static str, MakeVariants); 4] = [
+        ("periodic", periodic),
+        ("bias-step", bias_step),
+        ("cross-axis", cross_axis),
+        ("rotation-direction", rotation_direction),
+    ];
     probes
         .iter()
         .filter_map(|(name, make)| {
