@@ -214,14 +214,20 @@ fn i16_axis(values: &[i16], limit: i32) -> (i32, i64, u64, bool) {
     (sum, sum_sq, spread, !clear && values.iter().any(|v| v.saturated(limit)))
 }
 
-/// Axis `axis` of a full block of samples: its raw sums written to `sum` and `sum_sq`, its `n^2`
-/// variance `n sum_sq - sum^2` returned (exact, at most `2^62`). Out of line, once per axis: nothing
-/// else is live, so its loop keeps every value in a register (the samples are read with a stride).
+/// The raw sums of a full block of samples, axis after axis in one call: `sum` and `sum_sq` written,
+/// the total `n^2` variance `sum_a (n sum_sq_a - sum_a^2)` returned (exact: each term at most `2^62`,
+/// three fit a `u64`). Out of line, once per block: nothing else is live, so each axis loop keeps its
+/// eight values and running sums in registers (the samples are read with a stride).
 #[inline(never)]
-fn i16_block_axis(samples: &[[i16; 3]], axis: usize, sum: &mut i64, sum_sq: &mut i64) -> u64 {
-    let (s, sq) = raw_i16_axis_sums(samples, axis);
-    (*sum, *sum_sq) = (i64::from(s), sq);
-    (samples.len() as i64 * sq - i64::from(s) * i64::from(s)) as u64
+fn i16_block_sums(samples: &[[i16; 3]], sum: &mut [i64; 3], sum_sq: &mut [i64; 3]) -> u64 {
+    let n = samples.len() as i64;
+    let mut total = 0u64;
+    for a in 0..3 {
+        let (s, q) = raw_i16_axis_sums(samples, a);
+        (sum[a], sum_sq[a]) = (i64::from(s), q);
+        total += (n * q - i64::from(s) * i64::from(s)) as u64;
+    }
+    total
 }
 
 /// `false` when no sample of a block can be saturated, from its statistics: every sample lies within
@@ -265,9 +271,9 @@ impl Reading for i16 {
     ) -> ([f32; 3], f32, bool) {
         let n_inverse = 1.0 / N as f32;
         // The three axes' n^2 variances (each at most 2^62) fit a u64.
-        let (mut mean, mut n_squared_variance) = ([0.0; 3], 0u64);
+        let mut mean = [0.0; 3];
+        let n_squared_variance = i16_block_sums(samples, sum, sum_sq);
         for a in 0..3 {
-            n_squared_variance += i16_block_axis(samples, a, &mut sum[a], &mut sum_sq[a]);
             // A block's raw sum fits an i32 (at most 2^16 samples of at most 2^15).
             mean[a] = sum[a] as i32 as f32 * n_inverse;
         }
