@@ -48,6 +48,10 @@ pub trait Reading: Copy + Default {
     type Sum: Copy + Default + AddAssign + Add<Output = Self::Sum> + Sub<Output = Self::Sum> + Mul<Output = Self::Sum>;
     /// Variance (sum over axes) below which no noise can be resolved: the quantisation floor.
     const QUANTUM_VARIANCE: f32;
+    /// An upper bound of the squared magnitude `|mean|^2` of a block's mean (input unit squared): where
+    /// `1e-12` of it stays below [`Reading::QUANTUM_VARIANCE`], the noise floor's relative term can never
+    /// win and is not computed. Defaults to infinity (always computed).
+    const MAX_MAGNITUDE_SQ: f32 = f32::INFINITY;
     /// Sums are kept relative to a reference sample (the first of a block or pose), for precision;
     /// `false`: summed raw (the reference is zero), exact in the sum type, merged by addition.
     const RELATIVE: bool;
@@ -230,23 +234,37 @@ fn i16_block_sums(samples: &[[i16; 3]], sum: &mut [i64; 3], sum_sq: &mut [i64; 3
     total
 }
 
-/// `false` when no sample of a block can be saturated, from its statistics: every sample lies within
-/// `sqrt(n variance)` of its axis mean, so none reaches `min(limit, i16::MAX)` (nor a rail) when
-/// `(min(limit, i16::MAX) - |mean| - 1)^2 > 1.01 n variance + 1` on every axis (the 1 and the 1 % cover the
-/// `f32` rounding of the mean, below `2^-8`, and of the variance, below `2^-20` relative). Only otherwise
+/// `false` when no sample of a block of `n` samples can be saturated, from its raw sums and total
+/// `n^2` variance `spread` (exact integers): on every axis `sum_i (n x_i - sum)^2 = n spread_axis <= n
+/// spread`, so every `|n x_i| <= |sum| + sqrt(n spread)`, and none reaches `min(limit, i16::MAX)` (nor a
+/// rail) when `margin = n min(limit, i16::MAX) - max |sum| > 0` and `margin^2 > n spread`. Only otherwise
 /// are the samples checked.
 #[inline(always)]
-fn i16_may_saturate(mean: &[f32; 3], variance: f32, n: usize, limit: i32) -> bool {
-    let (reach, spread) = (limit.min(i32::from(i16::MAX)) as f32 - 1.0, 1.01 * n as f32 * variance + 1.0);
-    mean.iter().any(|m| {
-        let room = reach - m.abs();
-        !(room > 0.0 && room * room > spread)
-    })
+fn i16_may_saturate(sum: &[i64; 3], spread: u64, n: usize, limit: i32) -> bool {
+    // A block's raw sum fits an i32 (at most 2^16 samples of at most 2^15): |sum| <= 2^31.
+    let largest = sum.iter().map(|&s| (s as i32).unsigned_abs()).fold(0, u32::max);
+    // n min(limit, i16::MAX) < 2^16 2^15 = 2^31.
+    let reach = n as u32 * limit.clamp(0, i32::from(i16::MAX)) as u32;
+    let margin = u64::from(reach.saturating_sub(largest));
+    margin == 0 || spread.checked_mul(n as u64).is_none_or(|t| t >= margin * margin)
+}
+
+/// Whether one of `values` is saturated at `limit` ([`Reading::saturated`]): at or beyond
+/// `min(limit, i16::MAX)` or at or below `-min(limit, 2^15)` (the rails included), one unsigned
+/// comparison per value.
+#[inline(always)]
+fn i16_any_saturated(values: &[i16], limit: i32) -> bool {
+    let (high, low) = (limit.clamp(0, i32::from(i16::MAX)), -limit.clamp(0, 1 << 15));
+    // Not saturated: low < v < high, i.e. 0 <= v - low - 1 < high - low - 1.
+    let inside = (high - low - 1).max(0) as u32;
+    values.iter().any(|&v| (i32::from(v) - low - 1) as u32 >= inside)
 }
 
 impl Reading for i16 {
     type Sum = i64;
     const QUANTUM_VARIANCE: f32 = 3.0 / 12.0;
+    // Every axis mean lies within [-2^15, 2^15].
+    const MAX_MAGNITUDE_SQ: f32 = 3.0 * 32_768.0 * 32_768.0;
     const RELATIVE: bool = false;
     fn block_reference(_first: i16) -> i16 {
         0
@@ -271,15 +289,13 @@ impl Reading for i16 {
     ) -> ([f32; 3], f32, bool) {
         let n_inverse = 1.0 / N as f32;
         // The three axes' n^2 variances (each at most 2^62) fit a u64.
-        let mut mean = [0.0; 3];
         let n_squared_variance = i16_block_sums(samples, sum, sum_sq);
-        for a in 0..3 {
-            // A block's raw sum fits an i32 (at most 2^16 samples of at most 2^15).
-            mean[a] = sum[a] as i32 as f32 * n_inverse;
-        }
+        // A block's raw sum fits an i32 (at most 2^16 samples of at most 2^15).
+        let mean_of = |s: i64| s as i32 as f32 * n_inverse;
+        let mean = [mean_of(sum[0]), mean_of(sum[1]), mean_of(sum[2])];
         let variance = u64_to_f32_halves(n_squared_variance) * n_inverse * n_inverse;
         let saturated =
-            i16_may_saturate(&mean, variance, N, limit) && samples.iter().flatten().any(|v| v.saturated(limit));
+            i16_may_saturate(sum, n_squared_variance, N, limit) && i16_any_saturated(samples.as_flattened(), limit);
         (mean, variance, saturated)
     }
     fn mean_and_variance(reference: i16, sum: i64, sum_sq: i64, n: u32) -> (f32, f32) {
@@ -651,6 +667,10 @@ pub struct Accumulator<R: Reading, const POSES: usize, const BLOCK: usize> {
     has_previous: bool,
     pose: Option<Sums<R>>,
     noise_variance: f32,
+    /// The noise variance's fixed floor: `max(min_noise_variance, R::QUANTUM_VARIANCE)`.
+    noise_floor: f32,
+    /// `1 + noise_rise_per_block`.
+    noise_rise_factor: f32,
     /// Samples seen (saturating), except those in `buffer`.
     counted: u32,
 }
@@ -679,6 +699,8 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
             has_previous: false,
             pose: None,
             noise_variance: f32::INFINITY,
+            noise_floor: max_f32(config.min_noise_variance, R::QUANTUM_VARIANCE),
+            noise_rise_factor: 1.0 + config.noise_rise_per_block,
             counted: 0,
         })
     }
@@ -847,13 +869,16 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
 
     /// The noise variance after a block of this mean and variance (a leaky minimum, above the floor).
     fn update_noise(&mut self, mean: [f32; 3], variance: f32) -> f32 {
-        let magnitude_sq = mean[0] * mean[0] + mean[1] * mean[1] + mean[2] * mean[2];
-        let risen = if self.noise_variance.is_finite() {
-            self.noise_variance * (1.0 + self.config.noise_rise_per_block)
+        const RELATIVE_FLOOR: f32 = 1e-12;
+        // Infinite before the first block: it stays so (the factor is finite and at least 1).
+        let risen = self.noise_variance * self.noise_rise_factor;
+        let floor = if RELATIVE_FLOOR * R::MAX_MAGNITUDE_SQ < R::QUANTUM_VARIANCE {
+            // The relative term is below the quantum, itself at most the floor: it cannot win.
+            self.noise_floor
         } else {
-            f32::INFINITY
+            let magnitude_sq = mean[0] * mean[0] + mean[1] * mean[1] + mean[2] * mean[2];
+            max_f32(self.noise_floor, RELATIVE_FLOOR * magnitude_sq)
         };
-        let floor = max_f32(max_f32(self.config.min_noise_variance, R::QUANTUM_VARIANCE), 1e-12 * magnitude_sq);
         self.noise_variance = max_f32(min_f32(risen, variance), floor);
         self.noise_variance
     }
@@ -1047,7 +1072,7 @@ mod tests {
     }
 
     #[test]
-    fn the_f32_saturation_bound_never_clears_a_saturated_block() {
+    fn the_saturation_bound_never_clears_a_saturated_block() {
         // Blocks near the rails and near a limit: whenever a sample is saturated, the bound must send the
         // block to the sample-by-sample check (it may also do so for a clear block).
         let mut x = 0x2545_F491_4F6C_DD1Du64;
@@ -1065,17 +1090,29 @@ mod tests {
                 }
             }
             let (mut sum, mut sum_sq) = ([0i64; 3], [0i64; 3]);
-            let (mean, variance, saturated) = i16::full_block(&samples, limit, &mut sum, &mut sum_sq);
+            let saturated = i16::full_block(&samples, limit, &mut sum, &mut sum_sq).2;
+            let spread = (0..3).map(|a| (32 * sum_sq[a] - sum[a] * sum[a]) as u64).sum();
             let truth = samples.iter().flatten().any(|v| v.saturated(limit));
             assert_eq!(saturated, truth, "round {round}");
             if truth {
                 saturated_blocks += 1;
-                assert!(i16_may_saturate(&mean, variance, 32, limit), "round {round}");
-            } else if !i16_may_saturate(&mean, variance, 32, limit) {
+                assert!(i16_may_saturate(&sum, spread, 32, limit), "round {round}");
+            } else if !i16_may_saturate(&sum, spread, 32, limit) {
                 cleared += 1;
             }
         }
         assert!(saturated_blocks > 500 && cleared > 500, "{saturated_blocks} saturated, {cleared} cleared");
+    }
+
+    #[test]
+    fn the_block_saturation_check_is_the_per_sample_one() {
+        // Every reading at every kind of limit (saturation_limit gives 0 ..= 32_769).
+        for limit in [0, 1, 2, 100, 16_384, 32_766, 32_767, 32_768, 32_769] {
+            for v in i16::MIN..=i16::MAX {
+                assert_eq!(i16_any_saturated(&[v], limit), v.saturated(limit), "{v} at {limit}");
+            }
+        }
+        assert!(!i16_any_saturated(&[], 0));
     }
 
     /// A stream of still holds (noise `noise`) and moves, with `hold` samples per hold, from `seed`.
