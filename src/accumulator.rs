@@ -222,7 +222,7 @@ fn i16_axis(values: &[i16], limit: i32) -> (i32, i64, u64, bool) {
 /// the total `n^2` variance `sum_a (n sum_sq_a - sum_a^2)` returned (exact: each term at most `2^62`,
 /// three fit a `u64`). Out of line, once per block: nothing else is live, so each axis loop keeps its
 /// eight values and running sums in registers (the samples are read with a stride).
-#[inline(never)]
+#[inline(always)]
 fn i16_block_sums(samples: &[[i16; 3]], sum: &mut [i64; 3], sum_sq: &mut [i64; 3]) -> u64 {
     let n = samples.len() as i64;
     let mut total = 0u64;
@@ -400,13 +400,6 @@ fn f32_axis_sums(mut values: impl Iterator<Item = f32> + Clone, limit: f32) -> (
         saturated |= v.saturated(limit);
     }
     (sum, sum_sq, saturated)
-}
-
-/// `f32::min` as a comparison (the method is a library call on a Cortex-M4F): the other value when one
-/// is NaN.
-#[inline]
-fn min_f32(a: f32, b: f32) -> f32 {
-    if b < a || a.is_nan() { b } else { a }
 }
 
 /// `f32::max` as a comparison: the other value when one is NaN.
@@ -613,20 +606,22 @@ impl<R: Reading> Sums<R> {
             return;
         }
         self.end_index = other.end_index;
+        self.n += other.n;
+        self.saturated |= other.saturated;
+        if !R::RELATIVE {
+            // Raw sums: both references are zero. Six additions, unrolled (no loop).
+            let (sum, sum_sq) = (&mut self.sum, &mut self.sum_sq);
+            (sum[0], sum[1], sum[2]) = (sum[0] + other.sum[0], sum[1] + other.sum[1], sum[2] + other.sum[2]);
+            (sum_sq[0], sum_sq[1]) = (sum_sq[0] + other.sum_sq[0], sum_sq[1] + other.sum_sq[1]);
+            sum_sq[2] += other.sum_sq[2];
+            return;
+        }
         let n = R::count(other.n);
         for a in 0..3 {
-            if !R::RELATIVE {
-                // Raw sums: both references are zero.
-                self.sum_sq[a] += other.sum_sq[a];
-                self.sum[a] += other.sum[a];
-                continue;
-            }
             let shift = other.reference[a].delta(self.reference[a]);
             self.sum_sq[a] += other.sum_sq[a] + (other.sum[a] * shift + other.sum[a] * shift) + n * shift * shift;
             self.sum[a] += other.sum[a] + n * shift;
         }
-        self.n += other.n;
-        self.saturated |= other.saturated;
     }
 
     fn pose(&self) -> Pose {
@@ -879,7 +874,11 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
             let magnitude_sq = mean[0] * mean[0] + mean[1] * mean[1] + mean[2] * mean[2];
             max_f32(self.noise_floor, RELATIVE_FLOOR * magnitude_sq)
         };
-        self.noise_variance = max_f32(min_f32(risen, variance), floor);
+        // As max_f32(min_f32(risen, variance), floor), without the NaN tests: `risen` is never NaN (the
+        // noise starts infinite, is never NaN after an update, and its factor is finite and at least 1),
+        // so a NaN variance leaves `risen` in both forms, and the floor compares with a number.
+        let lower = if variance < risen { variance } else { risen };
+        self.noise_variance = if floor > lower { floor } else { lower };
         self.noise_variance
     }
 
