@@ -242,7 +242,8 @@ fn i16_block_sums(samples: &[[i16; 3]], sum: &mut [i64; 3], sum_sq: &mut [i64; 3
 #[inline(always)]
 fn i16_may_saturate(sum: &[i64; 3], spread: u64, n: usize, limit: i32) -> bool {
     // A block's raw sum fits an i32 (at most 2^16 samples of at most 2^15): |sum| <= 2^31.
-    let largest = sum.iter().map(|&s| (s as i32).unsigned_abs()).fold(0, u32::max);
+    let magnitude = |s: i64| (s as i32).unsigned_abs();
+    let largest = magnitude(sum[0]).max(magnitude(sum[1])).max(magnitude(sum[2]));
     // n min(limit, i16::MAX) < 2^16 2^15 = 2^31.
     let reach = n as u32 * limit.clamp(0, i32::from(i16::MAX)) as u32;
     let margin = u64::from(reach.saturating_sub(largest));
@@ -601,6 +602,7 @@ impl<R: Reading> Sums<R> {
     /// Adds `other` (relative to its own reference; raw sums when not [`Reading::RELATIVE`]) to these
     /// sums, exactly. A merge that would take the
     /// count above [`MAX_POSE_SAMPLES`] is not made: the count saturates and the sums stay exact.
+    #[inline(always)]
     fn merge(&mut self, other: &Self) {
         if other.n > MAX_POSE_SAMPLES - self.n.min(MAX_POSE_SAMPLES) {
             return;
