@@ -224,14 +224,16 @@ fn i16_axis(values: &[i16], limit: i32) -> (i32, i64, u64, bool) {
 /// eight values and running sums in registers (the samples are read with a stride).
 #[inline(always)]
 fn i16_block_sums(samples: &[[i16; 3]], sum: &mut [i64; 3], sum_sq: &mut [i64; 3]) -> u64 {
-    let n = samples.len() as i64;
-    let mut total = 0u64;
     for a in 0..3 {
         let (s, q) = raw_i16_axis_sums(samples, a);
         (sum[a], sum_sq[a]) = (i64::from(s), q);
-        total += (n * q - i64::from(s) * i64::from(s)) as u64;
     }
-    total
+    // sum_a (n sum_sq_a - sum_a^2) = n sum_a sum_sq_a - sum_a sum_a^2: each block sum fits an i32, each
+    // square and the result (at most 3 2^62) a u64, which holds the intermediate terms modulo 2^64.
+    let square = |s: i64| (i64::from(s as i32) * i64::from(s as i32)) as u64;
+    let squares = square(sum[0]) + square(sum[1]) + square(sum[2]);
+    let total_sq = (sum_sq[0] + sum_sq[1] + sum_sq[2]) as u64;
+    (samples.len() as u64).wrapping_mul(total_sq).wrapping_sub(squares)
 }
 
 /// `false` when no sample of a block of `n` samples can be saturated, from its raw sums and total
@@ -1103,6 +1105,31 @@ mod tests {
             }
         }
         assert!(saturated_blocks > 500 && cleared > 500, "{saturated_blocks} saturated, {cleared} cleared");
+    }
+
+    #[test]
+    fn block_sums_and_spread_are_exact_for_the_longest_full_scale_block() {
+        // 2^16 samples (the longest block): rails and near-rails, where every term is largest.
+        let samples: Vec<[i16; 3]> = (0..1usize << 16)
+            .map(|i| match i % 3 {
+                0 => [i16::MIN, i16::MAX, i16::MIN],
+                1 => [i16::MAX, i16::MIN, i16::MIN + 1],
+                _ => [i16::MIN, i16::MIN, (i % 65_521) as i16],
+            })
+            .collect();
+        for len in [32, 1 << 16] {
+            let block = &samples[..len];
+            let (mut sum, mut sum_sq) = ([0i64; 3], [0i64; 3]);
+            let spread = i16_block_sums(block, &mut sum, &mut sum_sq);
+            let mut expected = 0i128;
+            for a in 0..3 {
+                let s: i128 = block.iter().map(|v| i128::from(v[a])).sum();
+                let q: i128 = block.iter().map(|v| i128::from(v[a]).pow(2)).sum();
+                assert_eq!((i128::from(sum[a]), i128::from(sum_sq[a])), (s, q), "len {len} axis {a}");
+                expected += len as i128 * q - s * s;
+            }
+            assert_eq!(i128::from(spread), expected, "len {len}");
+        }
     }
 
     #[test]
