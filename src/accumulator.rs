@@ -717,8 +717,8 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
             self.drop_block();
             return Ok(None);
         }
-        self.buffer[i] = sample;
         self.buffered = i + 1;
+        self.buffer[i] = sample;
         if i + 1 == BLOCK {
             return self.close_block(None);
         }
