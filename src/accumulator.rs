@@ -218,10 +218,10 @@ fn i16_axis(values: &[i16], limit: i32) -> (i32, i64, u64, bool) {
     (sum, sum_sq, spread, !clear && values.iter().any(|v| v.saturated(limit)))
 }
 
-/// The raw sums of a full block of samples, axis after axis in one call: `sum` and `sum_sq` written,
-/// the total `n^2` variance `sum_a (n sum_sq_a - sum_a^2)` returned (exact: each term at most `2^62`,
-/// three fit a `u64`). Out of line, once per block: nothing else is live, so each axis loop keeps its
-/// eight values and running sums in registers (the samples are read with a stride).
+/// The raw sums of a full block of samples, axis after axis: `sum` and `sum_sq` written, the total `n^2`
+/// variance `sum_a (n sum_sq_a - sum_a^2)` returned (exact: each term at most `2^62`, three fit a `u64`).
+/// Inlined into the block close (one call fewer per axis than an out-of-line axis function); each axis
+/// loop keeps its eight values and running sums in registers (the samples are read with a stride).
 #[inline(always)]
 fn i16_block_sums(samples: &[[i16; 3]], sum: &mut [i64; 3], sum_sq: &mut [i64; 3]) -> u64 {
     for a in 0..3 {
@@ -266,8 +266,8 @@ fn i16_any_saturated(values: &[i16], limit: i32) -> bool {
 impl Reading for i16 {
     type Sum = i64;
     const QUANTUM_VARIANCE: f32 = 3.0 / 12.0;
-    // Every axis mean lies within [-2^15, 2^15].
-    const MAX_MAGNITUDE_SQ: f32 = 3.0 * 32_768.0 * 32_768.0;
+    // Every axis mean lies within [-2^15, 2^15] (3 2^30), with room for the f32 rounding of the means.
+    const MAX_MAGNITUDE_SQ: f32 = 4.0 * 32_768.0 * 32_768.0;
     const RELATIVE: bool = false;
     fn block_reference(_first: i16) -> i16 {
         0
@@ -1129,6 +1129,49 @@ mod tests {
                 expected += len as i128 * q - s * s;
             }
             assert_eq!(i128::from(spread), expected, "len {len}");
+        }
+    }
+
+    /// The noise update as first written (NaN-safe min and max, the relative floor always computed).
+    fn reference_noise(previous: f32, mean: [f32; 3], variance: f32, config: &AccumulatorConfig, quantum: f32) -> f32 {
+        let min = |a: f32, b: f32| if b < a || a.is_nan() { b } else { a };
+        let magnitude_sq = mean[0] * mean[0] + mean[1] * mean[1] + mean[2] * mean[2];
+        let risen = if previous.is_finite() { previous * (1.0 + config.noise_rise_per_block) } else { f32::INFINITY };
+        let floor = max_f32(max_f32(config.min_noise_variance, quantum), 1e-12 * magnitude_sq);
+        max_f32(min(risen, variance), floor)
+    }
+
+    /// Every block's noise update of `acc` fed `samples` one at a time, against [`reference_noise`].
+    fn check_noise<R: Reading, const B: usize>(acc: &mut Accumulator<R, 8, B>, samples: &[[R; 3]], what: &str) {
+        let mut previous = acc.noise_variance();
+        for (i, &s) in samples.iter().enumerate() {
+            let _ = acc.push(s);
+            if (i + 1) % B == 0 {
+                let block = &acc.blocks[acc.previous_slot % 2];
+                let expected = reference_noise(previous, block.mean, block.variance, &acc.config, R::QUANTUM_VARIANCE);
+                assert_eq!(acc.noise_variance().to_bits(), expected.to_bits(), "{what}: block {}", i / B);
+                previous = acc.noise_variance();
+            }
+        }
+    }
+
+    #[test]
+    fn the_noise_update_is_the_leaky_minimum_bit_for_bit() {
+        let floor =
+            AccumulatorConfig { min_noise_variance: 30.0, noise_rise_per_block: 0.3, ..AccumulatorConfig::DEFAULT };
+        for (k, config) in [AccumulatorConfig::DEFAULT, floor].into_iter().enumerate() {
+            // i16 at full scale too (the relative floor term is skipped for i16: it stays below the quantum).
+            let raw: Vec<[i16; 3]> = stream(k as u64 + 40, 12, 400, 9.0)
+                .enumerate()
+                .map(|(i, s)| if i % 1000 < 100 { [i16::MAX, i16::MIN, i16::MAX] } else { s.map(|v| v.round() as i16) })
+                .collect();
+            check_noise(&mut Accumulator::<i16, 8, 32>::new(config).unwrap(), &raw, "i16");
+            // f32 in g: the relative floor term decides for quiet blocks without a configured floor.
+            let scaled: Vec<[f32; 3]> =
+                stream(k as u64 + 50, 12, 400, 0.002).map(|s| s.map(|v| v / 16_384.0)).collect();
+            check_noise(&mut Accumulator::<f32, 8, 16>::new(config).unwrap(), &scaled, "f32");
+            let still = [[0.0f32, 0.0, 1.0]; 64];
+            check_noise(&mut Accumulator::<f32, 8, 16>::new(config).unwrap(), &still, "f32 still");
         }
     }
 
