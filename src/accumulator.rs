@@ -800,17 +800,12 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         (taken, Ok(None))
     }
 
-    /// Sums the full `block` into `stats` with its statistics (mean, total variance, which it returns).
+    /// Sums the full `block` into `stats` with its statistics (mean, total variance, which it returns,
+    /// and whether a sample is saturated); the index span is set after.
     #[inline(always)]
-    fn sum_block(
-        stats: &mut BlockStats<R>,
-        block: &[[R; 3]; BLOCK],
-        limit: R::Limit,
-        (start_index, end_index): (u32, u32),
-    ) -> ([f32; 3], f32) {
+    fn sum_block(stats: &mut BlockStats<R>, block: &[[R; 3]; BLOCK], limit: R::Limit) -> ([f32; 3], f32, bool) {
         let sums = &mut stats.sums;
         let (mut mean, variance, saturated) = R::full_block(block, limit, &mut sums.sum, &mut sums.sum_sq);
-        (sums.n, sums.start_index, sums.end_index, sums.saturated) = (BLOCK as u32, start_index, end_index, saturated);
         // Raw sums keep the zero reference set by `new` (no store, no `+ 0.0` at run time).
         if R::RELATIVE {
             for (a, (m, reference)) in mean.iter_mut().zip(&mut sums.reference).enumerate() {
@@ -819,29 +814,25 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
             }
         }
         (stats.mean, stats.variance) = (mean, variance);
-        (mean, variance)
-    }
-
-    /// Ends the open block (its samples are `BLOCK` from `block_start`): its index span, and the slot
-    /// its statistics go to.
-    fn end_block(&mut self) -> (usize, (u32, u32)) {
-        let start_index = self.block_start;
-        self.drop_block();
-        ((self.previous_slot + 1) % 2, (start_index, self.counted))
+        (mean, variance, saturated)
     }
 
     /// Closes the full block: the buffer's (`None`), or a whole block of the caller's samples while the
     /// buffer is empty. Once per BLOCK samples: kept out of line so that `push`, inlined into the
     /// caller's sample loop, stays small (inlined, its register pressure made every push save and
-    /// restore all FPU registers).
+    /// restore all FPU registers). The samples are summed first, the bookkeeping done after (nothing of
+    /// it is kept across the summing loops).
     #[inline(never)]
     fn close_block(&mut self, whole: Option<&[[R; 3]; BLOCK]>) -> Result<Option<Event>, AccumulatorError> {
-        if whole.is_some() {
-            self.buffered = BLOCK;
-        }
-        let (slot, span) = self.end_block();
+        let slot = (self.previous_slot + 1) % 2;
         let block = whole.unwrap_or(&self.buffer);
-        let (mean, variance) = Self::sum_block(&mut self.blocks[slot], block, self.saturation_limit, span);
+        let (mean, variance, saturated) = Self::sum_block(&mut self.blocks[slot], block, self.saturation_limit);
+        // The block's samples are BLOCK from `block_start` (all in the buffer, or none when whole).
+        let start_index = self.block_start;
+        self.buffered = BLOCK;
+        self.drop_block();
+        let sums = &mut self.blocks[slot].sums;
+        (sums.n, sums.start_index, sums.end_index, sums.saturated) = (BLOCK as u32, start_index, self.counted, saturated);
         self.judge_block(slot, mean, variance)
     }
 
