@@ -114,6 +114,10 @@ fn u64_to_f32_halves(v: u64) -> f32 {
 /// steps. Called once per pose.
 fn div_rem_u64(x: u64, d: u32) -> (u64, u32) {
     let d = d.max(1);
+    if let Ok(x) = u32::try_from(x) {
+        // One hardware division (e.g. a pose's sum by its count).
+        return (u64::from(x / d), x % d);
+    }
     let mut q = 0u64;
     if d <= 0xFFFF {
         let mut r = 0u32;
@@ -832,7 +836,8 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         self.buffered = BLOCK;
         self.drop_block();
         let sums = &mut self.blocks[slot].sums;
-        (sums.n, sums.start_index, sums.end_index, sums.saturated) = (BLOCK as u32, start_index, self.counted, saturated);
+        (sums.n, sums.start_index, sums.end_index, sums.saturated) =
+            (BLOCK as u32, start_index, self.counted, saturated);
         self.judge_block(slot, mean, variance)
     }
 
