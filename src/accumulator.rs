@@ -48,6 +48,10 @@ pub trait Reading: Copy + Default {
     type Sum: Copy + Default + AddAssign + Add<Output = Self::Sum> + Sub<Output = Self::Sum> + Mul<Output = Self::Sum>;
     /// Variance (sum over axes) below which no noise can be resolved: the quantisation floor.
     const QUANTUM_VARIANCE: f32;
+    /// An upper bound of the squared magnitude `|mean|^2` of a block's mean (input unit squared): where
+    /// `1e-12` of it stays below [`Reading::QUANTUM_VARIANCE`], the noise floor's relative term can never
+    /// win and is not computed. Defaults to infinity (always computed).
+    const MAX_MAGNITUDE_SQ: f32 = f32::INFINITY;
     /// Sums are kept relative to a reference sample (the first of a block or pose), for precision;
     /// `false`: summed raw (the reference is zero), exact in the sum type, merged by addition.
     const RELATIVE: bool;
@@ -110,6 +114,10 @@ fn u64_to_f32_halves(v: u64) -> f32 {
 /// steps. Called once per pose.
 fn div_rem_u64(x: u64, d: u32) -> (u64, u32) {
     let d = d.max(1);
+    if let Ok(x) = u32::try_from(x) {
+        // One hardware division (e.g. a pose's sum by its count).
+        return (u64::from(x / d), x % d);
+    }
     let mut q = 0u64;
     if d <= 0xFFFF {
         let mut r = 0u32;
@@ -214,33 +222,56 @@ fn i16_axis(values: &[i16], limit: i32) -> (i32, i64, u64, bool) {
     (sum, sum_sq, spread, !clear && values.iter().any(|v| v.saturated(limit)))
 }
 
-/// Axis `axis` of a full block of samples: its raw sums written to `sum` and `sum_sq`, its `n^2`
-/// variance `n sum_sq - sum^2` returned (exact, at most `2^62`). Out of line, once per axis: nothing
-/// else is live, so its loop keeps every value in a register (the samples are read with a stride).
-#[inline(never)]
-fn i16_block_axis(samples: &[[i16; 3]], axis: usize, sum: &mut i64, sum_sq: &mut i64) -> u64 {
-    let (s, sq) = raw_i16_axis_sums(samples, axis);
-    (*sum, *sum_sq) = (i64::from(s), sq);
-    (samples.len() as i64 * sq - i64::from(s) * i64::from(s)) as u64
+/// The raw sums of a full block of samples, axis after axis: `sum` and `sum_sq` written, the total `n^2`
+/// variance `sum_a (n sum_sq_a - sum_a^2)` returned (exact: each term at most `2^62`, three fit a `u64`).
+/// Inlined into the block close (one call fewer per axis than an out-of-line axis function); each axis
+/// loop keeps its eight values and running sums in registers (the samples are read with a stride).
+#[inline(always)]
+fn i16_block_sums(samples: &[[i16; 3]], sum: &mut [i64; 3], sum_sq: &mut [i64; 3]) -> u64 {
+    for a in 0..3 {
+        let (s, q) = raw_i16_axis_sums(samples, a);
+        (sum[a], sum_sq[a]) = (i64::from(s), q);
+    }
+    // sum_a (n sum_sq_a - sum_a^2) = n sum_a sum_sq_a - sum_a sum_a^2: each block sum fits an i32, each
+    // square and the result (at most 3 2^62) a u64, which holds the intermediate terms modulo 2^64.
+    let square = |s: i64| (i64::from(s as i32) * i64::from(s as i32)) as u64;
+    let squares = square(sum[0]) + square(sum[1]) + square(sum[2]);
+    let total_sq = (sum_sq[0] + sum_sq[1] + sum_sq[2]) as u64;
+    (samples.len() as u64).wrapping_mul(total_sq).wrapping_sub(squares)
 }
 
-/// `false` when no sample of a block can be saturated, from its statistics: every sample lies within
-/// `sqrt(n variance)` of its axis mean, so none reaches `min(limit, i16::MAX)` (nor a rail) when
-/// `(min(limit, i16::MAX) - |mean| - 1)^2 > 1.01 n variance + 1` on every axis (the 1 and the 1 % cover the
-/// `f32` rounding of the mean, below `2^-8`, and of the variance, below `2^-20` relative). Only otherwise
+/// `false` when no sample of a block of `n` samples can be saturated, from its raw sums and total
+/// `n^2` variance `spread` (exact integers): on every axis `sum_i (n x_i - sum)^2 = n spread_axis <= n
+/// spread`, so every `|n x_i| <= |sum| + sqrt(n spread)`, and none reaches `min(limit, i16::MAX)` (nor a
+/// rail) when `margin = n min(limit, i16::MAX) - max |sum| > 0` and `margin^2 > n spread`. Only otherwise
 /// are the samples checked.
 #[inline(always)]
-fn i16_may_saturate(mean: &[f32; 3], variance: f32, n: usize, limit: i32) -> bool {
-    let (reach, spread) = (limit.min(i32::from(i16::MAX)) as f32 - 1.0, 1.01 * n as f32 * variance + 1.0);
-    mean.iter().any(|m| {
-        let room = reach - m.abs();
-        !(room > 0.0 && room * room > spread)
-    })
+fn i16_may_saturate(sum: &[i64; 3], spread: u64, n: usize, limit: i32) -> bool {
+    // A block's raw sum fits an i32 (at most 2^16 samples of at most 2^15): |sum| <= 2^31.
+    let magnitude = |s: i64| (s as i32).unsigned_abs();
+    let largest = magnitude(sum[0]).max(magnitude(sum[1])).max(magnitude(sum[2]));
+    // n min(limit, i16::MAX) < 2^16 2^15 = 2^31.
+    let reach = n as u32 * limit.clamp(0, i32::from(i16::MAX)) as u32;
+    let margin = u64::from(reach.saturating_sub(largest));
+    margin == 0 || spread.checked_mul(n as u64).is_none_or(|t| t >= margin * margin)
+}
+
+/// Whether one of `values` is saturated at `limit` ([`Reading::saturated`]): at or beyond
+/// `min(limit, i16::MAX)` or at or below `-min(limit, 2^15)` (the rails included), one unsigned
+/// comparison per value.
+#[inline(always)]
+fn i16_any_saturated(values: &[i16], limit: i32) -> bool {
+    let (high, low) = (limit.clamp(0, i32::from(i16::MAX)), -limit.clamp(0, 1 << 15));
+    // Not saturated: low < v < high, i.e. 0 <= v - low - 1 < high - low - 1.
+    let inside = (high - low - 1).max(0) as u32;
+    values.iter().any(|&v| (i32::from(v) - low - 1) as u32 >= inside)
 }
 
 impl Reading for i16 {
     type Sum = i64;
     const QUANTUM_VARIANCE: f32 = 3.0 / 12.0;
+    // Every axis mean lies within [-2^15, 2^15] (3 2^30), with room for the f32 rounding of the means.
+    const MAX_MAGNITUDE_SQ: f32 = 4.0 * 32_768.0 * 32_768.0;
     const RELATIVE: bool = false;
     fn block_reference(_first: i16) -> i16 {
         0
@@ -265,15 +296,13 @@ impl Reading for i16 {
     ) -> ([f32; 3], f32, bool) {
         let n_inverse = 1.0 / N as f32;
         // The three axes' n^2 variances (each at most 2^62) fit a u64.
-        let (mut mean, mut n_squared_variance) = ([0.0; 3], 0u64);
-        for a in 0..3 {
-            n_squared_variance += i16_block_axis(samples, a, &mut sum[a], &mut sum_sq[a]);
-            // A block's raw sum fits an i32 (at most 2^16 samples of at most 2^15).
-            mean[a] = sum[a] as i32 as f32 * n_inverse;
-        }
+        let n_squared_variance = i16_block_sums(samples, sum, sum_sq);
+        // A block's raw sum fits an i32 (at most 2^16 samples of at most 2^15).
+        let mean_of = |s: i64| s as i32 as f32 * n_inverse;
+        let mean = [mean_of(sum[0]), mean_of(sum[1]), mean_of(sum[2])];
         let variance = u64_to_f32_halves(n_squared_variance) * n_inverse * n_inverse;
         let saturated =
-            i16_may_saturate(&mean, variance, N, limit) && samples.iter().flatten().any(|v| v.saturated(limit));
+            i16_may_saturate(sum, n_squared_variance, N, limit) && i16_any_saturated(samples.as_flattened(), limit);
         (mean, variance, saturated)
     }
     fn mean_and_variance(reference: i16, sum: i64, sum_sq: i64, n: u32) -> (f32, f32) {
@@ -378,13 +407,6 @@ fn f32_axis_sums(mut values: impl Iterator<Item = f32> + Clone, limit: f32) -> (
         saturated |= v.saturated(limit);
     }
     (sum, sum_sq, saturated)
-}
-
-/// `f32::min` as a comparison (the method is a library call on a Cortex-M4F): the other value when one
-/// is NaN.
-#[inline]
-fn min_f32(a: f32, b: f32) -> f32 {
-    if b < a || a.is_nan() { b } else { a }
 }
 
 /// `f32::max` as a comparison: the other value when one is NaN.
@@ -586,25 +608,28 @@ impl<R: Reading> Sums<R> {
     /// Adds `other` (relative to its own reference; raw sums when not [`Reading::RELATIVE`]) to these
     /// sums, exactly. A merge that would take the
     /// count above [`MAX_POSE_SAMPLES`] is not made: the count saturates and the sums stay exact.
+    #[inline(always)]
     fn merge(&mut self, other: &Self) {
         if other.n > MAX_POSE_SAMPLES - self.n.min(MAX_POSE_SAMPLES) {
             return;
         }
         self.end_index = other.end_index;
+        self.n += other.n;
+        self.saturated |= other.saturated;
+        if !R::RELATIVE {
+            // Raw sums: both references are zero. Six additions, unrolled (no loop).
+            let (sum, sum_sq) = (&mut self.sum, &mut self.sum_sq);
+            (sum[0], sum[1], sum[2]) = (sum[0] + other.sum[0], sum[1] + other.sum[1], sum[2] + other.sum[2]);
+            (sum_sq[0], sum_sq[1]) = (sum_sq[0] + other.sum_sq[0], sum_sq[1] + other.sum_sq[1]);
+            sum_sq[2] += other.sum_sq[2];
+            return;
+        }
         let n = R::count(other.n);
         for a in 0..3 {
-            if !R::RELATIVE {
-                // Raw sums: both references are zero.
-                self.sum_sq[a] += other.sum_sq[a];
-                self.sum[a] += other.sum[a];
-                continue;
-            }
             let shift = other.reference[a].delta(self.reference[a]);
             self.sum_sq[a] += other.sum_sq[a] + (other.sum[a] * shift + other.sum[a] * shift) + n * shift * shift;
             self.sum[a] += other.sum[a] + n * shift;
         }
-        self.n += other.n;
-        self.saturated |= other.saturated;
     }
 
     fn pose(&self) -> Pose {
@@ -645,6 +670,10 @@ pub struct Accumulator<R: Reading, const POSES: usize, const BLOCK: usize> {
     has_previous: bool,
     pose: Option<Sums<R>>,
     noise_variance: f32,
+    /// The noise variance's fixed floor: `max(min_noise_variance, R::QUANTUM_VARIANCE)`.
+    noise_floor: f32,
+    /// `1 + noise_rise_per_block`.
+    noise_rise_factor: f32,
     /// Samples seen (saturating), except those in `buffer`.
     counted: u32,
 }
@@ -673,6 +702,8 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
             has_previous: false,
             pose: None,
             noise_variance: f32::INFINITY,
+            noise_floor: max_f32(config.min_noise_variance, R::QUANTUM_VARIANCE),
+            noise_rise_factor: 1.0 + config.noise_rise_per_block,
             counted: 0,
         })
     }
@@ -690,8 +721,8 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
             self.drop_block();
             return Ok(None);
         }
-        self.buffer[i] = sample;
         self.buffered = i + 1;
+        self.buffer[i] = sample;
         if i + 1 == BLOCK {
             return self.close_block(None);
         }
@@ -773,17 +804,12 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         (taken, Ok(None))
     }
 
-    /// Sums the full `block` into `stats` with its statistics (mean, total variance, which it returns).
+    /// Sums the full `block` into `stats` with its statistics (mean, total variance, which it returns,
+    /// and whether a sample is saturated); the index span is set after.
     #[inline(always)]
-    fn sum_block(
-        stats: &mut BlockStats<R>,
-        block: &[[R; 3]; BLOCK],
-        limit: R::Limit,
-        (start_index, end_index): (u32, u32),
-    ) -> ([f32; 3], f32) {
+    fn sum_block(stats: &mut BlockStats<R>, block: &[[R; 3]; BLOCK], limit: R::Limit) -> ([f32; 3], f32, bool) {
         let sums = &mut stats.sums;
         let (mut mean, variance, saturated) = R::full_block(block, limit, &mut sums.sum, &mut sums.sum_sq);
-        (sums.n, sums.start_index, sums.end_index, sums.saturated) = (BLOCK as u32, start_index, end_index, saturated);
         // Raw sums keep the zero reference set by `new` (no store, no `+ 0.0` at run time).
         if R::RELATIVE {
             for (a, (m, reference)) in mean.iter_mut().zip(&mut sums.reference).enumerate() {
@@ -792,29 +818,26 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
             }
         }
         (stats.mean, stats.variance) = (mean, variance);
-        (mean, variance)
-    }
-
-    /// Ends the open block (its samples are `BLOCK` from `block_start`): its index span, and the slot
-    /// its statistics go to.
-    fn end_block(&mut self) -> (usize, (u32, u32)) {
-        let start_index = self.block_start;
-        self.drop_block();
-        ((self.previous_slot + 1) % 2, (start_index, self.counted))
+        (mean, variance, saturated)
     }
 
     /// Closes the full block: the buffer's (`None`), or a whole block of the caller's samples while the
     /// buffer is empty. Once per BLOCK samples: kept out of line so that `push`, inlined into the
     /// caller's sample loop, stays small (inlined, its register pressure made every push save and
-    /// restore all FPU registers).
+    /// restore all FPU registers). The samples are summed first, the bookkeeping done after (nothing of
+    /// it is kept across the summing loops).
     #[inline(never)]
     fn close_block(&mut self, whole: Option<&[[R; 3]; BLOCK]>) -> Result<Option<Event>, AccumulatorError> {
-        if whole.is_some() {
-            self.buffered = BLOCK;
-        }
-        let (slot, span) = self.end_block();
+        let slot = (self.previous_slot + 1) % 2;
         let block = whole.unwrap_or(&self.buffer);
-        let (mean, variance) = Self::sum_block(&mut self.blocks[slot], block, self.saturation_limit, span);
+        let (mean, variance, saturated) = Self::sum_block(&mut self.blocks[slot], block, self.saturation_limit);
+        // The block's samples are BLOCK from `block_start` (all in the buffer, or none when whole).
+        let start_index = self.block_start;
+        self.buffered = BLOCK;
+        self.drop_block();
+        let sums = &mut self.blocks[slot].sums;
+        (sums.n, sums.start_index, sums.end_index, sums.saturated) =
+            (BLOCK as u32, start_index, self.counted, saturated);
         self.judge_block(slot, mean, variance)
     }
 
@@ -841,14 +864,21 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
 
     /// The noise variance after a block of this mean and variance (a leaky minimum, above the floor).
     fn update_noise(&mut self, mean: [f32; 3], variance: f32) -> f32 {
-        let magnitude_sq = mean[0] * mean[0] + mean[1] * mean[1] + mean[2] * mean[2];
-        let risen = if self.noise_variance.is_finite() {
-            self.noise_variance * (1.0 + self.config.noise_rise_per_block)
+        const RELATIVE_FLOOR: f32 = 1e-12;
+        // Infinite before the first block: it stays so (the factor is finite and at least 1).
+        let risen = self.noise_variance * self.noise_rise_factor;
+        let floor = if RELATIVE_FLOOR * R::MAX_MAGNITUDE_SQ < R::QUANTUM_VARIANCE {
+            // The relative term is below the quantum, itself at most the floor: it cannot win.
+            self.noise_floor
         } else {
-            f32::INFINITY
+            let magnitude_sq = mean[0] * mean[0] + mean[1] * mean[1] + mean[2] * mean[2];
+            max_f32(self.noise_floor, RELATIVE_FLOOR * magnitude_sq)
         };
-        let floor = max_f32(max_f32(self.config.min_noise_variance, R::QUANTUM_VARIANCE), 1e-12 * magnitude_sq);
-        self.noise_variance = max_f32(min_f32(risen, variance), floor);
+        // As max_f32(min_f32(risen, variance), floor), without the NaN tests: `risen` is never NaN (the
+        // noise starts infinite, is never NaN after an update, and its factor is finite and at least 1),
+        // so a NaN variance leaves `risen` in both forms, and the floor compares with a number.
+        let lower = if variance < risen { variance } else { risen };
+        self.noise_variance = if floor > lower { floor } else { lower };
         self.noise_variance
     }
 
@@ -1041,7 +1071,7 @@ mod tests {
     }
 
     #[test]
-    fn the_f32_saturation_bound_never_clears_a_saturated_block() {
+    fn the_saturation_bound_never_clears_a_saturated_block() {
         // Blocks near the rails and near a limit: whenever a sample is saturated, the bound must send the
         // block to the sample-by-sample check (it may also do so for a clear block).
         let mut x = 0x2545_F491_4F6C_DD1Du64;
@@ -1059,17 +1089,97 @@ mod tests {
                 }
             }
             let (mut sum, mut sum_sq) = ([0i64; 3], [0i64; 3]);
-            let (mean, variance, saturated) = i16::full_block(&samples, limit, &mut sum, &mut sum_sq);
+            let saturated = i16::full_block(&samples, limit, &mut sum, &mut sum_sq).2;
+            let spread = (0..3).map(|a| (32 * sum_sq[a] - sum[a] * sum[a]) as u64).sum();
             let truth = samples.iter().flatten().any(|v| v.saturated(limit));
             assert_eq!(saturated, truth, "round {round}");
             if truth {
                 saturated_blocks += 1;
-                assert!(i16_may_saturate(&mean, variance, 32, limit), "round {round}");
-            } else if !i16_may_saturate(&mean, variance, 32, limit) {
+                assert!(i16_may_saturate(&sum, spread, 32, limit), "round {round}");
+            } else if !i16_may_saturate(&sum, spread, 32, limit) {
                 cleared += 1;
             }
         }
         assert!(saturated_blocks > 500 && cleared > 500, "{saturated_blocks} saturated, {cleared} cleared");
+    }
+
+    #[test]
+    fn block_sums_and_spread_are_exact_for_the_longest_full_scale_block() {
+        // 2^16 samples (the longest block): rails and near-rails, where every term is largest.
+        let samples: Vec<[i16; 3]> = (0..1usize << 16)
+            .map(|i| match i % 3 {
+                0 => [i16::MIN, i16::MAX, i16::MIN],
+                1 => [i16::MAX, i16::MIN, i16::MIN + 1],
+                _ => [i16::MIN, i16::MIN, (i % 65_521) as i16],
+            })
+            .collect();
+        for len in [32, 1 << 16] {
+            let block = &samples[..len];
+            let (mut sum, mut sum_sq) = ([0i64; 3], [0i64; 3]);
+            let spread = i16_block_sums(block, &mut sum, &mut sum_sq);
+            let mut expected = 0i128;
+            for a in 0..3 {
+                let s: i128 = block.iter().map(|v| i128::from(v[a])).sum();
+                let q: i128 = block.iter().map(|v| i128::from(v[a]).pow(2)).sum();
+                assert_eq!((i128::from(sum[a]), i128::from(sum_sq[a])), (s, q), "len {len} axis {a}");
+                expected += len as i128 * q - s * s;
+            }
+            assert_eq!(i128::from(spread), expected, "len {len}");
+        }
+    }
+
+    /// The noise update as first written (NaN-safe min and max, the relative floor always computed).
+    fn reference_noise(previous: f32, mean: [f32; 3], variance: f32, config: &AccumulatorConfig, quantum: f32) -> f32 {
+        let min = |a: f32, b: f32| if b < a || a.is_nan() { b } else { a };
+        let magnitude_sq = mean[0] * mean[0] + mean[1] * mean[1] + mean[2] * mean[2];
+        let risen = if previous.is_finite() { previous * (1.0 + config.noise_rise_per_block) } else { f32::INFINITY };
+        let floor = max_f32(max_f32(config.min_noise_variance, quantum), 1e-12 * magnitude_sq);
+        max_f32(min(risen, variance), floor)
+    }
+
+    /// Every block's noise update of `acc` fed `samples` one at a time, against [`reference_noise`].
+    fn check_noise<R: Reading, const B: usize>(acc: &mut Accumulator<R, 8, B>, samples: &[[R; 3]], what: &str) {
+        let mut previous = acc.noise_variance();
+        for (i, &s) in samples.iter().enumerate() {
+            let _ = acc.push(s);
+            if (i + 1) % B == 0 {
+                let block = &acc.blocks[acc.previous_slot % 2];
+                let expected = reference_noise(previous, block.mean, block.variance, &acc.config, R::QUANTUM_VARIANCE);
+                assert_eq!(acc.noise_variance().to_bits(), expected.to_bits(), "{what}: block {}", i / B);
+                previous = acc.noise_variance();
+            }
+        }
+    }
+
+    #[test]
+    fn the_noise_update_is_the_leaky_minimum_bit_for_bit() {
+        let floor =
+            AccumulatorConfig { min_noise_variance: 30.0, noise_rise_per_block: 0.3, ..AccumulatorConfig::DEFAULT };
+        for (k, config) in [AccumulatorConfig::DEFAULT, floor].into_iter().enumerate() {
+            // i16 at full scale too (the relative floor term is skipped for i16: it stays below the quantum).
+            let raw: Vec<[i16; 3]> = stream(k as u64 + 40, 12, 400, 9.0)
+                .enumerate()
+                .map(|(i, s)| if i % 1000 < 100 { [i16::MAX, i16::MIN, i16::MAX] } else { s.map(|v| v.round() as i16) })
+                .collect();
+            check_noise(&mut Accumulator::<i16, 8, 32>::new(config).unwrap(), &raw, "i16");
+            // f32 in g: the relative floor term decides for quiet blocks without a configured floor.
+            let scaled: Vec<[f32; 3]> =
+                stream(k as u64 + 50, 12, 400, 0.002).map(|s| s.map(|v| v / 16_384.0)).collect();
+            check_noise(&mut Accumulator::<f32, 8, 16>::new(config).unwrap(), &scaled, "f32");
+            let still = [[0.0f32, 0.0, 1.0]; 64];
+            check_noise(&mut Accumulator::<f32, 8, 16>::new(config).unwrap(), &still, "f32 still");
+        }
+    }
+
+    #[test]
+    fn the_block_saturation_check_is_the_per_sample_one() {
+        // Every reading at every kind of limit (saturation_limit gives 0 ..= 32_769).
+        for limit in [0, 1, 2, 100, 16_384, 32_766, 32_767, 32_768, 32_769] {
+            for v in i16::MIN..=i16::MAX {
+                assert_eq!(i16_any_saturated(&[v], limit), v.saturated(limit), "{v} at {limit}");
+            }
+        }
+        assert!(!i16_any_saturated(&[], 0));
     }
 
     /// A stream of still holds (noise `noise`) and moves, with `hold` samples per hold, from `seed`.
