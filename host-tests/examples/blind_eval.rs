@@ -32,6 +32,10 @@ struct Args {
     /// Print every log.
     #[arg(long)]
     verbose: bool,
+    /// Also write the logs scored wrong where visible into this directory (CSV, named
+    /// family-shape-seed), for `accelcal diagnose`.
+    #[arg(long)]
+    write_wrong: Option<std::path::PathBuf>,
 }
 
 fn main() -> Result<(), String> {
@@ -69,6 +73,11 @@ fn main() -> Result<(), String> {
                     o.verdict,
                     if o.right { "" } else { "   (wrong)" }
                 );
+            }
+            if let (Some(dir), false, true) = (&args.write_wrong, o.right, o.visible()) {
+                let name = format!("{}-{}-{}.csv", family.name(), o.shape, o.seed);
+                std::fs::create_dir_all(dir).map_err(|e| e.to_string())?;
+                std::fs::write(dir.join(name), blindgen::generate(&spec).to_csv_string()).map_err(|e| e.to_string())?;
             }
             outcomes.push(o);
             bar.inc(1);
