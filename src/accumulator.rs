@@ -625,13 +625,14 @@ impl<R: Reading> Sums<R> {
     }
 
     fn pose(&self) -> Pose {
-        let (mut mean, mut variance) = ([0.0; 3], [0.0; 3]);
+        let (n, start_index, end_index) = (self.n, self.start_index, self.end_index);
+        let mut pose = Pose { mean: [0.0; 3], variance: [0.0; 3], n, start_index, end_index };
         for a in 0..3 {
             // Raw sums have a zero reference (folded away at compile time).
             let reference = if R::RELATIVE { self.reference[a] } else { R::default() };
-            (mean[a], variance[a]) = R::mean_and_variance(reference, self.sum[a], self.sum_sq[a], self.n);
+            (pose.mean[a], pose.variance[a]) = R::mean_and_variance(reference, self.sum[a], self.sum_sq[a], n);
         }
-        Pose { mean, variance, n: self.n, start_index: self.start_index, end_index: self.end_index }
+        pose
     }
 }
 
