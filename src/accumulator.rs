@@ -123,11 +123,11 @@ fn div_rem_sum(m: u64, d: u32) -> (u32, u32) {
     let divisor = u64::from(d) << 15;
     let (mut r, mut q) = (m.min(divisor), 0u32);
     for _ in 0..16 {
-        let bit = r >= divisor;
-        if bit {
-            r -= divisor;
+        q <<= 1;
+        if r >= divisor {
+            (q, r) = (q | 1, r - divisor);
         }
-        (q, r) = ((q << 1) | u32::from(bit), r << 1);
+        r <<= 1;
     }
     // Shifted 16 times: r = remainder 2^16 (below d 2^16).
     (q, (r >> 16) as u32)
@@ -907,11 +907,13 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         };
         let (pose, saturated) = (sums.pose(), sums.saturated);
         self.pose = None;
+        // Above this total variance the pose moved.
+        let moving = self.config.exit_factor * self.noise_variance;
         let rejection = if saturated {
             Some(Rejection::Saturated)
         } else if pose.n < self.config.min_pose_samples {
             Some(Rejection::TooShort)
-        } else if pose.variance.iter().sum::<f32>() > self.config.exit_factor * self.noise_variance {
+        } else if pose.variance[0] + pose.variance[1] + pose.variance[2] > moving {
             Some(Rejection::Moving)
         } else {
             None
