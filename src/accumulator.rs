@@ -109,75 +109,65 @@ fn u64_to_f32_halves(v: u64) -> f32 {
     ((v >> 32) as u32) as f32 * TWO_POW_32 + (v as u32) as f32
 }
 
-/// `x / d` and `x % d` without the compiler's 64-bit division (`__udivmoddi4`, ~1 KB of flash on a
-/// Cortex-M): for `d < 2^16` four hardware 32-bit divisions on 16-bit digits, else 64 shift-and-subtract
-/// steps. Called once per pose.
-fn div_rem_u64(x: u64, d: u32) -> (u64, u32) {
+/// `m / d` and `m % d` for the magnitude `m` of a sum of `d` `i16` readings (`m <= d 2^15`, a quotient
+/// of at most `2^15`; a larger `m` is clamped to that bound), without the compiler's 64-bit division
+/// (`__udivmoddi4`, ~1 KB of flash on a Cortex-M): one hardware division when `m` fits 32 bits (a pose
+/// of fewer than `2^17` samples), else 16 shift-and-subtract steps. Three calls per pose.
+fn div_rem_sum(m: u64, d: u32) -> (u32, u32) {
     let d = d.max(1);
-    if let Ok(x) = u32::try_from(x) {
-        // One hardware division (e.g. a pose's sum by its count).
-        return (u64::from(x / d), x % d);
+    if let Ok(x) = u32::try_from(m) {
+        return (x / d, x % d);
     }
-    let mut q = 0u64;
-    if d <= 0xFFFF {
-        let mut r = 0u32;
-        for digit in (0..4).rev() {
-            // r < d < 2^16: the partial dividend fits in 32 bits.
-            let part = (r << 16) | ((x >> (16 * digit)) & 0xFFFF) as u32;
-            q |= u64::from(part / d) << (16 * digit);
-            r = part % d;
+    // Quotient bits 15 down to 0: the remainder shifted up instead of the divisor down. Before each
+    // comparison the shifted remainder is below 2 divisor (it starts at most divisor), at most 2^48.
+    let divisor = u64::from(d) << 15;
+    let (mut r, mut q) = (m.min(divisor), 0u32);
+    for _ in 0..16 {
+        q <<= 1;
+        if r >= divisor {
+            (q, r) = (q | 1, r - divisor);
         }
-        return (q, r);
+        r <<= 1;
     }
-    let (d, mut r) = (u64::from(d), 0u64);
-    for bit in (0..64).rev() {
-        // r < d <= 2^32 before the shift: r stays below 2^33.
-        r = (r << 1) | ((x >> bit) & 1);
-        if r >= d {
-            r -= d;
-            q |= 1 << bit;
-        }
-    }
-    (q, r as u32)
+    // Shifted 16 times: r = remainder 2^16 (below d 2^16).
+    (q, (r >> 16) as u32)
 }
 
-/// Floor division of `x` by `d`: `x = q d + r` with `0 <= r < d`.
-fn div_rem_euclid_i64(x: i64, d: u32) -> (i64, u32) {
-    let (q, r) = div_rem_u64(x.unsigned_abs(), d);
-    match (x < 0, r) {
-        (false, _) => (q as i64, r),
-        (true, 0) => (-(q as i64), 0),
-        (true, r) => (-(q as i64) - 1, d.max(1) - r),
+/// `q + r / d` (`r < d`, `q < 2^25`) rounded once to the nearest `f32` (ties to even): the quotient
+/// extended bit by bit (long division of the remainder) until it has 26 significant bits, two below
+/// the `f32`'s 24, the last or-ed with a sticky bit for a remainder left (so a tie is one only when
+/// exact), converted by the hardware (a 32-bit integer: rounded once, to nearest even), then scaled by
+/// an exact power of two: the exact mean of integer samples without `f64` nor 64-bit library calls.
+fn fraction_to_f32(q: u32, r: u32, d: u32) -> f32 {
+    if q == 0 && r == 0 {
+        return 0.0;
     }
+    let (mut q, mut r, mut shift) = (q, r, 0u32);
+    // r < d throughout; the quotient gets a bit per step until it has 26 (at most 57 steps: a fraction
+    // of at least 1 / (2^32 - 1) has a 1 within its first 32 bits).
+    while q < 1 << 25 {
+        // 2 r >= d, without overflow (r < d): r >= d - r; then 2 r - d = r - (d - r) < d.
+        let rest = d - r;
+        let bit = r >= rest;
+        r = if bit { r - rest } else { r + r };
+        (q, shift) = ((q << 1) | u32::from(bit), shift + 1);
+    }
+    // q < 2^26: exact in u32; 2^-shift (shift <= 57) is a normal f32 and the product is exact.
+    (q | u32::from(r != 0)) as f32 * f32::from_bits((127 - shift) << 23)
 }
 
-/// `v` rounded once to the nearest `f32` (ties to even), from its top 24 bits and a sticky rest: the
-/// compiler's `__aeabi_ul2f` without linking it.
-fn u64_to_f32(v: u64) -> f32 {
-    let bits = 64 - v.leading_zeros();
-    if bits <= 24 {
-        return (v as u32) as f32;
-    }
-    let shift = bits - 24;
-    let (mantissa, rest, half) = (v >> shift, v & ((1 << shift) - 1), 1u64 << (shift - 1));
-    let up = rest > half || (rest == half && mantissa & 1 == 1);
-    // At most 2^24 (exact in f32) times an exact power of two.
-    ((mantissa + u64::from(up)) as u32) as f32 * f32::from_bits((127 + shift) << 23)
-}
-
-/// `total / n` rounded once to the nearest `f32` (integer division of the total scaled to at least 26
-/// quotient bits, the remainder kept as a sticky bit, one correctly rounded conversion, an exact
-/// power-of-two scaling): the exact mean of integer samples without `f64` nor 64-bit library calls.
-fn ratio_to_f32(total: i64, n: u32) -> f32 {
+/// The exact mean `total / n` of `n` `i16` readings summing to `total` (`|total| <= n 2^15`), rounded
+/// once to the nearest `f32`, and the floor division `total = q n + rem` with `0 <= rem < n`.
+fn mean_and_floor_div(total: i64, n: u32) -> (f32, i64, u32) {
     let n = n.max(1);
-    let magnitude = total.unsigned_abs();
-    let bits = |x: u64| 64 - x.leading_zeros();
-    // magnitude << shift has at most max(bits(magnitude), 27 + bits(n)) <= 63 bits; the quotient has >= 26.
-    let shift = (27 + bits(u64::from(n))).saturating_sub(bits(magnitude));
-    let (q, r) = div_rem_u64(magnitude << shift, n);
-    let unscale = f32::from_bits((127 - shift) << 23);
-    let v = u64_to_f32(q | u64::from(r != 0)) * unscale;
-    if total < 0 { -v } else { v }
+    let (q, r) = div_rem_sum(total.unsigned_abs(), n);
+    let magnitude = fraction_to_f32(q, r, n);
+    let q = i64::from(q);
+    match (total < 0, r) {
+        (false, _) => (magnitude, q, r),
+        (true, 0) => (-magnitude, -q, 0),
+        (true, r) => (-magnitude, -q - 1, n - r),
+    }
 }
 
 /// Raw sums `(sum x, sum x^2)` of one axis (`axis` of each value) of a block of `i16` samples (at most `2^16`: the `i32` sum
@@ -307,13 +297,15 @@ impl Reading for i16 {
     }
     fn mean_and_variance(reference: i16, sum: i64, sum_sq: i64, n: u32) -> (f32, f32) {
         let count = n.max(1);
-        let n = i64::from(count);
-        let mean = ratio_to_f32(n * i64::from(reference) + sum, count);
-        // sum = q n + rem with 0 <= rem < n.
-        let (q, rem) = div_rem_euclid_i64(sum, count);
-        // Squares about reference + q, exactly: sum (d - q)^2 = sum_sq - 2 q sum + n q^2 is below 2^63
-        // and is computed modulo 2^64, so the wrapped intermediate terms cancel exactly.
-        let about_q = sum_sq.wrapping_sub(q.wrapping_mul(sum).wrapping_mul(2)).wrapping_add(n.wrapping_mul(q * q));
+        let reference = i64::from(reference);
+        // total = q_total n + rem with 0 <= rem < n; the samples' sum relative to the reference is
+        // sum = total - n reference = q n + rem with q = q_total - reference (the same remainder).
+        let (mean, q_total, rem) = mean_and_floor_div(i64::from(count) * reference + sum, count);
+        let q = q_total - reference;
+        // Squares about reference + q, exactly: sum (d - q)^2 = sum_sq - 2 q sum + n q^2
+        // = sum_sq - q (2 sum - n q) = sum_sq - q (sum + rem), as n q = sum - rem. It is below 2^63 and
+        // computed modulo 2^64, so a wrapped intermediate term cancels exactly.
+        let about_q = sum_sq.wrapping_sub(q.wrapping_mul(sum.wrapping_add(i64::from(rem))));
         let fraction = rem as f32 / count as f32;
         // about_q is a sum of squares: not negative.
         let variance = u64_to_f32_halves(about_q as u64) / count as f32 - fraction * fraction;
@@ -633,13 +625,14 @@ impl<R: Reading> Sums<R> {
     }
 
     fn pose(&self) -> Pose {
-        let (mut mean, mut variance) = ([0.0; 3], [0.0; 3]);
+        let (n, start_index, end_index) = (self.n, self.start_index, self.end_index);
+        let mut pose = Pose { mean: [0.0; 3], variance: [0.0; 3], n, start_index, end_index };
         for a in 0..3 {
             // Raw sums have a zero reference (folded away at compile time).
             let reference = if R::RELATIVE { self.reference[a] } else { R::default() };
-            (mean[a], variance[a]) = R::mean_and_variance(reference, self.sum[a], self.sum_sq[a], self.n);
+            (pose.mean[a], pose.variance[a]) = R::mean_and_variance(reference, self.sum[a], self.sum_sq[a], n);
         }
-        Pose { mean, variance, n: self.n, start_index: self.start_index, end_index: self.end_index }
+        pose
     }
 }
 
@@ -914,11 +907,13 @@ impl<R: Reading, const POSES: usize, const BLOCK: usize> Accumulator<R, POSES, B
         };
         let (pose, saturated) = (sums.pose(), sums.saturated);
         self.pose = None;
+        // Above this total variance the pose moved.
+        let moving = self.config.exit_factor * self.noise_variance;
         let rejection = if saturated {
             Some(Rejection::Saturated)
         } else if pose.n < self.config.min_pose_samples {
             Some(Rejection::TooShort)
-        } else if pose.variance.iter().sum::<f32>() > self.config.exit_factor * self.noise_variance {
+        } else if pose.variance[0] + pose.variance[1] + pose.variance[2] > moving {
             Some(Rejection::Moving)
         } else {
             None
@@ -1034,39 +1029,153 @@ mod tests {
         acc.finish().unwrap();
     }
 
-    #[test]
-    fn ratios_are_rounded_once() {
-        for (total, n) in
-            [(0i64, 1u32), (-3, 7), (1, 3), (2, 3), (-(1 << 46), 1 << 31), (123_456_789_012, 4_000_000_000)]
-        {
-            let exact = total as f64 / f64::from(n);
-            assert_eq!(ratio_to_f32(total, n), exact as f32, "{total} / {n}");
+    /// The `f32` nearest to `total / n` (ties to even), found exactly: of the `f64` quotient's `f32`
+    /// and its two neighbours, the one whose distance `|v n - total|` is least, compared in `i128`.
+    fn nearest_f32(total: i64, n: u32) -> f32 {
+        let parts = |v: f32| -> (i128, i32) {
+            let bits = v.to_bits();
+            let (exponent, fraction) = ((bits >> 23) & 0xFF, i128::from(bits & 0x7F_FFFF));
+            let m = if exponent == 0 { fraction } else { fraction | 0x80_0000 };
+            (if v < 0.0 { -m } else { m }, exponent.max(1) as i32 - 150)
+        };
+        if total == 0 {
+            return 0.0;
         }
-        for total in -2000i64..2000 {
-            let n = 997;
-            assert_eq!(ratio_to_f32(total * 16_384 + 5, n), ((total * 16_384 + 5) as f64 / 997.0) as f32);
+        let guess = (total as f64 / f64::from(n)) as f32;
+        let candidates = [guess.next_down(), guess, guess.next_up()];
+        let lowest = candidates.iter().map(|&v| parts(v).1).min().unwrap().min(0);
+        let distance = |v: f32| {
+            let (m, e) = parts(v);
+            (m * i128::from(n) * (1i128 << (e - lowest)) - i128::from(total) * (1i128 << -lowest)).abs()
+        };
+        let best = |a: f32, b: f32| match distance(a).cmp(&distance(b)) {
+            core::cmp::Ordering::Less => a,
+            core::cmp::Ordering::Greater => b,
+            core::cmp::Ordering::Equal => {
+                if parts(a).0 % 2 == 0 {
+                    a
+                } else {
+                    b
+                }
+            }
+        };
+        best(best(candidates[0], candidates[1]), candidates[2])
+    }
+
+    /// The `i16` pose statistics as first written (the floor division by the compiler's 64-bit
+    /// division, the squares about `q` as `sum_sq - 2 q sum + n q^2`): the oracle of the variance.
+    fn reference_variance(sum: i64, sum_sq: i64, n: u32) -> f32 {
+        let count = n.max(1);
+        let n = i64::from(count);
+        let (q, rem) = (sum.div_euclid(n), sum.rem_euclid(n));
+        let about_q = sum_sq.wrapping_sub(q.wrapping_mul(sum).wrapping_mul(2)).wrapping_add(n.wrapping_mul(q * q));
+        let fraction = rem as f32 / count as f32;
+        let variance = u64_to_f32_halves(about_q as u64) / count as f32 - fraction * fraction;
+        if variance > 0.0 { variance } else { 0.0 }
+    }
+
+    /// Sums `(total, sum of squares, n)` of `i16` readings to check the pose statistics with: full
+    /// scale (the rails, the longest pose), exact ties, both sides of `2^32`, random sums.
+    fn pose_sums() -> Vec<(i64, i64, u32)> {
+        let longest = MAX_POSE_SAMPLES;
+        let full = 1i64 << 30;
+        let mut cases = std::vec![
+            (0, 0, 1),
+            (0, 0, longest),
+            (-(1 << 15), full, 1),
+            (32_767, 32_767 * 32_767, 1),
+            (i64::from(longest) << 15, i64::from(longest) * full, longest),
+            (-(i64::from(longest) << 15), i64::from(longest) * full, longest),
+            (i64::from(longest) * 32_767, i64::from(longest) * 32_767 * 32_767, longest),
+            (i64::from(longest) * 32_767 - 1, i64::from(longest) * 32_767 * 32_767, longest),
+            (1, 1, longest),
+            (-1, 1, longest),
+            (-3, 5, 7),
+            (1, 1, 3),
+            (2, 2, 3),
+            // Ties: 16384 + 2^-10 and + 3 2^-10 lie halfway between two f32 (ulp 2^-9).
+            ((1 << 24) + 1, 1 << 38, 1 << 10),
+            ((1 << 24) + 3, 1 << 38, 1 << 10),
+            (-(1 << 24) - 1, 1 << 38, 1 << 10),
+            (-(1 << 24) - 3, 1 << 38, 1 << 10),
+            ((1 << 32) - 1, 1 << 47, 1 << 17),
+            (1 << 32, 1 << 47, 1 << 17),
+            ((1 << 32) + 1, 1 << 47, (1 << 17) + 1),
+            (-(1 << 32), 1 << 47, 1 << 17),
+            (-(1 << 32) - 1, 1 << 47, (1 << 17) + 1),
+        ];
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        let mut next = move || {
+            x = x.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            x
+        };
+        for round in 0..20_000 {
+            let n = match round % 4 {
+                0 => 1 + (next() >> 54) as u32,
+                1 => 1 + (next() >> 48) as u32,
+                2 => 1 + (next() >> 33) as u32 % longest,
+                _ => longest - (next() >> 60) as u32,
+            };
+            // A mean anywhere in [-2^15, 2^15], or within a few LSB of 0.
+            let bound = i64::from(n) << if round % 3 == 0 { 2 } else { 15 };
+            let total = (next() >> 1) as i64 % (2 * bound + 1) - bound;
+            let sum_sq = (total.unsigned_abs() as i128 * 32_768).min(i128::from(n) << 30) as i64;
+            cases.push((total, sum_sq, n));
+        }
+        cases
+    }
+
+    #[test]
+    fn pose_means_are_rounded_once_and_variances_are_the_original_ones() {
+        for (total, sum_sq, n) in pose_sums() {
+            let (mean, variance) = i16::mean_and_variance(0, total, sum_sq, n);
+            assert_eq!(mean.to_bits(), nearest_f32(total, n).to_bits(), "{total} / {n}");
+            assert_eq!(variance.to_bits(), reference_variance(total, sum_sq, n).to_bits(), "{total} {sum_sq} {n}");
+            let (_, q, rem) = mean_and_floor_div(total, n);
+            assert_eq!((q, i64::from(rem)), (total.div_euclid(i64::from(n)), total.rem_euclid(i64::from(n))));
+            // Relative to a reference (the sum of the deviations from it): the same statistics.
+            let reference = -12_345i16;
+            let relative = total - i64::from(n) * i64::from(reference);
+            let about_reference = sum_sq - 2 * i64::from(reference) * total + i64::from(n) * 12_345 * 12_345;
+            let (mean_r, variance_r) = i16::mean_and_variance(reference, relative, about_reference, n);
+            assert_eq!(mean_r.to_bits(), mean.to_bits(), "{total} / {n} about {reference}");
+            let expected = reference_variance(relative, about_reference, n);
+            assert_eq!(variance_r.to_bits(), expected.to_bits(), "{total} {sum_sq} {n} about {reference}");
         }
     }
 
     #[test]
-    fn long_division_and_rounding_match_the_compiler() {
-        let mut x = 0x9E37_79B9_7F4A_7C15u64;
-        for d in [1u32, 2, 3, 7, 997, 65_535, 65_537, 1 << 31, u32::MAX] {
-            for _ in 0..200 {
+    fn the_long_division_matches_the_compiler_up_to_full_scale() {
+        let mut x = 0x2545_F491_4F6C_DD1Du64;
+        for d in [1u32, 2, 3, 7, 997, 65_535, 65_536, 65_537, 1 << 17, (1 << 31) - 1] {
+            let top = u64::from(d) << 15;
+            for _ in 0..2000 {
                 x = x.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
-                for v in [x, x >> 17, x >> 40, u64::MAX, 0] {
-                    let (q, r) = div_rem_u64(v, d);
-                    assert_eq!((q, u64::from(r)), (v / u64::from(d), v % u64::from(d)), "{v} / {d}");
-                    let signed = v as i64 >> 3;
-                    let euclid = (signed.div_euclid(i64::from(d)), signed.rem_euclid(i64::from(d)) as u32);
-                    assert_eq!(div_rem_euclid_i64(signed, d), euclid, "{signed} / {d}");
-                    assert_eq!(u64_to_f32(v).to_bits(), (v as f32).to_bits(), "{v}");
+                for m in [x % (top + 1), top, top - 1, (1 << 32).min(top), ((1 << 32) - 1).min(top), 0] {
+                    let (q, r) = div_rem_sum(m, d);
+                    assert_eq!((u64::from(q), u64::from(r)), (m / u64::from(d), m % u64::from(d)), "{m} / {d}");
                 }
             }
         }
-        // Ties round to even.
-        for v in [(1u64 << 25) + 1, (1 << 25) + 3, (1 << 40) + (1 << 16), (1 << 40) + (3 << 16)] {
-            assert_eq!(u64_to_f32(v).to_bits(), (v as f32).to_bits(), "{v}");
+        // Beyond full scale the quotient is clamped: no overflow, a remainder below the divisor.
+        assert_eq!(div_rem_sum(u64::MAX, 1 << 17), (1 << 15, 0));
+        assert_eq!(div_rem_sum(1 << 40, 0), (1 << 15, 0));
+    }
+
+    #[test]
+    fn fractions_round_to_nearest_even() {
+        // Every remainder of small divisors, and the largest divisor with the smallest fraction.
+        for d in 1..200u32 {
+            for q in [0u32, 1, 2, 3, 1000, 32_767, 32_768] {
+                for r in 0..d {
+                    let total = i64::from(q) * i64::from(d) + i64::from(r);
+                    assert_eq!(fraction_to_f32(q, r, d).to_bits(), nearest_f32(total, d).to_bits(), "{q} + {r}/{d}");
+                }
+            }
+        }
+        for (q, r, d) in [(0, 1, u32::MAX), (0, u32::MAX - 1, u32::MAX), (32_768, 1, u32::MAX), (0, 1, 3)] {
+            let exact = (f64::from(q) + f64::from(r) / f64::from(d)) as f32;
+            assert_eq!(fraction_to_f32(q, r, d), exact, "{q} + {r}/{d}");
         }
     }
 
