@@ -430,10 +430,10 @@ impl Fitting<'_> {
         self.params.is_finite().then_some(())
     }
 
-    /// `| |f_b| / g - 1 |` of the mean `m` under the fit. Out of line: every statistic below calls it.
-    #[inline(never)]
+    /// `| |f_b| / g - 1 |` of the mean `m` under the fit (the modulus out of line).
+    #[inline(always)]
     fn abs_error(&self, m: &[f32; 3]) -> f32 {
-        (sqrt_f32(norm_squared(self.params.apply(*m))) / self.gravity - 1.0).abs()
+        (modulus(self.params, *m) / self.gravity - 1.0).abs()
     }
 
     /// Over the poses listed in `kept`: the position and size of the largest modulus error, their RMS,
@@ -464,6 +464,13 @@ impl Fitting<'_> {
         }
         best
     }
+}
+
+/// `|f_b|`, the modulus of the reading `m` calibrated by `p`. Out of line: the fit's statistics and the
+/// verdict's RMSE before calibration share one copy.
+#[inline(never)]
+pub(crate) fn modulus(p: &Params, m: [f32; 3]) -> f32 {
+    sqrt_f32(norm_squared(p.apply(m)))
 }
 
 /// `a - b`.

@@ -200,15 +200,19 @@ fn initial_estimate(
     if let Err(e) = check_input(poses.iter().map(|p| &p.mean), gravity) {
         return Err(if init == Init::SixPosition { InitError::Coarse(e.into()) } else { InitError::Ellipsoid(e) });
     }
-    // The ellipsoid's model and the poses it leaves out are written in place; its centre and held
-    // terms kept here.
-    let mut fitted = None;
+    // The ellipsoid's model and the poses it leaves out are written in place; its held terms kept here.
+    let mut held = None;
     let mut ellipsoid_error = None;
     every_pose(list);
+    // The normalising frame: the ellipsoid's centre and gains `1 / S`, or the six faces' own
+    // (exactly: the paper's path).
+    let mut offset_gain = None;
     if init != Init::SixPosition {
         let mut fitting = Fitting::new(poses, gravity, &mut initial.params, &mut initial.excluded);
         match fitting.robust(list, rule) {
-            Ok(()) => fitted = Some((fitting.center, fitting.held)),
+            Ok(()) => {
+                (held, offset_gain) = (Some(fitting.held), Some(fitting.center));
+            }
             Err(e) if init == Init::Ellipsoid => return Err(InitError::Ellipsoid(e)),
             Err(e) => {
                 every_pose(list);
@@ -216,17 +220,18 @@ fn initial_estimate(
             }
         }
     }
-    // The normalising frame: the ellipsoid's centre and gains `1 / S`, or the six faces' own
-    // (exactly: the paper's path).
-    let frame_or_error = match fitted {
-        Some((center, _)) => Ok((center, initial.params.scale.map(|s| 1.0 / s))),
-        None => face_means(kept(poses, list), gravity).map(|(offset, gain, _)| (offset, gain)),
-    }
-    .and_then(|(offset, gain)| Ok(Frame::new(offset, gain, gravity)?));
     // When the six faces are the fallback, the ellipsoid's error is the one reported.
-    *frame = frame_or_error.map_err(|e| ellipsoid_error.map_or(InitError::Coarse(e), InitError::Ellipsoid))?;
-    let (kind, held) = match fitted {
-        Some((_, held)) => (Init::Ellipsoid, held),
+    let fallback_error = |e: CoarseError| ellipsoid_error.map_or(InitError::Coarse(e), InitError::Ellipsoid);
+    let (offset, gain) = match offset_gain {
+        Some(center) => (center, initial.params.scale.map(|s| 1.0 / s)),
+        None => match face_means(kept(poses, list), gravity) {
+            Ok((offset, gain, _)) => (offset, gain),
+            Err(e) => return Err(fallback_error(e)),
+        },
+    };
+    *frame = Frame::new(offset, gain, gravity).map_err(|e| fallback_error(e.into()))?;
+    let (kind, held) = match held {
+        Some(held) => (Init::Ellipsoid, held),
         None => {
             initial.params = frame.to_params(&[0.0; PARAM_COUNT]);
             initial.excluded = PoseList::EMPTY;

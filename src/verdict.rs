@@ -387,7 +387,7 @@ impl ModulusSums {
             let (e, variance) = error_and_variance(x, frame, p, n);
             let after = crate::linalg::sqrt_f32(larger(1.0 + e, 0.0));
             sums.after += crate::model::square(after - 1.0);
-            let raw = crate::linalg::sqrt_f32(crate::model::norm_squared(before.apply(p.mean)));
+            let raw = crate::ellipsoid::modulus(before, p.mean);
             sums.before += crate::model::square(raw - g);
             // |f_b| / g = sqrt(1 + E): d|f_b|/g = dE / 2 near |f_b| = g.
             sums.noise = sums.noise.zip(variance).map(|(s, v)| s + v / 4.0);
