@@ -113,24 +113,33 @@ fn quotient((n_hi, n_lo): (f32, f32), (d_hi, d_lo): (f32, f32)) -> (f32, f32) {
 impl Frame {
     /// A frame with per-axis `offset` and `gain` (input unit per output unit) and `gravity` (output unit).
     pub fn new(offset: [f32; 3], gain: [f32; 3], gravity: f32) -> Result<Self, FrameError> {
-        if !crate::linalg::positive_finite(gravity) {
+        let frame = Self { offset, gain, gravity };
+        frame.validate()?;
+        Ok(frame)
+    }
+
+    /// The checks of [`Frame::new`] on a frame written in place.
+    #[inline]
+    pub(crate) fn validate(&self) -> Result<(), FrameError> {
+        if !crate::linalg::positive_finite(self.gravity) {
             return Err(FrameError::InvalidGravity);
         }
-        for (axis, &k) in gain.iter().enumerate() {
+        for (axis, &k) in self.gain.iter().enumerate() {
             if !crate::linalg::nonzero_finite(k) {
                 return Err(FrameError::DegenerateGain { axis: axis as u8 });
             }
         }
-        if !offset.iter().all(|&c| crate::linalg::finite(c)) {
+        if !self.offset.iter().all(|&c| crate::linalg::finite(c)) {
             return Err(FrameError::NonFiniteOffset);
         }
-        Ok(Self { offset, gain, gravity })
+        Ok(())
     }
 
     /// Normalises one pose mean (input unit). `u` and `q` are formed in double-`f32` arithmetic (exact
     /// sums and products by error-free transformations; once per pose, not per cost evaluation, and no
     /// software `f64` on a Cortex-M4F): `q = |u|^2 - 1` is the small number every modulus error starts
     /// from, and rounding `u` to `f32` first would cost it about 1e-7 absolute.
+    #[inline]
     pub fn normalize(&self, mean: [f32; 3]) -> NormPose {
         let mut u = [0.0f32; 3];
         // q = sum(hi) - 1 + sum(lo), the large part summed without error.

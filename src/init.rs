@@ -200,18 +200,18 @@ fn initial_estimate(
     if let Err(e) = check_input(poses.iter().map(|p| &p.mean), gravity) {
         return Err(if init == Init::SixPosition { InitError::Coarse(e.into()) } else { InitError::Ellipsoid(e) });
     }
-    // The ellipsoid's model and the poses it leaves out are written in place; its held terms kept here.
+    // The ellipsoid's model and the poses it leaves out are written in place, its centre and gains
+    // `1 / S` into the frame; its held terms kept here.
     let mut held = None;
     let mut ellipsoid_error = None;
     every_pose(list);
-    // The normalising frame: the ellipsoid's centre and gains `1 / S`, or the six faces' own
-    // (exactly: the paper's path).
-    let mut offset_gain = None;
+    frame.gravity = gravity;
     if init != Init::SixPosition {
         let mut fitting = Fitting::new(poses, gravity, &mut initial.params, &mut initial.excluded);
         match fitting.robust(list, rule) {
             Ok(()) => {
-                (held, offset_gain) = (Some(fitting.held), Some(fitting.center));
+                (held, frame.offset) = (Some(fitting.held), fitting.center);
+                frame.gain = initial.params.scale.map(|s| 1.0 / s);
             }
             Err(e) if init == Init::Ellipsoid => return Err(InitError::Ellipsoid(e)),
             Err(e) => {
@@ -222,14 +222,13 @@ fn initial_estimate(
     }
     // When the six faces are the fallback, the ellipsoid's error is the one reported.
     let fallback_error = |e: CoarseError| ellipsoid_error.map_or(InitError::Coarse(e), InitError::Ellipsoid);
-    let (offset, gain) = match offset_gain {
-        Some(center) => (center, initial.params.scale.map(|s| 1.0 / s)),
-        None => match face_means(kept(poses, list), gravity) {
-            Ok((offset, gain, _)) => (offset, gain),
-            Err(e) => return Err(fallback_error(e)),
-        },
-    };
-    *frame = Frame::new(offset, gain, gravity).map_err(|e| fallback_error(e.into()))?;
+    // The six faces' own frame (exactly: the paper's path).
+    if held.is_none() {
+        if let Err(e) = face_means(kept(poses, list), gravity, &mut frame.offset, &mut frame.gain) {
+            return Err(fallback_error(e));
+        }
+    }
+    frame.validate().map_err(|e| fallback_error(e.into()))?;
     let (kind, held) = match held {
         Some(held) => (Init::Ellipsoid, held),
         None => {
@@ -254,6 +253,7 @@ fn every_pose(list: &mut [u16]) {
 /// at 0, written into `start`: the frame's offset is the model's centre, whose image `Ka c` is the
 /// model's bias (the ellipsoid computes `B` so, and [`Frame::to_params`] the six faces' model), so the
 /// bias deviations are exactly 0; only non-orthogonality terms are ever held.
+#[inline(always)] // one caller
 fn start_deviation(initial: &Initial, frame: &Frame, start: &mut Deviation) {
     let (p, k) = (&initial.params, frame.gain);
     *start = [0.0; PARAM_COUNT];
