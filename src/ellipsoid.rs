@@ -34,7 +34,7 @@
 
 use crate::accumulator::Pose;
 use crate::linalg::{
-    DETERMINED_PIVOT, Held, Matrix, add_normal_row, larger, smaller, solve_spd_holding_weak_in_place, sqrt_f32,
+    DETERMINED_PIVOT, Held, add_normal_row, larger, smaller, solve_spd_holding_weak_in_place, sqrt_f32, zero_matrix,
 };
 use crate::model::{PARAM_COUNT, Params, norm_squared};
 
@@ -373,7 +373,7 @@ impl Fitting<'_> {
     /// accelerometer can have.
     fn fit_once(&mut self, kept: &[u16]) -> Option<bool> {
         let (m0, s) = self.reference(kept);
-        let mut ata: Matrix<COEFFS> = [[0.0; COEFFS]; COEFFS];
+        let mut ata = zero_matrix::<COEFFS>();
         let mut atb = [0.0f32; COEFFS];
         for m in self::kept(self.poses, kept) {
             let v = [(m[0] - m0[0]) / s, (m[1] - m0[1]) / s, (m[2] - m0[2]) / s];

@@ -211,7 +211,8 @@ fn initial_estimate(
         match fitting.robust(list, rule) {
             Ok(()) => {
                 (held, frame.offset) = (Some(fitting.held), fitting.center);
-                frame.gain = initial.params.scale.map(|s| 1.0 / s);
+                let s = &initial.params.scale;
+                frame.gain = [1.0 / s[0], 1.0 / s[1], 1.0 / s[2]];
             }
             Err(e) if init == Init::Ellipsoid => return Err(InitError::Ellipsoid(e)),
             Err(e) => {

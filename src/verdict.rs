@@ -160,6 +160,9 @@ impl Verdict {
     }
 }
 
+/// A zero matrix ([`crate::linalg::zero_matrix`]: one `memclr` call).
+const ZERO: Matrix<PARAM_COUNT> = crate::linalg::zero_matrix();
+
 /// Largest plausible deviation from the coarse estimate of every deviation coordinate: bias 0.5 g,
 /// scale 50 %, non-orthogonality 0.5 rad.
 const PLAUSIBLE_DEVIATION: f32 = 0.5;
@@ -207,7 +210,7 @@ pub fn information_matrix(
     held: Held,
     inflate: bool,
 ) -> Option<Matrix<PARAM_COUNT>> {
-    let mut info = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
+    let mut info = ZERO;
     information_in_place(x, frame, set, held, inflate, &mut info).then_some(info)
 }
 
@@ -265,7 +268,7 @@ pub fn deviation_covariance(
     set: &PoseSet<'_>,
     held: Held,
 ) -> Option<Matrix<PARAM_COUNT>> {
-    let mut cov = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
+    let mut cov = ZERO;
     covariance_in_place(x, frame, set, held, &mut cov).then_some(cov)
 }
 
@@ -322,7 +325,7 @@ pub fn parameters_to_hold(x: &Deviation, frame: &Frame, set: &PoseSet<'_>, held:
     let mut held = held.union(undetermined_parameters(x, set.norm));
     // The information matrix of the parameters held so far, rebuilt at each step rather than copied.
     let first = held;
-    let mut cov = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
+    let mut cov = ZERO;
     loop {
         let inverted =
             information_in_place(x, frame, set, first, false, &mut cov) && covariance_holding_in_place(&mut cov, held);
@@ -351,7 +354,7 @@ pub fn parameters_to_hold(x: &Deviation, frame: &Frame, set: &PoseSet<'_>, held:
 /// the ones before it and is flagged, then left out. With only axis-aligned poses, for example, the
 /// non-orthogonality terms are flagged.
 pub fn undetermined_parameters(x: &Deviation, norm: &[NormPose]) -> Held {
-    let (mut info, mut unused) = ([[0.0f32; PARAM_COUNT]; PARAM_COUNT], [0.0; PARAM_COUNT]);
+    let (mut info, mut unused) = (ZERO, [0.0; PARAM_COUNT]);
     normal_equations(x, norm, None, &mut info, &mut unused);
     crate::linalg::weak_pivots_in_place(&mut info, crate::linalg::DETERMINED_PIVOT)
 }
@@ -450,7 +453,7 @@ pub(crate) fn judge_run(
     let sums = ModulusSums::of(x, frame, set, before);
     let rmse_after_mg = rmse_of_mg(sums.after, set.len(), 1.0);
     let noise_floor = noise_floor_of(sums.noise, set.len(), fitted);
-    let mut cov = [[0.0f32; PARAM_COUNT]; PARAM_COUNT];
+    let mut cov = ZERO;
     let mut std = if covariance_in_place(x, frame, set, held, &mut cov) {
         param_std(frame, &cov)
     } else {
