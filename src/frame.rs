@@ -118,12 +118,19 @@ impl Frame {
         Ok(frame)
     }
 
-    /// The checks of [`Frame::new`] on a frame written in place.
+    /// The checks of [`Frame::new`].
     #[inline]
-    pub(crate) fn validate(&self) -> Result<(), FrameError> {
+    fn validate(&self) -> Result<(), FrameError> {
         if !crate::linalg::positive_finite(self.gravity) {
             return Err(FrameError::InvalidGravity);
         }
+        self.validate_axes()
+    }
+
+    /// The checks of [`Frame::new`] but gravity's, on a frame written in place with a gravity
+    /// checked before.
+    #[inline]
+    pub(crate) fn validate_axes(&self) -> Result<(), FrameError> {
         for (axis, &k) in self.gain.iter().enumerate() {
             if !crate::linalg::nonzero_finite(k) {
                 return Err(FrameError::DegenerateGain { axis: axis as u8 });

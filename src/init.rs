@@ -221,15 +221,17 @@ fn initial_estimate(
             }
         }
     }
-    // When the six faces are the fallback, the ellipsoid's error is the one reported.
-    let fallback_error = |e: CoarseError| ellipsoid_error.map_or(InitError::Coarse(e), InitError::Ellipsoid);
-    // The six faces' own frame (exactly: the paper's path).
-    if held.is_none() {
-        if let Err(e) = face_means(kept(poses, list), gravity, &mut frame.offset, &mut frame.gain) {
-            return Err(fallback_error(e));
-        }
+    // The six faces' own frame (exactly: the paper's path), then the checks of either frame (gravity
+    // checked above).
+    let checked = match held {
+        None => face_means(kept(poses, list), gravity, &mut frame.offset, &mut frame.gain).map(|_| ()),
+        Some(_) => Ok(()),
     }
-    frame.validate().map_err(|e| fallback_error(e.into()))?;
+    .and_then(|()| Ok(frame.validate_axes()?));
+    // When the six faces are the fallback, the ellipsoid's error is the one reported.
+    if let Err(e) = checked {
+        return Err(ellipsoid_error.map_or(InitError::Coarse(e), InitError::Ellipsoid));
+    }
     let (kind, held) = match held {
         Some(held) => (Init::Ellipsoid, held),
         None => {
