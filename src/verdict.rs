@@ -393,7 +393,10 @@ impl ModulusSums {
             let raw = crate::ellipsoid::modulus(before, p.mean);
             sums.before += crate::model::square(raw - g);
             // |f_b| / g = sqrt(1 + E): d|f_b|/g = dE / 2 near |f_b| = g.
-            sums.noise = sums.noise.zip(variance).map(|(s, v)| s + v / 4.0);
+            match (&mut sums.noise, variance) {
+                (Some(s), Some(v)) => *s += v / 4.0,
+                (noise, _) => *noise = None,
+            }
         }
         sums
     }
