@@ -259,13 +259,11 @@ fn every_pose(list: &mut [u16]) {
 #[inline(always)] // one caller
 fn start_deviation(initial: &Initial, frame: &Frame, start: &mut Deviation) {
     let (p, k) = (&initial.params, frame.gain);
-    *start = [0.0; PARAM_COUNT];
     for a in 0..3 {
+        start[a] = 0.0;
         start[3 + a] = p.scale[a] * k[a] - 1.0;
         // Mxx and Myy are relative to the x gain, Mzz to the y gain.
-        if !initial.held[6 + a] {
-            start[6 + a] = p.nonorth[a] * k[a / 2];
-        }
+        start[6 + a] = if initial.held[6 + a] { 0.0 } else { p.nonorth[a] * k[a / 2] };
     }
 }
 
