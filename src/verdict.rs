@@ -322,10 +322,11 @@ pub const HOLD_STD: Deviation = [0.05, 0.05, 0.05, 0.02, 0.02, 0.02, 0.01, 0.01,
 /// fails the verdict instead.
 #[inline(never)] // its matrices need not share a stack frame with the solvers'
 pub fn parameters_to_hold(x: &Deviation, frame: &Frame, set: &PoseSet<'_>, held: Held) -> Held {
-    let mut held = held.union(undetermined_parameters(x, set.norm));
-    // The information matrix of the parameters held so far, rebuilt at each step rather than copied.
-    let first = held;
+    // The information matrix of the parameters held so far, rebuilt at each step rather than copied
+    // (first the scratch of the structural test).
     let mut cov = ZERO;
+    let mut held = held.union(undetermined_in(x, set.norm, &mut cov));
+    let first = held;
     loop {
         let inverted =
             information_in_place(x, frame, set, first, false, &mut cov) && covariance_holding_in_place(&mut cov, held);
@@ -354,9 +355,15 @@ pub fn parameters_to_hold(x: &Deviation, frame: &Frame, set: &PoseSet<'_>, held:
 /// the ones before it and is flagged, then left out. With only axis-aligned poses, for example, the
 /// non-orthogonality terms are flagged.
 pub fn undetermined_parameters(x: &Deviation, norm: &[NormPose]) -> Held {
-    let (mut info, mut unused) = (ZERO, [0.0; PARAM_COUNT]);
-    normal_equations(x, norm, None, &mut info, &mut unused);
-    crate::linalg::weak_pivots_in_place(&mut info, crate::linalg::DETERMINED_PIVOT)
+    let mut info = ZERO;
+    undetermined_in(x, norm, &mut info)
+}
+
+/// [`undetermined_parameters`] with `scratch` (overwritten) for the information matrix: the caller's
+/// own matrix, when it has one, is used instead of a second one (no zeros written first).
+fn undetermined_in(x: &Deviation, norm: &[NormPose], scratch: &mut Matrix<PARAM_COUNT>) -> Held {
+    normal_equations(x, norm, None, scratch, &mut [0.0; PARAM_COUNT]);
+    crate::linalg::weak_pivots_in_place(scratch, crate::linalg::DETERMINED_PIVOT)
 }
 
 /// Standard deviations of the paper-convention parameters from a deviation covariance.
@@ -473,7 +480,8 @@ pub(crate) fn judge_run(
     };
     let mut warnings = Warnings { held: [false; PARAM_COUNT], excluded: PoseList::EMPTY };
     warnings.excluded.copy_from(excluded);
-    let structurally_undetermined = undetermined_parameters(x, set.norm);
+    // The covariance is no longer needed: scratch for the structural test.
+    let structurally_undetermined = undetermined_in(x, set.norm, &mut cov);
     for i in 0..PARAM_COUNT {
         if held.contains(i) {
             (std[i], warnings.held[i]) = (f32::INFINITY, true);
