@@ -162,6 +162,11 @@ impl PoseList {
         &self.index[..usize::from(self.len).min(MAX_EXCLUDED)]
     }
 
+    /// How many indices (at most [`MAX_EXCLUDED`]: [`PoseList::push`] stops there; no clamp).
+    pub(crate) fn count(&self) -> usize {
+        usize::from(self.len)
+    }
+
     /// `true` when the list is empty.
     pub fn is_empty(&self) -> bool {
         self.len == 0

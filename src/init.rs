@@ -242,7 +242,7 @@ fn initial_estimate(
     };
     initial.kind = kind;
     initial.held = held_parameters(&held);
-    Ok(list.len() - initial.excluded.as_slice().len())
+    Ok(list.len() - initial.excluded.count())
 }
 
 /// Every pose, in order: `list[i] = i`.
