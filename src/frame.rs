@@ -146,7 +146,6 @@ impl Frame {
     /// sums and products by error-free transformations; once per pose, not per cost evaluation, and no
     /// software `f64` on a Cortex-M4F): `q = |u|^2 - 1` is the small number every modulus error starts
     /// from, and rounding `u` to `f32` first would cost it about 1e-7 absolute.
-    #[inline]
     pub fn normalize(&self, mean: [f32; 3]) -> NormPose {
         let mut u = [0.0f32; 3];
         // q = sum(hi) - 1 + sum(lo), the large part summed without error.
