@@ -177,7 +177,9 @@ impl<const MAX_POSES: usize> NormalizedPoses<MAX_POSES> {
         &self.source
     }
 
-    /// The poses used, with `poses` the poses this was prepared from.
+    /// The poses used, with `poses` the poses this was prepared from. Out of line: the calibration's
+    /// calls share one copy.
+    #[inline(never)]
     pub fn pose_set<'a>(&'a self, poses: &'a [Pose]) -> PoseSet<'a> {
         PoseSet { poses, norm: &self.poses, source: &self.source }
     }
