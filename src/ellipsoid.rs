@@ -672,6 +672,19 @@ mod tests {
     }
 
     #[test]
+    fn a_pose_list_counts_at_most_max_excluded() {
+        let mut list = PoseList::EMPTY;
+        for i in 0..3 * MAX_EXCLUDED as u16 {
+            list.push(i);
+            assert_eq!(list.count(), list.as_slice().len());
+        }
+        assert_eq!(list.count(), MAX_EXCLUDED);
+        let mut copy = PoseList::EMPTY;
+        copy.copy_from(&list);
+        assert_eq!((copy.count(), copy), (MAX_EXCLUDED, list));
+    }
+
+    #[test]
     fn refuses_bad_input() {
         let mut kept = all::<3>();
         let ones = [Pose::from_mean([1.0; 3], 100); 3];
