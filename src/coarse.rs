@@ -158,7 +158,8 @@ impl CoarseCalibration {
     pub fn from_poses(poses: &[Pose], gravity: f32) -> Result<Self, CoarseError> {
         let means = poses.iter().map(|p| &p.mean);
         check_input(means.clone(), gravity).map_err(CoarseError::from)?;
-        let (offset, gain, poses_used) = face_means(means, gravity)?;
+        let (mut offset, mut gain) = ([0.0; 3], [0.0; 3]);
+        let poses_used = face_means(means, gravity, &mut offset, &mut gain)?;
         Ok(Self { frame: Frame::new(offset, gain, gravity)?, poses_used })
     }
 
@@ -212,13 +213,15 @@ fn check_reversed(half: [f32; 3], widest: f32) -> Result<(), CoarseError> {
     Ok(())
 }
 
-/// The six-position offset `b` and gain `k` per axis from pose means [`check_input`] has accepted, and
-/// how many poses were averaged into `V_up` / `V_down` per axis.
-#[allow(clippy::type_complexity)] // Three arrays, named in the doc.
+/// The six-position offset `b` and gain `k` per axis from pose means [`check_input`] has accepted,
+/// written into `offset` and `gain` (where they stay: no copies), and how many poses were averaged
+/// into `V_up` / `V_down` per axis.
 pub(crate) fn face_means<'a>(
     means: impl Iterator<Item = &'a [f32; 3]> + Clone,
     gravity: f32,
-) -> Result<([f32; 3], [f32; 3], [[u16; 2]; 3]), CoarseError> {
+    offset: &mut [f32; 3],
+    gain: &mut [f32; 3],
+) -> Result<[[u16; 2]; 3], CoarseError> {
     // Centre and half-range per axis from the extremes: removes the large offsets of raw counts.
     let (mid, half, widest) = mid_range(means.clone());
     check_reversed(half, widest)?;
@@ -241,8 +244,6 @@ pub(crate) fn face_means<'a>(
             }
         }
     }
-    let mut offset = [0.0; 3];
-    let mut gain = [0.0; 3];
     for a in 0..3 {
         let [up, down] = counts[a];
         if up == 0 || down == 0 {
@@ -256,5 +257,5 @@ pub(crate) fn face_means<'a>(
         gain[a] = (v_up - v_down) / (2.0 * gravity);
         offset[a] = 0.5 * (v_up + v_down);
     }
-    Ok((offset, gain, counts))
+    Ok(counts)
 }

@@ -113,18 +113,33 @@ fn quotient((n_hi, n_lo): (f32, f32), (d_hi, d_lo): (f32, f32)) -> (f32, f32) {
 impl Frame {
     /// A frame with per-axis `offset` and `gain` (input unit per output unit) and `gravity` (output unit).
     pub fn new(offset: [f32; 3], gain: [f32; 3], gravity: f32) -> Result<Self, FrameError> {
-        if !crate::linalg::positive_finite(gravity) {
+        let frame = Self { offset, gain, gravity };
+        frame.validate()?;
+        Ok(frame)
+    }
+
+    /// The checks of [`Frame::new`].
+    #[inline]
+    fn validate(&self) -> Result<(), FrameError> {
+        if !crate::linalg::positive_finite(self.gravity) {
             return Err(FrameError::InvalidGravity);
         }
-        for (axis, &k) in gain.iter().enumerate() {
+        self.validate_axes()
+    }
+
+    /// The checks of [`Frame::new`] but gravity's, on a frame written in place with a gravity
+    /// checked before.
+    #[inline]
+    pub(crate) fn validate_axes(&self) -> Result<(), FrameError> {
+        for (axis, &k) in self.gain.iter().enumerate() {
             if !crate::linalg::nonzero_finite(k) {
                 return Err(FrameError::DegenerateGain { axis: axis as u8 });
             }
         }
-        if !offset.iter().all(|&c| crate::linalg::finite(c)) {
+        if !self.offset.iter().all(|&c| crate::linalg::finite(c)) {
             return Err(FrameError::NonFiniteOffset);
         }
-        Ok(Self { offset, gain, gravity })
+        Ok(())
     }
 
     /// Normalises one pose mean (input unit). `u` and `q` are formed in double-`f32` arithmetic (exact

@@ -177,7 +177,9 @@ impl<const MAX_POSES: usize> NormalizedPoses<MAX_POSES> {
         &self.source
     }
 
-    /// The poses used, with `poses` the poses this was prepared from.
+    /// The poses used, with `poses` the poses this was prepared from. Out of line: the calibration's
+    /// calls share one copy.
+    #[inline(never)]
     pub fn pose_set<'a>(&'a self, poses: &'a [Pose]) -> PoseSet<'a> {
         PoseSet { poses, norm: &self.poses, source: &self.source }
     }
@@ -200,15 +202,20 @@ fn initial_estimate(
     if let Err(e) = check_input(poses.iter().map(|p| &p.mean), gravity) {
         return Err(if init == Init::SixPosition { InitError::Coarse(e.into()) } else { InitError::Ellipsoid(e) });
     }
-    // The ellipsoid's model and the poses it leaves out are written in place; its centre and held
-    // terms kept here.
-    let mut fitted = None;
+    // The ellipsoid's model and the poses it leaves out are written in place, its centre and gains
+    // `1 / S` into the frame; its held terms kept here.
+    let mut held = None;
     let mut ellipsoid_error = None;
     every_pose(list);
+    frame.gravity = gravity;
     if init != Init::SixPosition {
         let mut fitting = Fitting::new(poses, gravity, &mut initial.params, &mut initial.excluded);
         match fitting.robust(list, rule) {
-            Ok(()) => fitted = Some((fitting.center, fitting.held)),
+            Ok(()) => {
+                (held, frame.offset) = (Some(fitting.held), fitting.center);
+                let s = &initial.params.scale;
+                frame.gain = [1.0 / s[0], 1.0 / s[1], 1.0 / s[2]];
+            }
             Err(e) if init == Init::Ellipsoid => return Err(InitError::Ellipsoid(e)),
             Err(e) => {
                 every_pose(list);
@@ -216,17 +223,19 @@ fn initial_estimate(
             }
         }
     }
-    // The normalising frame: the ellipsoid's centre and gains `1 / S`, or the six faces' own
-    // (exactly: the paper's path).
-    let frame_or_error = match fitted {
-        Some((center, _)) => Ok((center, initial.params.scale.map(|s| 1.0 / s))),
-        None => face_means(kept(poses, list), gravity).map(|(offset, gain, _)| (offset, gain)),
+    // The six faces' own frame (exactly: the paper's path), then the checks of either frame (gravity
+    // checked above).
+    let checked = match held {
+        None => face_means(kept(poses, list), gravity, &mut frame.offset, &mut frame.gain).map(|_| ()),
+        Some(_) => Ok(()),
     }
-    .and_then(|(offset, gain)| Ok(Frame::new(offset, gain, gravity)?));
+    .and_then(|()| Ok(frame.validate_axes()?));
     // When the six faces are the fallback, the ellipsoid's error is the one reported.
-    *frame = frame_or_error.map_err(|e| ellipsoid_error.map_or(InitError::Coarse(e), InitError::Ellipsoid))?;
-    let (kind, held) = match fitted {
-        Some((_, held)) => (Init::Ellipsoid, held),
+    if let Err(e) = checked {
+        return Err(ellipsoid_error.map_or(InitError::Coarse(e), InitError::Ellipsoid));
+    }
+    let (kind, held) = match held {
+        Some(held) => (Init::Ellipsoid, held),
         None => {
             initial.params = frame.to_params(&[0.0; PARAM_COUNT]);
             initial.excluded = PoseList::EMPTY;
@@ -235,7 +244,7 @@ fn initial_estimate(
     };
     initial.kind = kind;
     initial.held = held_parameters(&held);
-    Ok(list.len() - initial.excluded.as_slice().len())
+    Ok(list.len() - initial.excluded.count())
 }
 
 /// Every pose, in order: `list[i] = i`.
@@ -249,15 +258,14 @@ fn every_pose(list: &mut [u16]) {
 /// at 0, written into `start`: the frame's offset is the model's centre, whose image `Ka c` is the
 /// model's bias (the ellipsoid computes `B` so, and [`Frame::to_params`] the six faces' model), so the
 /// bias deviations are exactly 0; only non-orthogonality terms are ever held.
+#[inline(always)] // one caller
 fn start_deviation(initial: &Initial, frame: &Frame, start: &mut Deviation) {
     let (p, k) = (&initial.params, frame.gain);
-    *start = [0.0; PARAM_COUNT];
     for a in 0..3 {
+        start[a] = 0.0;
         start[3 + a] = p.scale[a] * k[a] - 1.0;
         // Mxx and Myy are relative to the x gain, Mzz to the y gain.
-        if !initial.held[6 + a] {
-            start[6 + a] = p.nonorth[a] * k[a / 2];
-        }
+        start[6 + a] = if initial.held[6 + a] { 0.0 } else { p.nonorth[a] * k[a / 2] };
     }
 }
 
