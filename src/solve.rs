@@ -184,14 +184,15 @@ fn add(x: &Deviation, step: &Deviation) -> Deviation {
     out
 }
 
-/// `x - step` and the largest `|step|` ([`max_abs`]), in one loop.
-fn sub(x: &Deviation, step: &Deviation) -> (Deviation, f32) {
-    let (mut out, mut largest) = (*x, 0.0f32);
-    for (o, s) in out.iter_mut().zip(step) {
-        *o -= s;
+/// `step` becomes `x - step`; returns the largest `|step|` ([`max_abs`]), in one loop (in place: no
+/// candidate vector beside the step).
+fn subtract_from(x: &Deviation, step: &mut Deviation) -> f32 {
+    let mut largest = 0.0f32;
+    for (s, &xi) in step.iter_mut().zip(x) {
         largest = if s.abs() > largest { s.abs() } else { largest };
+        *s = xi - *s;
     }
-    (out, largest)
+    largest
 }
 
 /// Levenberg-Marquardt on the per-pose modulus errors, from `x0`.
@@ -235,9 +236,7 @@ pub fn levenberg_marquardt_holding(
         return Err(SolveError::Diverged);
     }
     let mut lambda = config.initial_damping;
-    let mut jtj = [[0.0; PARAM_COUNT]; PARAM_COUNT];
-    let mut jte = [0.0; PARAM_COUNT];
-    let mut damped = [[0.0; PARAM_COUNT]; PARAM_COUNT];
+    let (mut jtj, mut jte, mut damped) = (ZERO_MATRIX, [0.0; PARAM_COUNT], ZERO_MATRIX);
     // The normal equations are built (in place) at the start and after each accepted step.
     let mut rebuild = true;
     let mut iterations = 0;
@@ -256,15 +255,15 @@ pub fn levenberg_marquardt_holding(
             damped[i][i] = jtj[i][i] + lambda * larger(jtj[i][i], 1e-12);
         }
         // Solved for `J^T e`, the step is its negative (exactly: rounding is symmetric).
-        let mut step = jte;
-        if ldlt_solve_holding_split(&jtj, &mut damped, &mut step, held).is_err() {
+        let mut candidate = jte;
+        if ldlt_solve_holding_split(&jtj, &mut damped, &mut candidate, held).is_err() {
             if lambda < 1e10 {
                 lambda *= 10.0;
                 continue;
             }
             return Err(SolveError::Singular);
         }
-        let (candidate, largest_step) = sub(&x, &step);
+        let largest_step = subtract_from(&x, &mut candidate);
         let candidate_cost = objective(&candidate, poses);
         // (`cost` is finite: not above it means finite, NaN excluded.)
         if candidate_cost <= cost {
@@ -283,6 +282,9 @@ pub fn levenberg_marquardt_holding(
     };
     Ok(SolveReport { x, cost, iterations, termination })
 }
+
+/// A zero matrix; as a `const` it is one `memset` call, `[[0.0; 9]; 9]` in place was one per row.
+const ZERO_MATRIX: Matrix<PARAM_COUNT> = [[0.0; PARAM_COUNT]; PARAM_COUNT];
 
 /// The classical Newton iteration on `fE` (the paper's baseline): full Hessian
 /// `H = (2/N) sum(grad E grad E^T + 2 E Jr^T Jr)`, undamped step `H d = -grad fE`, no line search.
