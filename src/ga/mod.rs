@@ -355,7 +355,7 @@ impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O
                 let u = uniform(&mut self.rng);
                 self.population[i][d] = self.bounds.lower[d] + u * (self.bounds.upper[d] - self.bounds.lower[d]);
             }
-            self.costs[i] = self.evaluate(cost, i);
+            self.costs[i] = Self::evaluate(&mut self.evaluations, cost, &self.population[i]);
         }
         self.best_index = argmin(&self.costs);
         Ok(())
@@ -372,16 +372,16 @@ impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O
         for d in 0..DIM {
             self.population[worst][d] = self.bounds.clamp(d, x[d]);
         }
-        self.costs[worst] = self.evaluate(cost, worst);
+        self.costs[worst] = Self::evaluate(&mut self.evaluations, cost, &self.population[worst]);
         self.best_index = argmin(&self.costs);
     }
 
-    /// The cost of individual `i`, counted; non-finite costs become [`WORST_COST`]. Out of line: three
-    /// callers.
+    /// The cost of `x` (an individual), counted in `evaluations`; non-finite costs become [`WORST_COST`].
+    /// Out of line: three callers.
     #[inline(never)]
-    fn evaluate(&mut self, cost: &impl CostFunction<DIM>, i: usize) -> f32 {
-        self.evaluations = self.evaluations.saturating_add(1);
-        let c = self.population.get(i).map_or(WORST_COST, |x| cost.cost(x));
+    fn evaluate(evaluations: &mut u32, cost: &impl CostFunction<DIM>, x: &[f32; DIM]) -> f32 {
+        *evaluations = evaluations.saturating_add(1);
+        let c = cost.cost(x);
         if c.is_finite() && c < WORST_COST { c } else { WORST_COST }
     }
 
@@ -433,7 +433,11 @@ impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O
         // only offspring are evaluated.
         for i in 0..POP {
             self.population[i] = self.offspring[i];
-            self.costs[i] = if i < self.config.elites { parent_fitness[i] } else { self.evaluate(cost, i) };
+            self.costs[i] = if i < self.config.elites {
+                parent_fitness[i]
+            } else {
+                Self::evaluate(&mut self.evaluations, cost, &self.population[i])
+            };
         }
         self.best_index = argmin(&self.costs);
         self.generation += 1;
