@@ -407,6 +407,13 @@ impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O
 
     /// Fitness statistics of the current population (`f = -cost`), for producing the next generation.
     pub fn fitness_stats(&self) -> FitnessStats {
+        self.stats()
+    }
+
+    /// [`Ga::fitness_stats`], inlined into the step (its one caller there): no call, no result written
+    /// to memory and read back.
+    #[inline(always)]
+    fn stats(&self) -> FitnessStats {
         let sum: f32 = self.costs.iter().sum();
         let next = self.generation.saturating_add(1);
         FitnessStats { max: -self.best_cost_in_step(), avg: -(sum / POP as f32), lg_generation: lg_count(next) }
@@ -415,7 +422,7 @@ impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O
     /// Runs one generation: elitism, selection, crossover, mutation, evaluation.
     #[inline(never)]
     pub fn step(&mut self, cost: &impl CostFunction<DIM>) {
-        let stats = self.fitness_stats();
+        let stats = self.stats();
         let [crossover, mutation] = self.config.operators.curves(stats.lg_generation);
         let spread = self.gene_spread();
         let previous_best = self.best_cost_in_step();
