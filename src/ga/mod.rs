@@ -483,18 +483,19 @@ impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O
             let (fa, fb) = (-self.costs[a], -self.costs[b]);
             let pc = O::probability(crossover, if fa >= fb { fa } else { fb }, stats);
             // The parents copied into their children's slots; the second child into `spare` (bred for the
-            // draws, then dropped) when the last slot is taken.
-            let mut spare = self.population[b];
+            // draws, then dropped) when the last slot is taken. One copy per parent.
+            let mut spare;
             let Some((first, rest)) = self.offspring.get_mut(slot..).and_then(|s| s.split_first_mut()) else {
                 break;
             };
             let second = match rest.first_mut() {
-                Some(second) => {
-                    second.copy_from_slice(&spare);
-                    second
+                Some(second) => second,
+                None => {
+                    spare = [0.0; DIM];
+                    &mut spare
                 }
-                None => &mut spare,
             };
+            second.copy_from_slice(&self.population[b]);
             first.copy_from_slice(&self.population[a]);
             if uniform(&mut self.rng) < pc {
                 blend(&mut self.rng, &self.bounds, self.config.blend_alpha, first, second);
