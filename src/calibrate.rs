@@ -248,8 +248,7 @@ fn seed_population<R: Rng, const POP: usize>(
     half: &[f32; PARAM_COUNT],
 ) -> Result<(), GaError> {
     ga.set_bounds_around(start, half)?;
-    ga.initialize(&PoseCost(norm))?;
-    ga.inject(start, &PoseCost(norm));
+    ga.initialize_with(start, &PoseCost(norm))?;
     Ok(())
 }
 

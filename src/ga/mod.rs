@@ -346,6 +346,22 @@ impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O
     /// Checks the configuration ([`GaConfig::validate`]), draws the population uniformly from the box
     /// and evaluates it (generation 0). On an error nothing is drawn.
     pub fn initialize(&mut self, cost: &impl CostFunction<DIM>) -> Result<(), GaError> {
+        self.draw_population(cost)?;
+        self.best_index = argmin(&self.costs);
+        Ok(())
+    }
+
+    /// [`Ga::initialize`], then [`Ga::inject`] of `x`: the best is found once, after both.
+    pub(crate) fn initialize_with(&mut self, x: &[f32; DIM], cost: &impl CostFunction<DIM>) -> Result<(), GaError> {
+        self.draw_population(cost)?;
+        self.replace_worst(x, cost);
+        self.best_index = argmin(&self.costs);
+        Ok(())
+    }
+
+    /// [`Ga::initialize`] but for the best's index.
+    #[inline(always)]
+    fn draw_population(&mut self, cost: &impl CostFunction<DIM>) -> Result<(), GaError> {
         self.config.validate(POP)?;
         self.generation = 0;
         self.evaluations = 0;
@@ -357,12 +373,18 @@ impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O
             }
             self.costs[i] = Self::evaluate(&mut self.evaluations, cost, &self.population[i]);
         }
-        self.best_index = argmin(&self.costs);
         Ok(())
     }
 
     /// Replaces the worst individual by `x` (clamped into the box), e.g. a prior estimate.
     pub fn inject(&mut self, x: &[f32; DIM], cost: &impl CostFunction<DIM>) {
+        self.replace_worst(x, cost);
+        self.best_index = argmin(&self.costs);
+    }
+
+    /// [`Ga::inject`] but for the best's index.
+    #[inline(always)]
+    fn replace_worst(&mut self, x: &[f32; DIM], cost: &impl CostFunction<DIM>) {
         let worst = argmax(&self.costs);
         if worst >= POP {
             // Unreachable (argmax returns an index of `costs`); lets the optimiser drop the bounds checks
@@ -373,7 +395,6 @@ impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O
             self.population[worst][d] = self.bounds.clamp(d, x[d]);
         }
         self.costs[worst] = Self::evaluate(&mut self.evaluations, cost, &self.population[worst]);
-        self.best_index = argmin(&self.costs);
     }
 
     /// The cost of `x` (an individual), counted in `evaluations`; non-finite costs become [`WORST_COST`].
