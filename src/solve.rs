@@ -159,8 +159,9 @@ pub(crate) fn normal_equations(
                 None => continue,
             },
         };
-        let (e, g) = modulus_error_gradient(x, pose);
-        add_normal_row(jtj, jte, &g, w, e);
+        // Read in place (destructured, the gradient was copied).
+        let error_gradient = modulus_error_gradient(x, pose);
+        add_normal_row(jtj, jte, &error_gradient.1, w, error_gradient.0);
     }
 }
 
