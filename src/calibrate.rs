@@ -416,11 +416,15 @@ impl<const MAX_POSES: usize> Prepared<MAX_POSES> {
     /// `Optimised` returned in a `Result` was copied).
     fn polish(&self, run: &mut Optimised, config: &CalibrationConfig) -> Result<(), CalibrationError> {
         let norm = self.poses();
-        let r = match config.method {
-            Method::Newton => newton_holding(run.x, norm, &config.newton, self.held)?,
-            _ => levenberg_marquardt_holding(run.x, norm, &config.lm, self.held)?,
+        let solved = match config.method {
+            Method::Newton => newton_holding(run.x, norm, &config.newton, self.held),
+            _ => levenberg_marquardt_holding(run.x, norm, &config.lm, self.held),
         };
-        run.polished(&r);
+        // Read where the solver wrote it (`?` moved the report out of the `Result`: one more copy).
+        match &solved {
+            Ok(r) => run.polished(r),
+            Err(e) => return Err((*e).into()),
+        }
         Ok(())
     }
 
