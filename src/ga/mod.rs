@@ -165,9 +165,10 @@ impl<const DIM: usize> SearchBox<DIM> {
     }
 }
 
-/// A search interval's width is positive and finite (so neither bound is infinite or NaN).
+/// A search interval's width is positive and finite (so neither bound is infinite or NaN). `<= MAX`,
+/// not `< INFINITY` (the same for every width): two float compares, not the bit tests of a class check.
 fn valid_width(width: f32) -> bool {
-    width > 0.0 && width < f32::INFINITY
+    width > 0.0 && width <= f32::MAX
 }
 
 /// `v` reflected at `lo` and `hi`, then clamped into `[lo, hi]`. Out of line: three callers (flash
