@@ -50,8 +50,10 @@ impl Params {
     }
 
     /// `true` when every parameter is finite.
+    #[inline(never)]
     pub fn is_finite(&self) -> bool {
-        self.to_array().iter().all(|&v| crate::linalg::finite(v))
+        // Read in place (`to_array` first copied the nine values to the stack).
+        [&self.bias, &self.scale, &self.nonorth].iter().all(|a| a.iter().all(|&v| crate::linalg::finite(v)))
     }
 
     /// `Ka * f_s` (no bias).
