@@ -182,6 +182,20 @@ mod tests {
     }
 
     #[test]
+    fn apply_in_place_matches_apply_for_odd_and_even_batches() {
+        let samples: [[f32; 3]; 5] =
+            core::array::from_fn(|i| [i as f32 - 2.5, 9.8 - i as f32 * 0.3, (i * i) as f32 * 0.7 - 3.0]);
+        for n in 0..=samples.len() {
+            let mut batch = samples;
+            TRUTH.apply_in_place(&mut batch[..n]);
+            for i in 0..samples.len() {
+                let expected = if i < n { TRUTH.apply(samples[i]) } else { samples[i] };
+                assert_eq!(batch[i], expected, "batch of {n}, sample {i}");
+            }
+        }
+    }
+
+    #[test]
     fn singular_model_does_not_invert() {
         let mut p = TRUTH;
         p.scale[1] = 0.0;

@@ -785,6 +785,16 @@ mod tests {
     }
 
     #[test]
+    fn a_box_of_the_largest_finite_width_is_valid_and_an_infinite_or_nan_one_is_not() {
+        // Width `2 * (MAX / 2) = MAX`: the largest valid one; `2 * MAX` overflows to infinity.
+        assert!(SearchBox::around(&[0.0, 1.0], &[f32::MAX / 2.0, 1.0]).is_ok());
+        assert_eq!(SearchBox::around(&[0.0, 1.0], &[1.0, f32::MAX]), Err(GaError::InvalidInterval { dim: 1 }));
+        assert_eq!(SearchBox::around(&[f32::NAN], &[1.0]), Err(GaError::InvalidInterval { dim: 0 }));
+        assert_eq!(SearchBox::around(&[0.0], &[0.0]), Err(GaError::InvalidInterval { dim: 0 }));
+        assert_eq!(SearchBox::new([f32::MIN], [f32::MAX]), Err(GaError::InvalidInterval { dim: 0 }));
+    }
+
+    #[test]
     fn lg_count_is_within_three_ulps_of_log10_for_every_count_to_a_million() {
         let (mut worst_ulps, mut differ) = (0u32, 0u32);
         for n in 1..=1_000_000u32 {
