@@ -66,6 +66,22 @@ impl Params {
     /// Calibrates one sample: `f_b = Ka * f_s - B`.
     #[inline]
     pub fn apply(&self, f_s: [f32; 3]) -> [f32; 3] {
+        let mut sample = f_s;
+        self.apply_to(&mut sample);
+        sample
+    }
+
+    /// [`Params::apply`] in place. Out of line: one copy of the arithmetic for the library's
+    /// single-sample callers and the odd last sample of a batch (the batch loop inlines its own,
+    /// [`Params::calibrated`]).
+    #[inline(never)]
+    fn apply_to(&self, sample: &mut [f32; 3]) {
+        *sample = self.calibrated(*sample);
+    }
+
+    /// [`Params::apply`], inlined.
+    #[inline(always)]
+    fn calibrated(&self, f_s: [f32; 3]) -> [f32; 3] {
         let k = self.ka_times(f_s);
         [k[0] - self.bias[0], k[1] - self.bias[1], k[2] - self.bias[2]]
     }
@@ -75,13 +91,13 @@ impl Params {
     pub fn apply_in_place(&self, samples: &mut [[f32; 3]]) {
         let mut pairs = samples.chunks_exact_mut(2);
         for pair in &mut pairs {
-            let (a, b) = (self.apply(pair[0]), self.apply(pair[1]));
+            let (a, b) = (self.calibrated(pair[0]), self.calibrated(pair[1]));
             pair[0] = a;
             pair[1] = b;
         }
         // At most one sample is left: no loop.
         if let [last] = pairs.into_remainder() {
-            *last = self.apply(*last);
+            self.apply_to(last);
         }
     }
 
