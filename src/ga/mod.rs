@@ -480,14 +480,13 @@ impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O
     #[inline(always)]
     fn keep_elites(&mut self, costs: &mut [f32; POP]) {
         let (mut after_cost, mut after_index) = (f32::NEG_INFINITY, usize::MAX);
-        for e in 0..self.config.elites {
+        // `min`: `elites` is below `POP` already (validated); it spares the bounds checks of `e`.
+        for e in 0..self.config.elites.min(POP) {
             let best = next_smallest(&self.costs, after_cost, after_index);
-            if let (Some(&cost), Some(kept), Some(slot), Some(genes)) =
-                (self.costs.get(best), costs.get_mut(e), self.offspring.get_mut(e), self.population.get(best))
-            {
+            if let (Some(&cost), Some(genes)) = (self.costs.get(best), self.population.get(best)) {
                 // `copy_from_slice`: an assignment of one row to another here linked `memmove` (1.5 KB).
-                slot.copy_from_slice(genes);
-                *kept = cost;
+                self.offspring[e].copy_from_slice(genes);
+                costs[e] = cost;
                 (after_cost, after_index) = (cost, best);
             }
         }
