@@ -231,24 +231,24 @@ pub fn levenberg_marquardt_holding(
     held: Held,
 ) -> Result<SolveReport, SolveError> {
     check_input(&x0, poses, held)?;
-    let mut x = x0;
-    let mut cost = objective(&x, poses);
-    if !cost.is_finite() {
+    // The iterate lives in the report (written where it is returned: no copy at the end).
+    let mut r =
+        SolveReport { cost: objective(&x0, poses), x: x0, iterations: 0, termination: SolveTermination::MaxIterations };
+    if !r.cost.is_finite() {
         return Err(SolveError::Diverged);
     }
     let mut lambda = config.initial_damping;
     let (mut jtj, mut jte, mut damped) = (ZERO_MATRIX, [0.0; PARAM_COUNT], ZERO_MATRIX);
     // The normal equations are built (in place) at the start and after each accepted step.
     let mut rebuild = true;
-    let mut iterations = 0;
     // One exit (one report written): about 100 bytes fewer on a Cortex-M4F than a return per reason.
-    let termination = loop {
-        if iterations == config.max_iterations {
+    r.termination = loop {
+        if r.iterations == config.max_iterations {
             break SolveTermination::MaxIterations;
         }
-        iterations += 1;
+        r.iterations += 1;
         if rebuild {
-            normal_equations(&x, poses, None, &mut jtj, &mut jte);
+            normal_equations(&r.x, poses, None, &mut jtj, &mut jte);
             rebuild = false;
         }
         // The damped matrix is `jtj` below the diagonal (read from there: no copy) and this diagonal.
@@ -264,11 +264,11 @@ pub fn levenberg_marquardt_holding(
             }
             return Err(SolveError::Singular);
         }
-        let largest_step = subtract_from(&x, &mut candidate);
+        let largest_step = subtract_from(&r.x, &mut candidate);
         let candidate_cost = objective(&candidate, poses);
         // (`cost` is finite: not above it means finite, NaN excluded.)
-        if candidate_cost <= cost {
-            (x, cost) = (candidate, candidate_cost);
+        if candidate_cost <= r.cost {
+            (r.x, r.cost) = (candidate, candidate_cost);
             lambda = larger(lambda * 0.3, 1e-9);
             if largest_step < config.step_tolerance {
                 break SolveTermination::Converged;
@@ -281,7 +281,7 @@ pub fn levenberg_marquardt_holding(
             }
         }
     };
-    Ok(SolveReport { x, cost, iterations, termination })
+    Ok(r)
 }
 
 /// A zero matrix; as a `const` it is one `memset` call, `[[0.0; 9]; 9]` in place was one per row.
