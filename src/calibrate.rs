@@ -265,7 +265,7 @@ impl crate::ga::CostFunction<PARAM_COUNT> for PoseCost<'_> {
 
 /// The half-widths of the GA's search box for `intervals` around `start` (held parameters pinned to a
 /// zero-width-like interval); the box is `start +- half` ([`SearchBox::around`]).
-#[inline(never)] // its matrices need not share a stack frame with the GA's state
+#[inline] // into the caller's array (returned, it was copied); the matrices are out of line below
 pub fn search_half_widths(
     intervals: &Intervals,
     start: &Deviation,
@@ -282,7 +282,9 @@ pub fn search_half_widths(
 }
 
 /// `sigmas` standard deviations of each parameter at `start` ([`Intervals::Uncertainty`]) into `half`;
-/// `half` is left as it is when the covariance cannot be formed.
+/// `half` is left as it is when the covariance cannot be formed. Out of line: its matrices need not
+/// share a stack frame with the GA's state.
+#[inline(never)]
 fn uncertainty_half_widths(
     sigmas: f32,
     start: &Deviation,
