@@ -26,7 +26,7 @@ use crate::ga::{Ga, GaConfig, GaError, SearchBox};
 pub use crate::init::{Init, InitError, Initial, NormalizedPoses};
 use crate::linalg::{Held, larger};
 use crate::model::{PARAM_COUNT, Params};
-use crate::solve::{LmConfig, NewtonConfig, SolveError, SolveTermination, levenberg_marquardt_holding, newton_holding};
+use crate::solve::{LmConfig, NewtonConfig, SolveError, SolveTermination, levenberg_marquardt_counted, newton_holding};
 use crate::verdict::{PoseSet, Verdict, VerdictBounds, information_in_place, judge_run, parameters_to_hold};
 
 /// The recommended seeded generator for the GA: 32-bit state arithmetic, fast on a Cortex-M4.
@@ -420,7 +420,8 @@ impl<const MAX_POSES: usize> Prepared<MAX_POSES> {
         let norm = self.poses();
         let solved = match config.method {
             Method::Newton => newton_holding(run.x, norm, &config.newton, self.held),
-            _ => levenberg_marquardt_holding(run.x, norm, &config.lm, self.held),
+            // The number of poses was checked by `refill`.
+            _ => levenberg_marquardt_counted(run.x, norm, &config.lm, self.held),
         };
         // Read where the solver wrote it (`?` moved the report out of the `Result`: one more copy).
         match &solved {

@@ -124,8 +124,22 @@ impl Default for NewtonConfig {
 
 /// At least one pose per free parameter, everything finite.
 fn check_input(x: &Deviation, poses: &[NormPose], held: Held) -> Result<(), SolveError> {
+    check_count(poses, held)?;
+    check_finite(x, poses)
+}
+
+/// At least one pose per free parameter, and one at least.
+fn check_count(poses: &[NormPose], held: Held) -> Result<(), SolveError> {
     if poses.len() < PARAM_COUNT - held.count() || poses.is_empty() {
         return Err(SolveError::TooFewPoses { got: poses.len() });
+    }
+    Ok(())
+}
+
+/// Everything finite, and one pose at least.
+fn check_finite(x: &Deviation, poses: &[NormPose]) -> Result<(), SolveError> {
+    if poses.is_empty() {
+        return Err(SolveError::TooFewPoses { got: 0 });
     }
     let poses_finite = poses.iter().all(|p| finite(p.q) && p.u.iter().all(|&v| finite(v)));
     if !poses_finite || !x.iter().all(|&v| finite(v)) {
@@ -223,14 +237,26 @@ fn hold(jtj: &mut Matrix<PARAM_COUNT>, rhs: &mut Deviation, held: Held) {
 }
 
 /// [`levenberg_marquardt`] with the parameters flagged in `held` fixed at their values in `x0`.
-#[inline(never)] // its frame need not merge with the caller's (peak stack on the device)
 pub fn levenberg_marquardt_holding(
     x0: Deviation,
     poses: &[NormPose],
     config: &LmConfig,
     held: Held,
 ) -> Result<SolveReport, SolveError> {
-    check_input(&x0, poses, held)?;
+    check_count(poses, held)?;
+    levenberg_marquardt_counted(x0, poses, config, held)
+}
+
+/// [`levenberg_marquardt_holding`] on poses whose number the caller has checked (a calibration checks
+/// it when it prepares the problem: not twice).
+#[inline(never)] // its frame need not merge with the caller's (peak stack on the device)
+pub(crate) fn levenberg_marquardt_counted(
+    x0: Deviation,
+    poses: &[NormPose],
+    config: &LmConfig,
+    held: Held,
+) -> Result<SolveReport, SolveError> {
+    check_finite(&x0, poses)?;
     // The iterate lives in the report (written where it is returned: no copy at the end).
     let mut r =
         SolveReport { cost: objective(&x0, poses), x: x0, iterations: 0, termination: SolveTermination::MaxIterations };
