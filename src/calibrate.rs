@@ -26,7 +26,9 @@ use crate::ga::{Ga, GaConfig, GaError, SearchBox};
 pub use crate::init::{Init, InitError, Initial, NormalizedPoses};
 use crate::linalg::{Held, larger};
 use crate::model::{PARAM_COUNT, Params};
-use crate::solve::{LmConfig, NewtonConfig, SolveError, SolveTermination, levenberg_marquardt_counted, newton_holding};
+use crate::solve::{
+    LmConfig, NewtonConfig, SolveError, SolveTermination, levenberg_marquardt_in_place, newton_holding,
+};
 use crate::verdict::{PoseSet, Verdict, VerdictBounds, information_in_place, judge_run, parameters_to_hold};
 
 /// The recommended seeded generator for the GA: 32-bit state arithmetic, fast on a Cortex-M4.
@@ -354,11 +356,6 @@ impl Optimised {
             ..Self::at(report.best)
         }
     }
-
-    /// Newton or LM from `self.x` (a GA's best, or the start) ran and gave `r`.
-    fn polished(&mut self, r: &crate::solve::SolveReport) {
-        (self.x, self.iterations, self.solver_termination) = (r.x, r.iterations, Some(r.termination));
-    }
 }
 
 /// The problem every optimiser solves: the poses normalised in the frame of the initial estimate, the
@@ -418,16 +415,19 @@ impl<const MAX_POSES: usize> Prepared<MAX_POSES> {
     /// `Optimised` returned in a `Result` was copied).
     fn polish(&self, run: &mut Optimised, config: &CalibrationConfig) -> Result<(), CalibrationError> {
         let norm = self.poses();
-        let solved = match config.method {
-            Method::Newton => newton_holding(run.x, norm, &config.newton, self.held),
-            // The number of poses was checked by `refill`.
-            _ => levenberg_marquardt_counted(run.x, norm, &config.lm, self.held),
+        let (iterations, termination) = match config.method {
+            Method::Newton => {
+                let r = newton_holding(run.x, norm, &config.newton, self.held)?;
+                run.x = r.x;
+                (r.iterations, r.termination)
+            }
+            // In place; the number of poses was checked by `refill`.
+            _ => {
+                let end = levenberg_marquardt_in_place(&mut run.x, norm, &config.lm, self.held)?;
+                (end.iterations, end.termination)
+            }
         };
-        // Read where the solver wrote it (`?` moved the report out of the `Result`: one more copy).
-        match &solved {
-            Ok(r) => run.polished(r),
-            Err(e) => return Err((*e).into()),
-        }
+        (run.iterations, run.solver_termination) = (iterations, Some(termination));
         Ok(())
     }
 

@@ -244,37 +244,49 @@ pub fn levenberg_marquardt_holding(
     held: Held,
 ) -> Result<SolveReport, SolveError> {
     check_count(poses, held)?;
-    levenberg_marquardt_counted(x0, poses, config, held)
+    let mut x = x0;
+    let end = levenberg_marquardt_in_place(&mut x, poses, config, held)?;
+    Ok(SolveReport { x, cost: end.cost, iterations: end.iterations, termination: end.termination })
 }
 
-/// [`levenberg_marquardt_holding`] on poses whose number the caller has checked (a calibration checks
-/// it when it prepares the problem: not twice).
+/// How [`levenberg_marquardt_in_place`] ended: a [`SolveReport`] but for the deviation vector.
+pub(crate) struct LmEnd {
+    /// Normalised objective at the result.
+    pub cost: f32,
+    /// Iterations run.
+    pub iterations: u32,
+    /// Why it stopped.
+    pub termination: SolveTermination,
+}
+
+/// [`levenberg_marquardt_holding`] from `x`, into `x` (no copy of the vector in and out), on poses
+/// whose number the caller has checked (a calibration checks it when it prepares the problem: not
+/// twice). On an error `x` is unspecified.
 #[inline(never)] // its frame need not merge with the caller's (peak stack on the device)
-pub(crate) fn levenberg_marquardt_counted(
-    x0: Deviation,
+pub(crate) fn levenberg_marquardt_in_place(
+    x: &mut Deviation,
     poses: &[NormPose],
     config: &LmConfig,
     held: Held,
-) -> Result<SolveReport, SolveError> {
-    check_finite(&x0, poses)?;
-    // The iterate lives in the report (written where it is returned: no copy at the end).
-    let mut r =
-        SolveReport { cost: objective(&x0, poses), x: x0, iterations: 0, termination: SolveTermination::MaxIterations };
-    if !r.cost.is_finite() {
+) -> Result<LmEnd, SolveError> {
+    check_finite(x, poses)?;
+    let mut cost = objective(x, poses);
+    if !cost.is_finite() {
         return Err(SolveError::Diverged);
     }
     let mut lambda = config.initial_damping;
     let (mut jtj, mut jte, mut damped) = (ZERO_MATRIX, [0.0; PARAM_COUNT], ZERO_MATRIX);
     // The normal equations are built (in place) at the start and after each accepted step.
     let mut rebuild = true;
+    let mut iterations = 0;
     // One exit (one report written): about 100 bytes fewer on a Cortex-M4F than a return per reason.
-    r.termination = loop {
-        if r.iterations == config.max_iterations {
+    let termination = loop {
+        if iterations == config.max_iterations {
             break SolveTermination::MaxIterations;
         }
-        r.iterations += 1;
+        iterations += 1;
         if rebuild {
-            normal_equations(&r.x, poses, None, &mut jtj, &mut jte);
+            normal_equations(x, poses, None, &mut jtj, &mut jte);
             rebuild = false;
         }
         // The damped matrix is `jtj` below the diagonal (read from there: no copy) and this diagonal.
@@ -290,11 +302,11 @@ pub(crate) fn levenberg_marquardt_counted(
             }
             return Err(SolveError::Singular);
         }
-        let largest_step = subtract_from(&r.x, &mut candidate);
+        let largest_step = subtract_from(x, &mut candidate);
         let candidate_cost = objective(&candidate, poses);
         // (`cost` is finite: not above it means finite, NaN excluded.)
-        if candidate_cost <= r.cost {
-            (r.x, r.cost) = (candidate, candidate_cost);
+        if candidate_cost <= cost {
+            (*x, cost) = (candidate, candidate_cost);
             lambda = larger(lambda * 0.3, 1e-9);
             if largest_step < config.step_tolerance {
                 break SolveTermination::Converged;
@@ -307,7 +319,7 @@ pub(crate) fn levenberg_marquardt_counted(
             }
         }
     };
-    Ok(r)
+    Ok(LmEnd { cost, iterations, termination })
 }
 
 /// A zero matrix; as a `const` it is one `memset` call, `[[0.0; 9]; 9]` in place was one per row.
