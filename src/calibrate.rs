@@ -26,7 +26,9 @@ use crate::ga::{Ga, GaConfig, GaError, SearchBox};
 pub use crate::init::{Init, InitError, Initial, NormalizedPoses};
 use crate::linalg::{Held, larger};
 use crate::model::{PARAM_COUNT, Params};
-use crate::solve::{LmConfig, NewtonConfig, SolveError, SolveTermination, levenberg_marquardt_holding, newton_holding};
+use crate::solve::{
+    LmConfig, NewtonConfig, SolveError, SolveTermination, levenberg_marquardt_in_place, newton_holding,
+};
 use crate::verdict::{PoseSet, Verdict, VerdictBounds, information_in_place, judge_run, parameters_to_hold};
 
 /// The recommended seeded generator for the GA: 32-bit state arithmetic, fast on a Cortex-M4.
@@ -248,8 +250,7 @@ fn seed_population<R: Rng, const POP: usize>(
     half: &[f32; PARAM_COUNT],
 ) -> Result<(), GaError> {
     ga.set_bounds_around(start, half)?;
-    ga.initialize(&PoseCost(norm))?;
-    ga.inject(start, &PoseCost(norm));
+    ga.initialize_with(start, &PoseCost(norm))?;
     Ok(())
 }
 
@@ -266,7 +267,7 @@ impl crate::ga::CostFunction<PARAM_COUNT> for PoseCost<'_> {
 
 /// The half-widths of the GA's search box for `intervals` around `start` (held parameters pinned to a
 /// zero-width-like interval); the box is `start +- half` ([`SearchBox::around`]).
-#[inline(never)] // its matrices need not share a stack frame with the GA's state
+#[inline] // into the caller's array (returned, it was copied); the matrices are out of line below
 pub fn search_half_widths(
     intervals: &Intervals,
     start: &Deviation,
@@ -283,7 +284,9 @@ pub fn search_half_widths(
 }
 
 /// `sigmas` standard deviations of each parameter at `start` ([`Intervals::Uncertainty`]) into `half`;
-/// `half` is left as it is when the covariance cannot be formed.
+/// `half` is left as it is when the covariance cannot be formed. Out of line: its matrices need not
+/// share a stack frame with the GA's state.
+#[inline(never)]
 fn uncertainty_half_widths(
     sigmas: f32,
     start: &Deviation,
@@ -353,11 +356,6 @@ impl Optimised {
             ..Self::at(report.best)
         }
     }
-
-    /// Newton or LM from `self.x` (a GA's best, or the start) ran and gave `r`.
-    fn polished(self, r: crate::solve::SolveReport) -> Self {
-        Self { x: r.x, iterations: r.iterations, solver_termination: Some(r.termination), ..self }
-    }
 }
 
 /// The problem every optimiser solves: the poses normalised in the frame of the initial estimate, the
@@ -384,8 +382,10 @@ impl<const MAX_POSES: usize> Prepared<MAX_POSES> {
         let normalized = &mut self.normalized;
         normalized.refill(poses, config.init, config.gravity, &config.outliers)?;
         let set = normalized.pose_set(poses);
-        let mut start = normalized.start();
-        let held = parameters_to_hold(&start, normalized.frame(), &set, Held::from_flags(&normalized.initial().held));
+        // Written in place (a local start was copied into `self`).
+        self.start = normalized.start();
+        let held =
+            parameters_to_hold(&self.start, normalized.frame(), &set, Held::from_flags(&normalized.initial().held));
         // One pose per parameter fitted (six faces fit the biases and scale factors).
         let norm = normalized.poses();
         if norm.len() < PARAM_COUNT - held.count() {
@@ -393,10 +393,10 @@ impl<const MAX_POSES: usize> Prepared<MAX_POSES> {
         }
         for i in 0..PARAM_COUNT {
             if held.contains(i) {
-                start[i] = 0.0;
+                self.start[i] = 0.0;
             }
         }
-        (self.held, self.start) = (held, start);
+        self.held = held;
         Ok(())
     }
 
@@ -411,38 +411,53 @@ impl<const MAX_POSES: usize> Prepared<MAX_POSES> {
         search_half_widths(&config.intervals, &self.start, frame, &set, self.held)
     }
 
-    /// Newton or LM (per `config.method`; LM for TAGA+LM) from `run.x`.
-    fn polish(&self, run: Optimised, config: &CalibrationConfig) -> Result<Optimised, CalibrationError> {
+    /// Newton or LM (per `config.method`; LM for TAGA+LM) from `run.x`, into `run` (in place: an
+    /// `Optimised` returned in a `Result` was copied).
+    fn polish(&self, run: &mut Optimised, config: &CalibrationConfig) -> Result<(), CalibrationError> {
         let norm = self.poses();
-        let r = match config.method {
-            Method::Newton => newton_holding(run.x, norm, &config.newton, self.held)?,
-            _ => levenberg_marquardt_holding(run.x, norm, &config.lm, self.held)?,
+        let (iterations, termination) = match config.method {
+            Method::Newton => {
+                let r = newton_holding(run.x, norm, &config.newton, self.held)?;
+                run.x = r.x;
+                (r.iterations, r.termination)
+            }
+            // In place; the number of poses was checked by `refill`.
+            _ => {
+                let end = levenberg_marquardt_in_place(&mut run.x, norm, &config.lm, self.held)?;
+                (end.iterations, end.termination)
+            }
         };
-        Ok(run.polished(r))
+        (run.iterations, run.solver_termination) = (iterations, Some(termination));
+        Ok(())
     }
 
     /// The calibration at the optimiser's result: held parameters exactly at nominal, the verdict.
     #[inline(never)]
-    fn conclude(&self, poses: &[Pose], run: &Optimised, config: &CalibrationConfig) -> Calibration {
+    fn conclude(&self, poses: &[Pose], run: &mut Optimised, config: &CalibrationConfig) -> Calibration {
         let frame = self.normalized.frame();
         let set = self.normalized.pose_set(poses);
         let initial = self.normalized.initial();
-        // The GA moves held genes within its smallest interval; they are held exactly.
-        let x: Deviation = core::array::from_fn(|i| if self.held.contains(i) { self.start[i] } else { run.x[i] });
+        // The GA moves held genes within its smallest interval; they are held exactly (in place: no copy).
+        for i in 0..PARAM_COUNT {
+            if self.held.contains(i) {
+                run.x[i] = self.start[i];
+            }
+        }
+        let x = &run.x;
         let before = config.before.unwrap_or_else(|| frame.to_params(&[0.0; PARAM_COUNT]));
         let not_converged = run.solver_termination == Some(SolveTermination::MaxIterations);
         // The verdict is judged last, straight into the result (no copy of it: no memcpy call).
         Calibration {
-            params: frame.to_params(&x),
+            params: frame.to_params(x),
             initial: *initial,
             method: config.method,
-            objective: objective_value(&x, set.norm, config.gravity),
+            objective: objective_value(x, set.norm, config.gravity),
             generations: run.generations,
             evaluations: run.evaluations,
             iterations: run.iterations,
             ga_termination: run.ga_termination,
             solver_termination: run.solver_termination,
-            verdict: judge_run(&x, frame, &set, &before, &config.bounds, self.held, &initial.excluded, not_converged),
+            verdict: judge_run(x, frame, &set, &before, &config.bounds, self.held, &initial.excluded, not_converged),
         }
     }
 }
@@ -462,9 +477,9 @@ pub fn calibrate<R: Rng, const POP: usize, const MAX_POSES: usize>(
         run_ga::<R, POP>(prepared.poses(), &prepared.start, &half, &config.ga, rng, &mut run)?;
     }
     if config.method != Method::Taga {
-        run = prepared.polish(run, config)?;
+        prepared.polish(&mut run, config)?;
     }
-    Ok(prepared.conclude(poses, &run, config))
+    Ok(prepared.conclude(poses, &mut run, config))
 }
 
 /// What one [`Calibrator::step`] did.
@@ -562,9 +577,9 @@ impl<R: Rng, const POP: usize, const MAX_POSES: usize> Calibrator<R, POP, MAX_PO
             };
         }
         if self.config.method != Method::Taga {
-            run = self.prepared.polish(run, &self.config)?;
+            self.prepared.polish(&mut run, &self.config)?;
         }
-        Ok(Step::Finished(self.prepared.conclude(poses, &run, &self.config)))
+        Ok(Step::Finished(self.prepared.conclude(poses, &mut run, &self.config)))
     }
 }
 

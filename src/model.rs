@@ -50,8 +50,10 @@ impl Params {
     }
 
     /// `true` when every parameter is finite.
+    #[inline(never)]
     pub fn is_finite(&self) -> bool {
-        self.to_array().iter().all(|&v| crate::linalg::finite(v))
+        // Read in place (`to_array` first copied the nine values to the stack).
+        [&self.bias, &self.scale, &self.nonorth].iter().all(|a| a.iter().all(|&v| crate::linalg::finite(v)))
     }
 
     /// `Ka * f_s` (no bias).
@@ -64,6 +66,22 @@ impl Params {
     /// Calibrates one sample: `f_b = Ka * f_s - B`.
     #[inline]
     pub fn apply(&self, f_s: [f32; 3]) -> [f32; 3] {
+        let mut sample = f_s;
+        self.apply_to(&mut sample);
+        sample
+    }
+
+    /// [`Params::apply`] in place. Out of line: one copy of the arithmetic for the library's
+    /// single-sample callers and the odd last sample of a batch (the batch loop inlines its own,
+    /// [`Params::calibrated`]).
+    #[inline(never)]
+    fn apply_to(&self, sample: &mut [f32; 3]) {
+        *sample = self.calibrated(*sample);
+    }
+
+    /// [`Params::apply`], inlined.
+    #[inline(always)]
+    fn calibrated(&self, f_s: [f32; 3]) -> [f32; 3] {
         let k = self.ka_times(f_s);
         [k[0] - self.bias[0], k[1] - self.bias[1], k[2] - self.bias[2]]
     }
@@ -73,12 +91,13 @@ impl Params {
     pub fn apply_in_place(&self, samples: &mut [[f32; 3]]) {
         let mut pairs = samples.chunks_exact_mut(2);
         for pair in &mut pairs {
-            let (a, b) = (self.apply(pair[0]), self.apply(pair[1]));
+            let (a, b) = (self.calibrated(pair[0]), self.calibrated(pair[1]));
             pair[0] = a;
             pair[1] = b;
         }
-        for s in pairs.into_remainder() {
-            *s = self.apply(*s);
+        // At most one sample is left: no loop.
+        if let [last] = pairs.into_remainder() {
+            self.apply_to(last);
         }
     }
 
@@ -176,6 +195,20 @@ mod tests {
         assert!(Params::IDENTITY.objective(&poses, g).unwrap() > 1e-3);
         assert_eq!(TRUTH.objective(&[], g), None);
         assert_eq!(modulus_rmse_mg(&TRUTH, &[], g), None);
+    }
+
+    #[test]
+    fn apply_in_place_matches_apply_for_odd_and_even_batches() {
+        let samples: [[f32; 3]; 5] =
+            core::array::from_fn(|i| [i as f32 - 2.5, 9.8 - i as f32 * 0.3, (i * i) as f32 * 0.7 - 3.0]);
+        for n in 0..=samples.len() {
+            let mut batch = samples;
+            TRUTH.apply_in_place(&mut batch[..n]);
+            for i in 0..samples.len() {
+                let expected = if i < n { TRUTH.apply(samples[i]) } else { samples[i] };
+                assert_eq!(batch[i], expected, "batch of {n}, sample {i}");
+            }
+        }
     }
 
     #[test]

@@ -124,8 +124,22 @@ impl Default for NewtonConfig {
 
 /// At least one pose per free parameter, everything finite.
 fn check_input(x: &Deviation, poses: &[NormPose], held: Held) -> Result<(), SolveError> {
+    check_count(poses, held)?;
+    check_finite(x, poses)
+}
+
+/// At least one pose per free parameter, and one at least.
+fn check_count(poses: &[NormPose], held: Held) -> Result<(), SolveError> {
     if poses.len() < PARAM_COUNT - held.count() || poses.is_empty() {
         return Err(SolveError::TooFewPoses { got: poses.len() });
+    }
+    Ok(())
+}
+
+/// Everything finite, and one pose at least.
+fn check_finite(x: &Deviation, poses: &[NormPose]) -> Result<(), SolveError> {
+    if poses.is_empty() {
+        return Err(SolveError::TooFewPoses { got: 0 });
     }
     let poses_finite = poses.iter().all(|p| finite(p.q) && p.u.iter().all(|&v| finite(v)));
     if !poses_finite || !x.iter().all(|&v| finite(v)) {
@@ -159,8 +173,9 @@ pub(crate) fn normal_equations(
                 None => continue,
             },
         };
-        let (e, g) = modulus_error_gradient(x, pose);
-        add_normal_row(jtj, jte, &g, w, e);
+        // Read in place (destructured, the gradient was copied).
+        let error_gradient = modulus_error_gradient(x, pose);
+        add_normal_row(jtj, jte, &error_gradient.1, w, error_gradient.0);
     }
 }
 
@@ -184,14 +199,15 @@ fn add(x: &Deviation, step: &Deviation) -> Deviation {
     out
 }
 
-/// `x - step` and the largest `|step|` ([`max_abs`]), in one loop.
-fn sub(x: &Deviation, step: &Deviation) -> (Deviation, f32) {
-    let (mut out, mut largest) = (*x, 0.0f32);
-    for (o, s) in out.iter_mut().zip(step) {
-        *o -= s;
+/// `step` becomes `x - step`; returns the largest `|step|` ([`max_abs`]), in one loop (in place: no
+/// candidate vector beside the step).
+fn subtract_from(x: &Deviation, step: &mut Deviation) -> f32 {
+    let mut largest = 0.0f32;
+    for (s, &xi) in step.iter_mut().zip(x) {
         largest = if s.abs() > largest { s.abs() } else { largest };
+        *s = xi - *s;
     }
-    (out, largest)
+    largest
 }
 
 /// Levenberg-Marquardt on the per-pose modulus errors, from `x0`.
@@ -221,23 +237,45 @@ fn hold(jtj: &mut Matrix<PARAM_COUNT>, rhs: &mut Deviation, held: Held) {
 }
 
 /// [`levenberg_marquardt`] with the parameters flagged in `held` fixed at their values in `x0`.
-#[inline(never)] // its frame need not merge with the caller's (peak stack on the device)
 pub fn levenberg_marquardt_holding(
     x0: Deviation,
     poses: &[NormPose],
     config: &LmConfig,
     held: Held,
 ) -> Result<SolveReport, SolveError> {
-    check_input(&x0, poses, held)?;
+    check_count(poses, held)?;
     let mut x = x0;
-    let mut cost = objective(&x, poses);
+    let end = levenberg_marquardt_in_place(&mut x, poses, config, held)?;
+    Ok(SolveReport { x, cost: end.cost, iterations: end.iterations, termination: end.termination })
+}
+
+/// How [`levenberg_marquardt_in_place`] ended: a [`SolveReport`] but for the deviation vector.
+pub(crate) struct LmEnd {
+    /// Normalised objective at the result.
+    pub cost: f32,
+    /// Iterations run.
+    pub iterations: u32,
+    /// Why it stopped.
+    pub termination: SolveTermination,
+}
+
+/// [`levenberg_marquardt_holding`] from `x`, into `x` (no copy of the vector in and out), on poses
+/// whose number the caller has checked (a calibration checks it when it prepares the problem: not
+/// twice). On an error `x` is unspecified.
+#[inline(never)] // its frame need not merge with the caller's (peak stack on the device)
+pub(crate) fn levenberg_marquardt_in_place(
+    x: &mut Deviation,
+    poses: &[NormPose],
+    config: &LmConfig,
+    held: Held,
+) -> Result<LmEnd, SolveError> {
+    check_finite(x, poses)?;
+    let mut cost = objective(x, poses);
     if !cost.is_finite() {
         return Err(SolveError::Diverged);
     }
     let mut lambda = config.initial_damping;
-    let mut jtj = [[0.0; PARAM_COUNT]; PARAM_COUNT];
-    let mut jte = [0.0; PARAM_COUNT];
-    let mut damped = [[0.0; PARAM_COUNT]; PARAM_COUNT];
+    let (mut jtj, mut jte, mut damped) = (ZERO_MATRIX, [0.0; PARAM_COUNT], ZERO_MATRIX);
     // The normal equations are built (in place) at the start and after each accepted step.
     let mut rebuild = true;
     let mut iterations = 0;
@@ -248,7 +286,7 @@ pub fn levenberg_marquardt_holding(
         }
         iterations += 1;
         if rebuild {
-            normal_equations(&x, poses, None, &mut jtj, &mut jte);
+            normal_equations(x, poses, None, &mut jtj, &mut jte);
             rebuild = false;
         }
         // The damped matrix is `jtj` below the diagonal (read from there: no copy) and this diagonal.
@@ -256,19 +294,19 @@ pub fn levenberg_marquardt_holding(
             damped[i][i] = jtj[i][i] + lambda * larger(jtj[i][i], 1e-12);
         }
         // Solved for `J^T e`, the step is its negative (exactly: rounding is symmetric).
-        let mut step = jte;
-        if ldlt_solve_holding_split(&jtj, &mut damped, &mut step, held).is_err() {
+        let mut candidate = jte;
+        if ldlt_solve_holding_split(&jtj, &mut damped, &mut candidate, held).is_err() {
             if lambda < 1e10 {
                 lambda *= 10.0;
                 continue;
             }
             return Err(SolveError::Singular);
         }
-        let (candidate, largest_step) = sub(&x, &step);
+        let largest_step = subtract_from(x, &mut candidate);
         let candidate_cost = objective(&candidate, poses);
         // (`cost` is finite: not above it means finite, NaN excluded.)
         if candidate_cost <= cost {
-            (x, cost) = (candidate, candidate_cost);
+            (*x, cost) = (candidate, candidate_cost);
             lambda = larger(lambda * 0.3, 1e-9);
             if largest_step < config.step_tolerance {
                 break SolveTermination::Converged;
@@ -281,8 +319,11 @@ pub fn levenberg_marquardt_holding(
             }
         }
     };
-    Ok(SolveReport { x, cost, iterations, termination })
+    Ok(LmEnd { cost, iterations, termination })
 }
+
+/// A zero matrix; as a `const` it is one `memset` call, `[[0.0; 9]; 9]` in place was one per row.
+const ZERO_MATRIX: Matrix<PARAM_COUNT> = [[0.0; PARAM_COUNT]; PARAM_COUNT];
 
 /// The classical Newton iteration on `fE` (the paper's baseline): full Hessian
 /// `H = (2/N) sum(grad E grad E^T + 2 E Jr^T Jr)`, undamped step `H d = -grad fE`, no line search.

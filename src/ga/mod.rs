@@ -165,9 +165,10 @@ impl<const DIM: usize> SearchBox<DIM> {
     }
 }
 
-/// A search interval's width is positive and finite (so neither bound is infinite or NaN).
+/// A search interval's width is positive and finite (so neither bound is infinite or NaN). `<= MAX`,
+/// not `< INFINITY` (the same for every width): two float compares, not the bit tests of a class check.
 fn valid_width(width: f32) -> bool {
-    width > 0.0 && width < f32::INFINITY
+    width > 0.0 && width <= f32::MAX
 }
 
 /// `v` reflected at `lo` and `hi`, then clamped into `[lo, hi]`. Out of line: three callers (flash
@@ -285,17 +286,19 @@ pub struct GaReport<const DIM: usize> {
 
 /// The GA state: a population of `POP` individuals of `DIM` genes, the caller's seeded RNG `R` and the
 /// operator policy `O` ([`Taga`] unless named).
+// `repr(C)`, the fields [`Ga::empty`] zeroes before the two it copies: one `memset` call, not three.
+#[repr(C)]
 pub struct Ga<R, const POP: usize, const DIM: usize, O = Taga> {
-    config: GaConfig<O>,
-    bounds: SearchBox<DIM>,
-    rng: R,
     population: [[f32; DIM]; POP],
     costs: [f32; POP],
     offspring: [[f32; DIM]; POP],
+    bounds: SearchBox<DIM>,
     generation: u32,
     evaluations: u32,
     best_index: usize,
     stall: u32,
+    rng: R,
+    config: GaConfig<O>,
 }
 
 impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O> {
@@ -344,6 +347,22 @@ impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O
     /// Checks the configuration ([`GaConfig::validate`]), draws the population uniformly from the box
     /// and evaluates it (generation 0). On an error nothing is drawn.
     pub fn initialize(&mut self, cost: &impl CostFunction<DIM>) -> Result<(), GaError> {
+        self.draw_population(cost)?;
+        self.best_index = argmin(&self.costs);
+        Ok(())
+    }
+
+    /// [`Ga::initialize`], then [`Ga::inject`] of `x`: the best is found once, after both.
+    pub(crate) fn initialize_with(&mut self, x: &[f32; DIM], cost: &impl CostFunction<DIM>) -> Result<(), GaError> {
+        self.draw_population(cost)?;
+        self.replace_worst(x, cost);
+        self.best_index = argmin(&self.costs);
+        Ok(())
+    }
+
+    /// [`Ga::initialize`] but for the best's index.
+    #[inline(always)]
+    fn draw_population(&mut self, cost: &impl CostFunction<DIM>) -> Result<(), GaError> {
         self.config.validate(POP)?;
         self.generation = 0;
         self.evaluations = 0;
@@ -353,14 +372,20 @@ impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O
                 let u = uniform(&mut self.rng);
                 self.population[i][d] = self.bounds.lower[d] + u * (self.bounds.upper[d] - self.bounds.lower[d]);
             }
-            self.costs[i] = self.evaluate(cost, i);
+            self.costs[i] = Self::evaluate(&mut self.evaluations, cost, &self.population[i]);
         }
-        self.best_index = argmin(&self.costs);
         Ok(())
     }
 
     /// Replaces the worst individual by `x` (clamped into the box), e.g. a prior estimate.
     pub fn inject(&mut self, x: &[f32; DIM], cost: &impl CostFunction<DIM>) {
+        self.replace_worst(x, cost);
+        self.best_index = argmin(&self.costs);
+    }
+
+    /// [`Ga::inject`] but for the best's index.
+    #[inline(always)]
+    fn replace_worst(&mut self, x: &[f32; DIM], cost: &impl CostFunction<DIM>) {
         let worst = argmax(&self.costs);
         if worst >= POP {
             // Unreachable (argmax returns an index of `costs`); lets the optimiser drop the bounds checks
@@ -370,16 +395,15 @@ impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O
         for d in 0..DIM {
             self.population[worst][d] = self.bounds.clamp(d, x[d]);
         }
-        self.costs[worst] = self.evaluate(cost, worst);
-        self.best_index = argmin(&self.costs);
+        self.costs[worst] = Self::evaluate(&mut self.evaluations, cost, &self.population[worst]);
     }
 
-    /// The cost of individual `i`, counted; non-finite costs become [`WORST_COST`]. Out of line: three
-    /// callers.
+    /// The cost of `x` (an individual), counted in `evaluations`; non-finite costs become [`WORST_COST`].
+    /// Out of line: three callers.
     #[inline(never)]
-    fn evaluate(&mut self, cost: &impl CostFunction<DIM>, i: usize) -> f32 {
-        self.evaluations = self.evaluations.saturating_add(1);
-        let c = self.population.get(i).map_or(WORST_COST, |x| cost.cost(x));
+    fn evaluate(evaluations: &mut u32, cost: &impl CostFunction<DIM>, x: &[f32; DIM]) -> f32 {
+        *evaluations = evaluations.saturating_add(1);
+        let c = cost.cost(x);
         if c.is_finite() && c < WORST_COST { c } else { WORST_COST }
     }
 
@@ -396,20 +420,34 @@ impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O
         }
     }
 
+    /// [`Ga::best_cost`] for the generation step: `min` (a compare and a move) spares the bounds check
+    /// and the constant of the `get` in [`Ga::best_cost`] (`best_index` is always below `POP`). Not
+    /// used by [`Ga::run`], whose loop grew when the check was written this way there.
+    fn best_cost_in_step(&self) -> f32 {
+        self.costs[self.best_index.min(POP - 1)]
+    }
+
     /// Fitness statistics of the current population (`f = -cost`), for producing the next generation.
     pub fn fitness_stats(&self) -> FitnessStats {
+        self.stats()
+    }
+
+    /// [`Ga::fitness_stats`], inlined into the step (its one caller there): no call, no result written
+    /// to memory and read back.
+    #[inline(always)]
+    fn stats(&self) -> FitnessStats {
         let sum: f32 = self.costs.iter().sum();
         let next = self.generation.saturating_add(1);
-        FitnessStats { max: -self.best_cost(), avg: -(sum / POP as f32), lg_generation: lg_count(next) }
+        FitnessStats { max: -self.best_cost_in_step(), avg: -(sum / POP as f32), lg_generation: lg_count(next) }
     }
 
     /// Runs one generation: elitism, selection, crossover, mutation, evaluation.
     #[inline(never)]
     pub fn step(&mut self, cost: &impl CostFunction<DIM>) {
-        let stats = self.fitness_stats();
+        let stats = self.stats();
         let [crossover, mutation] = self.config.operators.curves(stats.lg_generation);
         let spread = self.gene_spread();
-        let previous_best = self.best_cost();
+        let previous_best = self.best_cost_in_step();
         // Per slot: the parent's fitness for a child, the cost for an elite (kept across the evaluation).
         let mut parent_fitness = [0.0f32; POP];
         let mut parent_index = [0u16; POP];
@@ -424,11 +462,15 @@ impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O
         // only offspring are evaluated.
         for i in 0..POP {
             self.population[i] = self.offspring[i];
-            self.costs[i] = if i < self.config.elites { parent_fitness[i] } else { self.evaluate(cost, i) };
+            self.costs[i] = if i < self.config.elites {
+                parent_fitness[i]
+            } else {
+                Self::evaluate(&mut self.evaluations, cost, &self.population[i])
+            };
         }
         self.best_index = argmin(&self.costs);
         self.generation += 1;
-        let best = self.best_cost();
+        let best = self.best_cost_in_step();
         self.stall = if best < previous_best - 1e-6 * previous_best.abs() { 0 } else { self.stall.saturating_add(1) };
     }
 
@@ -438,14 +480,13 @@ impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O
     #[inline(always)]
     fn keep_elites(&mut self, costs: &mut [f32; POP]) {
         let (mut after_cost, mut after_index) = (f32::NEG_INFINITY, usize::MAX);
-        for e in 0..self.config.elites {
+        // `min`: `elites` is below `POP` already (validated); it spares the bounds checks of `e`.
+        for e in 0..self.config.elites.min(POP) {
             let best = next_smallest(&self.costs, after_cost, after_index);
-            if let (Some(&cost), Some(kept), Some(slot), Some(genes)) =
-                (self.costs.get(best), costs.get_mut(e), self.offspring.get_mut(e), self.population.get(best))
-            {
+            if let (Some(&cost), Some(genes)) = (self.costs.get(best), self.population.get(best)) {
                 // `copy_from_slice`: an assignment of one row to another here linked `memmove` (1.5 KB).
-                slot.copy_from_slice(genes);
-                *kept = cost;
+                self.offspring[e].copy_from_slice(genes);
+                costs[e] = cost;
                 (after_cost, after_index) = (cost, best);
             }
         }
@@ -463,18 +504,19 @@ impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O
             let (fa, fb) = (-self.costs[a], -self.costs[b]);
             let pc = O::probability(crossover, if fa >= fb { fa } else { fb }, stats);
             // The parents copied into their children's slots; the second child into `spare` (bred for the
-            // draws, then dropped) when the last slot is taken.
-            let mut spare = self.population[b];
+            // draws, then dropped) when the last slot is taken. One copy per parent.
+            let mut spare;
             let Some((first, rest)) = self.offspring.get_mut(slot..).and_then(|s| s.split_first_mut()) else {
                 break;
             };
             let second = match rest.first_mut() {
-                Some(second) => {
-                    second.copy_from_slice(&spare);
-                    second
+                Some(second) => second,
+                None => {
+                    spare = [0.0; DIM];
+                    &mut spare
                 }
-                None => &mut spare,
             };
+            second.copy_from_slice(&self.population[b]);
             first.copy_from_slice(&self.population[a]);
             if uniform(&mut self.rng) < pc {
                 blend(&mut self.rng, &self.bounds, self.config.blend_alpha, first, second);
@@ -739,6 +781,16 @@ mod tests {
                 assert_eq!(ga.costs[e], costs[order[e]], "elite {e}");
             }
         }
+    }
+
+    #[test]
+    fn a_box_of_the_largest_finite_width_is_valid_and_an_infinite_or_nan_one_is_not() {
+        // Width `2 * (MAX / 2) = MAX`: the largest valid one; `2 * MAX` overflows to infinity.
+        assert!(SearchBox::around(&[0.0, 1.0], &[f32::MAX / 2.0, 1.0]).is_ok());
+        assert_eq!(SearchBox::around(&[0.0, 1.0], &[1.0, f32::MAX]), Err(GaError::InvalidInterval { dim: 1 }));
+        assert_eq!(SearchBox::around(&[f32::NAN], &[1.0]), Err(GaError::InvalidInterval { dim: 0 }));
+        assert_eq!(SearchBox::around(&[0.0], &[0.0]), Err(GaError::InvalidInterval { dim: 0 }));
+        assert_eq!(SearchBox::new([f32::MIN], [f32::MAX]), Err(GaError::InvalidInterval { dim: 0 }));
     }
 
     #[test]
