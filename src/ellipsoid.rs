@@ -546,7 +546,15 @@ pub(crate) fn mid_range<'a>(means: impl Iterator<Item = &'a [f32; 3]>) -> ([f32;
     (lo, hi, widest)
 }
 
+/// [`half_axes_near`] of the mean `m` seen from `mid`, axis `a` in units of `scale[a]`: `u = (m - mid) /
+/// scale`. Out of line: the six faces and the missing directions share one copy.
+#[inline(never)]
+pub(crate) fn half_axes_near_of(m: &[f32; 3], mid: &[f32; 3], scale: &[f32; 3], cos: f32) -> u8 {
+    half_axes_near([(m[0] - mid[0]) / scale[0], (m[1] - mid[1]) / scale[1], (m[2] - mid[2]) / scale[2]], cos)
+}
+
 /// The half-axes ([`Directions`] bits) within `acos(cos)` of the direction of `u`; all six for `u = 0`.
+#[inline]
 pub(crate) fn half_axes_near(u: [f32; 3], cos: f32) -> u8 {
     let limit = cos * sqrt_f32(norm_squared(u));
     let mut bits = 0;
@@ -564,7 +572,7 @@ pub fn missing_directions<'a>(means: impl Iterator<Item = &'a [f32; 3]> + Clone)
     // cos 60 deg = 0.5.
     let mut seen = 0;
     for m in means {
-        seen |= half_axes_near([(m[0] - mid[0]) / widest, (m[1] - mid[1]) / widest, (m[2] - mid[2]) / widest], 0.5);
+        seen |= half_axes_near_of(m, &mid, &[widest; 3], 0.5);
     }
     Directions(!seen & 0x3f)
 }
