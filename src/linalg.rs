@@ -172,6 +172,14 @@ pub(crate) fn smaller(a: f32, b: f32) -> f32 {
     if a < b { a } else { b }
 }
 
+/// [`sqrt_f32`] of `x` clamped at 0 (`larger(x, 0)`: 0 for a negative or NaN `x`), the standard
+/// deviation of a variance that rounding may have made negative. Out of line: the verdict's three
+/// callers share the clamp.
+#[inline(never)]
+pub(crate) fn sqrt_clamped(x: f32) -> f32 {
+    sqrt_f32(larger(x, 0.0))
+}
+
 /// Square root to within 2 ulp for normal `x >= 0`, in a dozen single-precision operations (reciprocal
 /// square root from the exponent bits, three Newton steps): `libm::sqrtf` is a bit-by-bit software
 /// routine on targets without a stable square-root instruction in `core` (Cortex-M4F: ~100 cycles).

@@ -336,7 +336,7 @@ pub fn parameters_to_hold(x: &Deviation, frame: &Frame, set: &PoseSet<'_>, held:
         // The largest ratio above 1 (or NaN), `PARAM_COUNT` for none.
         let mut worst = (PARAM_COUNT, 1.0f32);
         for i in 0..PARAM_COUNT {
-            let ratio = crate::linalg::sqrt_f32(larger(cov[i][i], 0.0)) / HOLD_STD[i];
+            let ratio = crate::linalg::sqrt_clamped(cov[i][i]) / HOLD_STD[i];
             if !held.contains(i) && !(ratio <= worst.1) {
                 worst = (i, ratio);
             }
@@ -376,7 +376,7 @@ pub fn param_std(frame: &Frame, covariance: &Matrix<PARAM_COUNT>) -> [f32; PARAM
                 v += t[a] * covariance[a][b] * t[b];
             }
         }
-        crate::linalg::sqrt_f32(larger(v, 0.0))
+        crate::linalg::sqrt_clamped(v)
     })
 }
 
@@ -395,7 +395,7 @@ impl ModulusSums {
         let g = frame.gravity;
         for (p, n) in set.pairs() {
             let (e, variance) = error_and_variance(x, frame, p, n);
-            let after = crate::linalg::sqrt_f32(larger(1.0 + e, 0.0));
+            let after = crate::linalg::sqrt_clamped(1.0 + e);
             sums.after += crate::model::square(after - 1.0);
             let raw = crate::ellipsoid::modulus(before, p.mean);
             sums.before += crate::model::square(raw - g);
