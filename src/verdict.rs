@@ -464,7 +464,10 @@ pub(crate) fn judge_run(
     let sums = ModulusSums::of(x, frame, set, before);
     let rmse_after_mg = rmse_of_mg(sums.after, set.len(), 1.0);
     let noise_floor = noise_floor_of(sums.noise, set.len(), fitted);
+    // The structural test first, in the covariance's matrix: it writes every entry, so the zeros
+    // that initialise the matrix are never stored (no `memclr` call).
     let mut cov = ZERO;
+    let structurally_undetermined = undetermined_in(x, set.norm, &mut cov);
     let mut std = if covariance_in_place(x, frame, set, held, &mut cov) {
         param_std(frame, &cov)
     } else {
@@ -481,8 +484,6 @@ pub(crate) fn judge_run(
     };
     let mut warnings = Warnings { held: [false; PARAM_COUNT], excluded: PoseList::EMPTY };
     warnings.excluded.copy_from(excluded);
-    // The covariance is no longer needed: scratch for the structural test.
-    let structurally_undetermined = undetermined_in(x, set.norm, &mut cov);
     for i in 0..PARAM_COUNT {
         if held.contains(i) {
             (std[i], warnings.held[i]) = (f32::INFINITY, true);
