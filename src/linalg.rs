@@ -276,8 +276,6 @@ fn factor<const N: usize>(
 ) -> [f32; N] {
     const { assert!(N <= 16, "a `Held` mask has 16 entries") };
     let mut d = [0.0f32; N];
-    // The weight of column `k` in the elimination: its pivot (unscaled), 1 (Cholesky).
-    let mut weight = [1.0f32; N];
     for i in 0..N {
         if !positive_finite(a[i][i]) {
             held.insert(i);
@@ -302,7 +300,10 @@ fn factor<const N: usize>(
             // The Cholesky form subtracts the sum, the other each term: kept as they were measured.
             let mut s = if cholesky { 0.0 } else { scaled };
             for k in 0..j {
-                s -= a[i][k] * a[j][k] * weight[k];
+                // The weight of column `k` in the elimination: its pivot (unscaled, in place on the
+                // diagonal; 1 for a held row), 1 (Cholesky).
+                let weight = if cholesky { 1.0 } else { a[k][k] };
+                s -= a[i][k] * a[j][k] * weight;
             }
             if cholesky {
                 s += scaled;
@@ -311,7 +312,6 @@ fn factor<const N: usize>(
                 a[i][j] = if cholesky { s * a[j][j] } else { s / a[j][j] };
             } else if s > min_pivot && positive_finite(s) {
                 a[i][i] = if cholesky { 1.0 / sqrt_f32(s) } else { s };
-                weight[i] = if cholesky { 1.0 } else { s };
             } else {
                 // Found weak just now: held from here on.
                 held.insert(i);
