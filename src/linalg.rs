@@ -450,13 +450,12 @@ pub fn spd_inverse_holding_in_place<const N: usize>(a: &mut Matrix<N>, held: Hel
     if flagged != held {
         return Err(LinalgError::Singular);
     }
-    for j in 0..N {
-        let mut col = [0.0; N];
-        col[j] = 1.0;
-        factor_solve(&l, &d, &mut col, true);
-        for i in 0..N {
-            a[i][j] = col[i];
-        }
+    // Column `j` of the inverse solved in place in row `j` (the inverse is symmetric: `a` holds its
+    // transpose as computed, `a[j][i]` the solve for unit vector `j`; no copy of each column).
+    for (j, row) in a.iter_mut().enumerate() {
+        *row = [0.0; N];
+        row[j] = 1.0;
+        factor_solve(&l, &d, row, true);
     }
     if a.iter().flatten().all(|&v| finite(v)) { Ok(()) } else { Err(LinalgError::Singular) }
 }

@@ -371,9 +371,11 @@ pub fn param_std(frame: &Frame, covariance: &Matrix<PARAM_COUNT>) -> [f32; PARAM
     core::array::from_fn(|i| {
         let t = frame.params_jacobian_row(i);
         let mut v = 0.0;
+        // Read as `covariance[b][a]`: the order (and the bits) of the sum over the inverse as its
+        // columns are solved (`spd_inverse_holding_in_place` stores column `a` in row `a`).
         for a in 0..PARAM_COUNT {
             for b in 0..PARAM_COUNT {
-                v += t[a] * covariance[a][b] * t[b];
+                v += t[a] * covariance[b][a] * t[b];
             }
         }
         crate::linalg::sqrt_clamped(v)
