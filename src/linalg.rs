@@ -533,6 +533,16 @@ mod tests {
     }
 
     #[test]
+    fn sqrt_clamped_is_zero_below_zero_and_sqrt_f32_above() {
+        for x in [-f32::MAX, -1.0, -f32::MIN_POSITIVE, -0.0, f32::NAN, f32::NEG_INFINITY] {
+            assert_eq!(sqrt_clamped(x).to_bits(), 0.0f32.to_bits(), "{x}");
+        }
+        for x in [0.0, f32::MIN_POSITIVE, 1e-20, 2.0, 9.80665, f32::MAX, f32::INFINITY] {
+            assert_eq!(sqrt_clamped(x).to_bits(), sqrt_f32(x).to_bits(), "{x}");
+        }
+    }
+
+    #[test]
     fn inverse_times_matrix_is_identity() {
         let a = [[4.0, 1.0, 0.5], [1.0, 3.0, 0.2], [0.5, 0.2, 2.0]];
         let inv = spd_inverse(&a).unwrap();
@@ -625,6 +635,31 @@ mod tests {
             }
         }
         assert_eq!(inv[2][2], 0.0);
+    }
+
+    /// The LDLT elimination weighs each column by the pivot stored on its diagonal (1 for a held
+    /// row): holding a row solves the rest as the system without it, bit for bit, and the free
+    /// solution satisfies the equations.
+    #[test]
+    fn ldlt_holding_a_row_solves_the_rest_bit_for_bit() {
+        let a = spd4();
+        let b = [1.0, -2.0, 0.5, 3.0];
+        let mut held = a;
+        let mut x = b;
+        ldlt_solve_holding_in_place(&mut held, &mut x, Held::NONE.with(1)).unwrap();
+        let free = [0, 2, 3];
+        let mut reduced: Matrix<3> = core::array::from_fn(|i| core::array::from_fn(|j| a[free[i]][free[j]]));
+        let mut y = free.map(|i| b[i]);
+        ldlt_solve_in_place(&mut reduced, &mut y).unwrap();
+        assert_eq!(x[1], 0.0);
+        assert_eq!(free.map(|i| x[i].to_bits()), y.map(f32::to_bits));
+        let mut full = a;
+        let mut z = b;
+        ldlt_solve_in_place(&mut full, &mut z).unwrap();
+        for i in 0..4 {
+            let v: f32 = (0..4).map(|k| a[i][k] * z[k]).sum();
+            assert!((v - b[i]).abs() < 1e-5 * (1.0 + b[i].abs()), "{i}: {v}");
+        }
     }
 
     #[test]
