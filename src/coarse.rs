@@ -19,7 +19,7 @@
 //! ```
 
 use crate::accumulator::Pose;
-use crate::ellipsoid::{EllipsoidError, check_input, half_axes_near, mid_range};
+use crate::ellipsoid::{EllipsoidError, check_input, half_axes_near_of, mid_range};
 use crate::frame::{Deviation, Frame, FrameError};
 use crate::ga::{GaError, SearchBox};
 use crate::model::{PARAM_COUNT, Params};
@@ -223,15 +223,16 @@ pub(crate) fn face_means<'a>(
     gain: &mut [f32; 3],
 ) -> Result<[[u16; 2]; 3], CoarseError> {
     // Centre and half-range per axis from the extremes: removes the large offsets of raw counts.
-    let (mid, half, widest) = mid_range(means.clone());
-    check_reversed(half, widest)?;
+    // Read in place (destructured, the centre and half-ranges were copied).
+    let range = mid_range(means.clone());
+    let (mid, half) = (&range.0, &range.1);
+    check_reversed(*half, range.2)?;
     let mut sums = [[0.0f32; 2]; 3];
     let mut counts = [[0u16; 2]; 3];
     for m in means {
         // Every half-range is positive here, or all are 0 (all means equal): then `u` is NaN, near
         // no half-axis.
-        let u = [(m[0] - mid[0]) / half[0], (m[1] - mid[1]) / half[1], (m[2] - mid[2]) / half[2]];
-        let near = half_axes_near(u, DOMINANCE);
+        let near = half_axes_near_of(m, mid, half, DOMINANCE);
         // At most one half-axis is within 25 deg (all six only for u = 0, which points nowhere).
         if near != 0 && near != 0x3f {
             // Half-axis `bit`: axis `bit / 2`, up (even) or down (odd).

@@ -259,10 +259,10 @@ pub fn fit_ellipsoid(
         return Err(EllipsoidError::NonFinitePose);
     }
     check_input(self::kept(poses, kept), gravity)?;
-    let (mut params, mut excluded) = (Params::IDENTITY, PoseList::EMPTY);
-    let mut fitting = Fitting::new(poses, gravity, &mut params, &mut excluded);
+    let (mut params, mut excluded, mut center) = (Params::IDENTITY, PoseList::EMPTY, [0.0; 3]);
+    let mut fitting = Fitting::new(poses, gravity, &mut params, &mut excluded, &mut center);
     fitting.robust(kept, rule)?;
-    let (center, held, rmse_g) = (fitting.center, fitting.held, fitting.rmse_g);
+    let (held, rmse_g) = (fitting.held, fitting.rmse_g);
     Ok(EllipsoidFit { params, center, excluded, held, rmse_g })
 }
 
@@ -276,8 +276,8 @@ pub(crate) struct Fitting<'a> {
     params: &'a mut Params,
     /// Poses left out as far off the ellipsoid.
     excluded: &'a mut PoseList,
-    /// The centre of the ellipsoid (see [`EllipsoidFit::center`]).
-    pub(crate) center: [f32; 3],
+    /// The centre of the ellipsoid (see [`EllipsoidFit::center`]), written where the caller keeps it.
+    center: &'a mut [f32; 3],
     /// Non-orthogonality terms held at 0 (see [`EllipsoidFit::held`]).
     pub(crate) held: [bool; 3],
     /// Modulus RMSE of the poses kept, fraction of gravity.
@@ -287,9 +287,15 @@ pub(crate) struct Fitting<'a> {
 impl<'a> Fitting<'a> {
     /// A fit of `poses` against `gravity` writing its model into `params` and the poses it leaves out
     /// into `excluded` (cleared here).
-    pub(crate) fn new(poses: &'a [Pose], gravity: f32, params: &'a mut Params, excluded: &'a mut PoseList) -> Self {
+    pub(crate) fn new(
+        poses: &'a [Pose],
+        gravity: f32,
+        params: &'a mut Params,
+        excluded: &'a mut PoseList,
+        center: &'a mut [f32; 3],
+    ) -> Self {
         *excluded = PoseList::EMPTY;
-        Self { poses, gravity, params, excluded, center: [0.0; 3], held: [false; 3], rmse_g: 0.0 }
+        Self { poses, gravity, params, excluded, center, held: [false; 3], rmse_g: 0.0 }
     }
 }
 
@@ -432,8 +438,8 @@ impl Fitting<'_> {
         // Ka = L g / (s sqrt(k)).
         let w = self.gravity / (s * sqrt_f32(1.0 + y0 * y0 + y1 * y1 + y2 * y2));
         let ka = Params { bias: [0.0; 3], scale: [w * sx, w * sy, w * sz], nonorth: [w * mx, w * my, w * mz] };
-        self.center = [m0[0] + s * v0, m0[1] + s * v1, m0[2] + s * v2];
-        *self.params = Params { bias: ka.ka_times(self.center), ..ka };
+        *self.center = [m0[0] + s * v0, m0[1] + s * v1, m0[2] + s * v2];
+        *self.params = Params { bias: ka.ka_times(*self.center), ..ka };
         self.params.is_finite().then_some(())
     }
 
@@ -546,7 +552,15 @@ pub(crate) fn mid_range<'a>(means: impl Iterator<Item = &'a [f32; 3]>) -> ([f32;
     (lo, hi, widest)
 }
 
+/// [`half_axes_near`] of the mean `m` seen from `mid`, axis `a` in units of `scale[a]`: `u = (m - mid) /
+/// scale`. Out of line: the six faces and the missing directions share one copy.
+#[inline(never)]
+pub(crate) fn half_axes_near_of(m: &[f32; 3], mid: &[f32; 3], scale: &[f32; 3], cos: f32) -> u8 {
+    half_axes_near([(m[0] - mid[0]) / scale[0], (m[1] - mid[1]) / scale[1], (m[2] - mid[2]) / scale[2]], cos)
+}
+
 /// The half-axes ([`Directions`] bits) within `acos(cos)` of the direction of `u`; all six for `u = 0`.
+#[inline]
 pub(crate) fn half_axes_near(u: [f32; 3], cos: f32) -> u8 {
     let limit = cos * sqrt_f32(norm_squared(u));
     let mut bits = 0;
@@ -564,7 +578,7 @@ pub fn missing_directions<'a>(means: impl Iterator<Item = &'a [f32; 3]> + Clone)
     // cos 60 deg = 0.5.
     let mut seen = 0;
     for m in means {
-        seen |= half_axes_near([(m[0] - mid[0]) / widest, (m[1] - mid[1]) / widest, (m[2] - mid[2]) / widest], 0.5);
+        seen |= half_axes_near_of(m, &mid, &[widest; 3], 0.5);
     }
     Directions(!seen & 0x3f)
 }

@@ -209,10 +209,10 @@ fn initial_estimate(
     every_pose(list);
     frame.gravity = gravity;
     if init != Init::SixPosition {
-        let mut fitting = Fitting::new(poses, gravity, &mut initial.params, &mut initial.excluded);
+        let mut fitting = Fitting::new(poses, gravity, &mut initial.params, &mut initial.excluded, &mut frame.offset);
         match fitting.robust(list, rule) {
             Ok(()) => {
-                (held, frame.offset) = (Some(fitting.held), fitting.center);
+                held = Some(fitting.held);
                 let s = &initial.params.scale;
                 frame.gain = [1.0 / s[0], 1.0 / s[1], 1.0 / s[2]];
             }

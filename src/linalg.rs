@@ -172,6 +172,14 @@ pub(crate) fn smaller(a: f32, b: f32) -> f32 {
     if a < b { a } else { b }
 }
 
+/// [`sqrt_f32`] of `x` clamped at 0 (`larger(x, 0)`: 0 for a negative or NaN `x`), the standard
+/// deviation of a variance that rounding may have made negative. Out of line: the verdict's three
+/// callers share the clamp.
+#[inline(never)]
+pub(crate) fn sqrt_clamped(x: f32) -> f32 {
+    sqrt_f32(larger(x, 0.0))
+}
+
 /// Square root to within 2 ulp for normal `x >= 0`, in a dozen single-precision operations (reciprocal
 /// square root from the exponent bits, three Newton steps): `libm::sqrtf` is a bit-by-bit software
 /// routine on targets without a stable square-root instruction in `core` (Cortex-M4F: ~100 cycles).
@@ -268,8 +276,6 @@ fn factor<const N: usize>(
 ) -> [f32; N] {
     const { assert!(N <= 16, "a `Held` mask has 16 entries") };
     let mut d = [0.0f32; N];
-    // The weight of column `k` in the elimination: its pivot (unscaled), 1 (Cholesky).
-    let mut weight = [1.0f32; N];
     for i in 0..N {
         if !positive_finite(a[i][i]) {
             held.insert(i);
@@ -294,7 +300,10 @@ fn factor<const N: usize>(
             // The Cholesky form subtracts the sum, the other each term: kept as they were measured.
             let mut s = if cholesky { 0.0 } else { scaled };
             for k in 0..j {
-                s -= a[i][k] * a[j][k] * weight[k];
+                // The weight of column `k` in the elimination: its pivot (unscaled, in place on the
+                // diagonal; 1 for a held row), 1 (Cholesky).
+                let weight = if cholesky { 1.0 } else { a[k][k] };
+                s -= a[i][k] * a[j][k] * weight;
             }
             if cholesky {
                 s += scaled;
@@ -303,7 +312,6 @@ fn factor<const N: usize>(
                 a[i][j] = if cholesky { s * a[j][j] } else { s / a[j][j] };
             } else if s > min_pivot && positive_finite(s) {
                 a[i][i] = if cholesky { 1.0 / sqrt_f32(s) } else { s };
-                weight[i] = if cholesky { 1.0 } else { s };
             } else {
                 // Found weak just now: held from here on.
                 held.insert(i);
@@ -442,13 +450,12 @@ pub fn spd_inverse_holding_in_place<const N: usize>(a: &mut Matrix<N>, held: Hel
     if flagged != held {
         return Err(LinalgError::Singular);
     }
-    for j in 0..N {
-        let mut col = [0.0; N];
-        col[j] = 1.0;
-        factor_solve(&l, &d, &mut col, true);
-        for i in 0..N {
-            a[i][j] = col[i];
-        }
+    // Column `j` of the inverse solved in place in row `j` (the inverse is symmetric: `a` holds its
+    // transpose as computed, `a[j][i]` the solve for unit vector `j`; no copy of each column).
+    for (j, row) in a.iter_mut().enumerate() {
+        *row = [0.0; N];
+        row[j] = 1.0;
+        factor_solve(&l, &d, row, true);
     }
     if a.iter().flatten().all(|&v| finite(v)) { Ok(()) } else { Err(LinalgError::Singular) }
 }
@@ -523,6 +530,16 @@ mod tests {
         assert!((sqrt_f32(4.0) - 2.0).abs() <= 2.0 * f32::EPSILON * 2.0);
         assert!(sqrt_f32(-1.0).is_nan() && sqrt_f32(f32::NAN).is_nan());
         assert_eq!(sqrt_f32(f32::INFINITY), f32::INFINITY);
+    }
+
+    #[test]
+    fn sqrt_clamped_is_zero_below_zero_and_sqrt_f32_above() {
+        for x in [-f32::MAX, -1.0, -f32::MIN_POSITIVE, -0.0, f32::NAN, f32::NEG_INFINITY] {
+            assert_eq!(sqrt_clamped(x).to_bits(), 0.0f32.to_bits(), "{x}");
+        }
+        for x in [0.0, f32::MIN_POSITIVE, 1e-20, 2.0, 9.80665, f32::MAX, f32::INFINITY] {
+            assert_eq!(sqrt_clamped(x).to_bits(), sqrt_f32(x).to_bits(), "{x}");
+        }
     }
 
     #[test]
@@ -618,6 +635,31 @@ mod tests {
             }
         }
         assert_eq!(inv[2][2], 0.0);
+    }
+
+    /// The LDLT elimination weighs each column by the pivot stored on its diagonal (1 for a held
+    /// row): holding a row solves the rest as the system without it, bit for bit, and the free
+    /// solution satisfies the equations.
+    #[test]
+    fn ldlt_holding_a_row_solves_the_rest_bit_for_bit() {
+        let a = spd4();
+        let b = [1.0, -2.0, 0.5, 3.0];
+        let mut held = a;
+        let mut x = b;
+        ldlt_solve_holding_in_place(&mut held, &mut x, Held::NONE.with(1)).unwrap();
+        let free = [0, 2, 3];
+        let mut reduced: Matrix<3> = core::array::from_fn(|i| core::array::from_fn(|j| a[free[i]][free[j]]));
+        let mut y = free.map(|i| b[i]);
+        ldlt_solve_in_place(&mut reduced, &mut y).unwrap();
+        assert_eq!(x[1], 0.0);
+        assert_eq!(free.map(|i| x[i].to_bits()), y.map(f32::to_bits));
+        let mut full = a;
+        let mut z = b;
+        ldlt_solve_in_place(&mut full, &mut z).unwrap();
+        for i in 0..4 {
+            let v: f32 = (0..4).map(|k| a[i][k] * z[k]).sum();
+            assert!((v - b[i]).abs() < 1e-5 * (1.0 + b[i].abs()), "{i}: {v}");
+        }
     }
 
     #[test]

@@ -336,7 +336,7 @@ pub fn parameters_to_hold(x: &Deviation, frame: &Frame, set: &PoseSet<'_>, held:
         // The largest ratio above 1 (or NaN), `PARAM_COUNT` for none.
         let mut worst = (PARAM_COUNT, 1.0f32);
         for i in 0..PARAM_COUNT {
-            let ratio = crate::linalg::sqrt_f32(larger(cov[i][i], 0.0)) / HOLD_STD[i];
+            let ratio = crate::linalg::sqrt_clamped(cov[i][i]) / HOLD_STD[i];
             if !held.contains(i) && !(ratio <= worst.1) {
                 worst = (i, ratio);
             }
@@ -371,12 +371,14 @@ pub fn param_std(frame: &Frame, covariance: &Matrix<PARAM_COUNT>) -> [f32; PARAM
     core::array::from_fn(|i| {
         let t = frame.params_jacobian_row(i);
         let mut v = 0.0;
+        // Read as `covariance[b][a]`: the order (and the bits) of the sum over the inverse as its
+        // columns are solved (`spd_inverse_holding_in_place` stores column `a` in row `a`).
         for a in 0..PARAM_COUNT {
             for b in 0..PARAM_COUNT {
-                v += t[a] * covariance[a][b] * t[b];
+                v += t[a] * covariance[b][a] * t[b];
             }
         }
-        crate::linalg::sqrt_f32(larger(v, 0.0))
+        crate::linalg::sqrt_clamped(v)
     })
 }
 
@@ -395,7 +397,7 @@ impl ModulusSums {
         let g = frame.gravity;
         for (p, n) in set.pairs() {
             let (e, variance) = error_and_variance(x, frame, p, n);
-            let after = crate::linalg::sqrt_f32(larger(1.0 + e, 0.0));
+            let after = crate::linalg::sqrt_clamped(1.0 + e);
             sums.after += crate::model::square(after - 1.0);
             let raw = crate::ellipsoid::modulus(before, p.mean);
             sums.before += crate::model::square(raw - g);
@@ -464,7 +466,10 @@ pub(crate) fn judge_run(
     let sums = ModulusSums::of(x, frame, set, before);
     let rmse_after_mg = rmse_of_mg(sums.after, set.len(), 1.0);
     let noise_floor = noise_floor_of(sums.noise, set.len(), fitted);
+    // The structural test first, in the covariance's matrix: it writes every entry, so the zeros
+    // that initialise the matrix are never stored (no `memclr` call).
     let mut cov = ZERO;
+    let structurally_undetermined = undetermined_in(x, set.norm, &mut cov);
     let mut std = if covariance_in_place(x, frame, set, held, &mut cov) {
         param_std(frame, &cov)
     } else {
@@ -481,8 +486,6 @@ pub(crate) fn judge_run(
     };
     let mut warnings = Warnings { held: [false; PARAM_COUNT], excluded: PoseList::EMPTY };
     warnings.excluded.copy_from(excluded);
-    // The covariance is no longer needed: scratch for the structural test.
-    let structurally_undetermined = undetermined_in(x, set.norm, &mut cov);
     for i in 0..PARAM_COUNT {
         if held.contains(i) {
             (std[i], warnings.held[i]) = (f32::INFINITY, true);
