@@ -54,11 +54,12 @@ const fn budget(key: &'static str, limit: u64, unit: &'static str, enforced: boo
 pub const BUDGETS: [Budget; 7] = [
     budget("full_calibration_cycles", 2_000_000, "cycles", true, 2_000_000),
     budget("lm_cycles", 100_000, "cycles", true, 100_000),
-    budget("accumulate_cycles_per_sample", 30, "cycles", false, 65),
-    // The FIFO path (`Accumulator::push_slice` of a 32-sample read): 38 measured.
-    budget("accumulate_fifo_cycles_per_sample", 30, "cycles", false, 43),
+    // One push per call: 50 measured (the call, the store, and the block close every 32 pushes).
+    budget("accumulate_cycles_per_sample", 30, "cycles", false, 56),
+    // The FIFO path (`Accumulator::push_slice` of a 32-sample read): 28 measured.
+    budget("accumulate_fifo_cycles_per_sample", 30, "cycles", true, 30),
     budget("apply_cycles_per_sample", 25, "cycles", false, 31),
-    budget("library_flash_bytes", 16 * 1024, "bytes", false, 19_100),
+    budget("library_flash_bytes", 16 * 1024, "bytes", true, 16 * 1024),
     budget("solve_ram_bytes", 4 * 1024, "bytes", true, 3_500),
 ];
 
