@@ -243,7 +243,7 @@ pub fn levenberg_marquardt_holding(
     config: &LmConfig,
     held: Held,
 ) -> Result<SolveReport, SolveError> {
-    check_count(poses, held)?;
+    check_input(&x0, poses, held)?;
     let mut x = x0;
     let end = levenberg_marquardt_in_place(&mut x, poses, config, held)?;
     Ok(SolveReport { x, cost: end.cost, iterations: end.iterations, termination: end.termination })
@@ -269,7 +269,8 @@ pub(crate) fn levenberg_marquardt_in_place(
     config: &LmConfig,
     held: Held,
 ) -> Result<LmEnd, SolveError> {
-    check_finite(x, poses)?;
+    // A NaN or an infinity in `x` or in a pose makes the objective non-finite (no operation of a modulus
+    // error turns one finite): the inputs need no check of their own here (the public wrapper names them).
     let mut cost = objective(x, poses);
     if !cost.is_finite() {
         return Err(SolveError::Diverged);
@@ -372,4 +373,66 @@ pub fn newton_holding(
         return Err(SolveError::Diverged);
     }
     Ok(SolveReport { x, cost, iterations: config.max_iterations, termination: SolveTermination::MaxIterations })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Twelve unit directions (the six faces and six diagonals), exact: `q = 0`.
+    fn poses() -> [NormPose; 12] {
+        let s = core::f32::consts::FRAC_1_SQRT_2;
+        let dirs = [
+            [1.0, 0.0, 0.0],
+            [-1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, -1.0],
+            [s, s, 0.0],
+            [0.0, s, -s],
+            [-s, 0.0, s],
+            [s, -s, 0.0],
+            [0.0, -s, -s],
+            [s, 0.0, s],
+        ];
+        dirs.map(|u| NormPose { u, q: 0.0 })
+    }
+
+    #[test]
+    fn a_non_finite_value_anywhere_in_the_input_is_refused_without_an_input_check() {
+        // The in-place LM relies on the objective at the start: every NaN or infinity in a pose (its
+        // direction, where a zero component meets a zero coefficient too, or its `q`) or in `x` must
+        // make it non-finite. The public LM names the cause.
+        let config = LmConfig::DEFAULT;
+        for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            for pose in 0..12 {
+                for field in 0..4 {
+                    let mut set = poses();
+                    match field {
+                        3 => set[pose].q = bad,
+                        a => set[pose].u[a] = bad,
+                    }
+                    let mut x = [0.0; PARAM_COUNT];
+                    let in_place = levenberg_marquardt_in_place(&mut x, &set, &config, Held::NONE);
+                    assert!(matches!(in_place, Err(SolveError::Diverged)), "{bad} in pose {pose} field {field}");
+                    let public = levenberg_marquardt([0.0; PARAM_COUNT], &set, &config);
+                    assert!(matches!(public, Err(SolveError::NonFiniteInput)), "{bad} in pose {pose} field {field}");
+                }
+            }
+            for i in 0..PARAM_COUNT {
+                let mut x = [0.0; PARAM_COUNT];
+                x[i] = bad;
+                let mut moved = x;
+                let in_place = levenberg_marquardt_in_place(&mut moved, &poses(), &config, Held::NONE);
+                assert!(matches!(in_place, Err(SolveError::Diverged)), "{bad} in x[{i}]");
+                let public = levenberg_marquardt(x, &poses(), &config);
+                assert!(matches!(public, Err(SolveError::NonFiniteInput)), "{bad} in x[{i}]");
+            }
+        }
+        // Finite input still converges (the check is not refusing everything).
+        let mut x = [0.01; PARAM_COUNT];
+        assert!(levenberg_marquardt_in_place(&mut x, &poses(), &config, Held::NONE).is_ok());
+        assert!(x.iter().all(|v| v.abs() < 1e-4), "{x:?}");
+    }
 }

@@ -650,6 +650,7 @@ impl<R: Rng, const POP: usize, const DIM: usize, O: Operators> Ga<R, POP, DIM, O
 
 /// BLX-alpha: each child gene uniform in the parents' interval extended by `alpha` on both sides,
 /// reflected into `bounds`.
+#[inline(always)]
 fn blend<R: Rng, const DIM: usize>(
     rng: &mut R,
     bounds: &SearchBox<DIM>,
@@ -712,6 +713,7 @@ fn cauchy<R: Rng>(rng: &mut R) -> f32 {
 /// below 3e-8). A third of `libm::log10f`'s code, which special-cases what a count never is. TAGA's
 /// probabilities use it only in comparisons with 24-bit uniform draws, where a last-bit difference
 /// from `log10f` changes a draw's outcome with probability below 1e-8.
+#[inline(always)]
 fn lg_count(n: u32) -> f32 {
     const LN_2: f32 = core::f32::consts::LN_2;
     const LOG10_E: f32 = core::f32::consts::LOG10_E;
@@ -726,6 +728,7 @@ fn lg_count(n: u32) -> f32 {
 }
 
 /// Index of the first smallest finite value (0 if there is none); NaN never wins.
+#[inline(never)]
 fn argmin(v: &[f32]) -> usize {
     let i = next_smallest(v, f32::NEG_INFINITY, usize::MAX);
     if i < v.len() { i } else { 0 }

@@ -186,7 +186,8 @@ impl Operators for Taga {
     }
 }
 
-/// `p` clamped to `[0, 1]`; NaN gives 0.
+/// `p` clamped to `[0, 1]`; NaN gives 0. Out of line: the probability's two clamps share it (flash).
+#[inline(never)]
 pub(super) fn unit_interval(p: f32) -> f32 {
     if !(p > 0.0) {
         0.0
