@@ -483,7 +483,7 @@ impl Fitting<'_> {
 /// verdict's RMSE before calibration share one copy.
 #[inline(never)]
 pub(crate) fn modulus(p: &Params, m: [f32; 3]) -> f32 {
-    sqrt_f32(norm_squared(p.apply(m)))
+    sqrt_f32(norm_squared(p.apply_shared(m)))
 }
 
 /// `a - b`.

@@ -63,16 +63,23 @@ impl Params {
         [s[0] * f_s[0], m[0] * f_s[0] + s[1] * f_s[1], m[1] * f_s[0] + m[2] * f_s[1] + s[2] * f_s[2]]
     }
 
-    /// Calibrates one sample: `f_b = Ka * f_s - B`.
+    /// Calibrates one sample: `f_b = Ka * f_s - B`. Inlined: the per-sample path of a firmware.
     #[inline]
     pub fn apply(&self, f_s: [f32; 3]) -> [f32; 3] {
+        self.calibrated(f_s)
+    }
+
+    /// [`Params::apply`] through one out-of-line copy of the arithmetic ([`Params::apply_to`]): for the
+    /// library's once-per-pose callers (flash first; not a per-sample path).
+    #[inline]
+    pub(crate) fn apply_shared(&self, f_s: [f32; 3]) -> [f32; 3] {
         let mut sample = f_s;
         self.apply_to(&mut sample);
         sample
     }
 
     /// [`Params::apply`] in place. Out of line: one copy of the arithmetic for the library's
-    /// single-sample callers and the odd last sample of a batch (the batch loop inlines its own,
+    /// once-per-pose callers and the odd last sample of a batch (the batch loop inlines its own,
     /// [`Params::calibrated`]).
     #[inline(never)]
     fn apply_to(&self, sample: &mut [f32; 3]) {
@@ -112,7 +119,7 @@ impl Params {
     /// Modulus error of one pose, eq. (4): `E = |f_b|^2 - g^2` (output unit squared).
     #[inline]
     pub fn modulus_error(&self, f_s: [f32; 3], gravity: f32) -> f32 {
-        norm_squared(self.apply(f_s)) - gravity * gravity
+        norm_squared(self.apply_shared(f_s)) - gravity * gravity
     }
 
     /// The paper's objective, eq. (5): `fE = (1/N) sum E_L^2` over the pose means `poses`
@@ -163,7 +170,7 @@ pub fn modulus_rmse_mg(params: &Params, poses: &[[f32; 3]], gravity: f32) -> Opt
         return None;
     }
     let sum: f32 =
-        poses.iter().map(|&p| square(crate::linalg::sqrt_f32(norm_squared(params.apply(p))) - gravity)).sum();
+        poses.iter().map(|&p| square(crate::linalg::sqrt_f32(norm_squared(params.apply_shared(p))) - gravity)).sum();
     Some(crate::linalg::sqrt_f32(sum / poses.len() as f32) / gravity * 1000.0)
 }
 
