@@ -194,22 +194,19 @@ fn raw_i16_axis_sums(samples: &[[i16; 3]], axis: usize) -> (i32, i64) {
     (sum, sum_sq)
 }
 
-/// One axis of a block of `n = values.len()` samples: raw `(sum, sum of squares, n^2 variance,
-/// saturated)`, `n^2 variance = n sum_sq - sum^2` exact (at most `n^2 2^30 <= 2^62`).
+/// One axis of a block of at most `2^16` samples: raw `(sum, sum of squares, saturated)`, the saturation
+/// by the block's bound ([`i16_may_saturate`], from the exact `n^2` variance `n sum_sq - sum^2`) and only
+/// then sample by sample, as for a full block.
 #[inline(always)]
-fn i16_axis(values: &[i16], limit: i32) -> (i32, i64, u64, bool) {
+fn i16_axis(values: &[i16], limit: i32) -> (i32, i64, bool) {
     let (mut sum, mut sum_sq) = (0i32, 0i64);
     for &v in values {
         (sum, sum_sq) = (sum + i32::from(v), sum_sq + i64::from(v) * i64::from(v));
     }
-    let n = values.len() as u64;
+    let n = values.len();
     let spread = (n as i64 * sum_sq - i64::from(sum) * i64::from(sum)) as u64;
-    // With d_i = n x_i - sum, sum d_i^2 = n spread: every |n x_i| <= |sum| + sqrt(n spread). None can reach
-    // the limit (nor a rail) when that is below n min(limit, i16::MAX): margin > 0 and margin^2 > n spread
-    // (margin < 2^31; a product that overflows fails the test). Only otherwise are the samples checked.
-    let margin = n as i64 * i64::from(limit.min(i32::from(i16::MAX))) - i64::from(sum).abs();
-    let clear = margin > 0 && spread.checked_mul(n).is_some_and(|t| t < (margin * margin) as u64);
-    (sum, sum_sq, spread, !clear && values.iter().any(|v| v.saturated(limit)))
+    let saturated = i16_may_saturate(sum.unsigned_abs(), spread, n, limit) && i16_any_saturated(values, limit);
+    (sum, sum_sq, saturated)
 }
 
 /// The raw sums of a full block of samples, axis after axis: `sum` and `sum_sq` written, the total `n^2`
@@ -230,20 +227,25 @@ fn i16_block_sums(samples: &[[i16; 3]], sum: &mut [i64; 3], sum_sq: &mut [i64; 3
     (samples.len() as u64).wrapping_mul(total_sq).wrapping_sub(squares)
 }
 
-/// `false` when no sample of a block of `n` samples can be saturated, from its raw sums and total
-/// `n^2` variance `spread` (exact integers): on every axis `sum_i (n x_i - sum)^2 = n spread_axis <= n
+/// `false` when no sample of a block of `n` samples (one axis or three) can be saturated, from the
+/// largest `|sum|` of its axes and its total `n^2` variance `spread` (exact integers): on every axis `sum_i (n x_i - sum)^2 = n spread_axis <= n
 /// spread`, so every `|n x_i| <= |sum| + sqrt(n spread)`, and none reaches `min(limit, i16::MAX)` (nor a
 /// rail) when `margin = n min(limit, i16::MAX) - max |sum| > 0` and `margin^2 > n spread`. Only otherwise
 /// are the samples checked.
 #[inline(always)]
-fn i16_may_saturate(sum: &[i64; 3], spread: u64, n: usize, limit: i32) -> bool {
-    // A block's raw sum fits an i32 (at most 2^16 samples of at most 2^15): |sum| <= 2^31.
-    let magnitude = |s: i64| (s as i32).unsigned_abs();
-    let largest = magnitude(sum[0]).max(magnitude(sum[1])).max(magnitude(sum[2]));
+fn i16_may_saturate(largest: u32, spread: u64, n: usize, limit: i32) -> bool {
     // n min(limit, i16::MAX) < 2^16 2^15 = 2^31.
     let reach = n as u32 * limit.clamp(0, i32::from(i16::MAX)) as u32;
     let margin = u64::from(reach.saturating_sub(largest));
     margin == 0 || spread.checked_mul(n as u64).is_none_or(|t| t >= margin * margin)
+}
+
+/// The largest `|sum|` of a block's three raw sums (each fits an `i32`: at most `2^16` samples of at most
+/// `2^15`).
+#[inline(always)]
+fn largest_magnitude(sum: &[i64; 3]) -> u32 {
+    let magnitude = |s: i64| (s as i32).unsigned_abs();
+    magnitude(sum[0]).max(magnitude(sum[1])).max(magnitude(sum[2]))
 }
 
 /// Whether one of `values` is saturated at `limit` ([`Reading::saturated`]): at or beyond
@@ -274,7 +276,7 @@ impl Reading for i16 {
         i64::from(n)
     }
     fn axis_sums(values: &[i16], limit: i32) -> (i64, i64, bool) {
-        let (sum, sum_sq, _, saturated) = i16_axis(values, limit);
+        let (sum, sum_sq, saturated) = i16_axis(values, limit);
         (i64::from(sum), sum_sq, saturated)
     }
     #[inline(always)]
@@ -291,8 +293,8 @@ impl Reading for i16 {
         let mean_of = |s: i64| s as i32 as f32 * n_inverse;
         let mean = [mean_of(sum[0]), mean_of(sum[1]), mean_of(sum[2])];
         let variance = u64_to_f32_halves(n_squared_variance) * n_inverse * n_inverse;
-        let saturated =
-            i16_may_saturate(sum, n_squared_variance, N, limit) && i16_any_saturated(samples.as_flattened(), limit);
+        let saturated = i16_may_saturate(largest_magnitude(sum), n_squared_variance, N, limit)
+            && i16_any_saturated(samples.as_flattened(), limit);
         (mean, variance, saturated)
     }
     fn mean_and_variance(reference: i16, sum: i64, sum_sq: i64, n: u32) -> (f32, f32) {
@@ -1204,8 +1206,8 @@ mod tests {
             assert_eq!(saturated, truth, "round {round}");
             if truth {
                 saturated_blocks += 1;
-                assert!(i16_may_saturate(&sum, spread, 32, limit), "round {round}");
-            } else if !i16_may_saturate(&sum, spread, 32, limit) {
+                assert!(i16_may_saturate(largest_magnitude(&sum), spread, 32, limit), "round {round}");
+            } else if !i16_may_saturate(largest_magnitude(&sum), spread, 32, limit) {
                 cleared += 1;
             }
         }
