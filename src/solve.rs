@@ -17,7 +17,7 @@
 //! ```
 
 use crate::frame::{Deviation, NormPose, modulus_error_gradient, objective, residual_jacobian};
-use crate::linalg::{Held, Matrix, add_normal_row, finite, larger, ldlt_solve_holding_split, solve_lu};
+use crate::linalg::{Held, Matrix, add_normal_row, finite, larger, ldlt_solve_holding_split, solve_lu, zero_matrix};
 use crate::model::PARAM_COUNT;
 
 /// Why a solve could not produce parameters.
@@ -276,7 +276,8 @@ pub(crate) fn levenberg_marquardt_in_place(
         return Err(SolveError::Diverged);
     }
     let mut lambda = config.initial_damping;
-    let (mut jtj, mut jte, mut damped) = (ZERO_MATRIX, [0.0; PARAM_COUNT], ZERO_MATRIX);
+    // Zeroed from a constant (one `memset` call each; `[[0.0; 9]; 9]` in place was one per row).
+    let (mut jtj, mut jte, mut damped) = (zero_matrix(), [0.0; PARAM_COUNT], zero_matrix());
     // The normal equations are built (in place) at the start and after each accepted step.
     let mut rebuild = true;
     let mut iterations = 0;
@@ -322,9 +323,6 @@ pub(crate) fn levenberg_marquardt_in_place(
     };
     Ok(LmEnd { cost, iterations, termination })
 }
-
-/// A zero matrix; as a `const` it is one `memset` call, `[[0.0; 9]; 9]` in place was one per row.
-const ZERO_MATRIX: Matrix<PARAM_COUNT> = [[0.0; PARAM_COUNT]; PARAM_COUNT];
 
 /// The classical Newton iteration on `fE` (the paper's baseline): full Hessian
 /// `H = (2/N) sum(grad E grad E^T + 2 E Jr^T Jr)`, undamped step `H d = -grad fE`, no line search.
