@@ -303,7 +303,7 @@ fn uncertainty_half_widths(
     }
     // A floor keeps the box valid where a parameter is held or determined exactly.
     for (i, h) in half.iter_mut().enumerate() {
-        *h = larger(sigmas * crate::linalg::sqrt_f32(larger(cov[i][i], 0.0)), MIN_HALF_WIDTH);
+        *h = larger(sigmas * crate::linalg::sqrt_clamped(cov[i][i]), MIN_HALF_WIDTH);
     }
 }
 

@@ -446,7 +446,7 @@ impl Fitting<'_> {
     /// `| |f_b| / g - 1 |` of the mean `m` under the fit (the modulus out of line).
     #[inline(always)]
     fn abs_error(&self, m: &[f32; 3]) -> f32 {
-        (modulus(self.params, *m) / self.gravity - 1.0).abs()
+        (self.params.modulus(*m) / self.gravity - 1.0).abs()
     }
 
     /// Over the poses listed in `kept`: the position and size of the largest modulus error, their RMS,
@@ -477,13 +477,6 @@ impl Fitting<'_> {
         }
         best
     }
-}
-
-/// `|f_b|`, the modulus of the reading `m` calibrated by `p`. Out of line: the fit's statistics and the
-/// verdict's RMSE before calibration share one copy.
-#[inline(never)]
-pub(crate) fn modulus(p: &Params, m: [f32; 3]) -> f32 {
-    sqrt_f32(norm_squared(p.apply_shared(m)))
 }
 
 /// `a - b`.

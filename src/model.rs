@@ -78,6 +78,13 @@ impl Params {
         sample
     }
 
+    /// `|f_b|`, the modulus of the reading `f_s` calibrated. Out of line: the ellipsoid fit's statistics,
+    /// the verdict's RMSE before calibration and [`modulus_rmse_mg`] share one copy.
+    #[inline(never)]
+    pub(crate) fn modulus(&self, f_s: [f32; 3]) -> f32 {
+        crate::linalg::sqrt_f32(norm_squared(self.apply_shared(f_s)))
+    }
+
     /// [`Params::apply`] in place. Out of line: one copy of the arithmetic for the library's
     /// once-per-pose callers and the odd last sample of a batch (the batch loop inlines its own,
     /// [`Params::calibrated`]).
@@ -169,8 +176,7 @@ pub fn modulus_rmse_mg(params: &Params, poses: &[[f32; 3]], gravity: f32) -> Opt
     if poses.is_empty() || !(gravity > 0.0) {
         return None;
     }
-    let sum: f32 =
-        poses.iter().map(|&p| square(crate::linalg::sqrt_f32(norm_squared(params.apply_shared(p))) - gravity)).sum();
+    let sum: f32 = poses.iter().map(|&p| square(params.modulus(p) - gravity)).sum();
     Some(crate::linalg::sqrt_f32(sum / poses.len() as f32) / gravity * 1000.0)
 }
 

@@ -399,7 +399,7 @@ impl ModulusSums {
             let (e, variance) = error_and_variance(x, frame, p, n);
             let after = crate::linalg::sqrt_clamped(1.0 + e);
             sums.after += crate::model::square(after - 1.0);
-            let raw = crate::ellipsoid::modulus(before, p.mean);
+            let raw = before.modulus(p.mean);
             sums.before += crate::model::square(raw - g);
             // |f_b| / g = sqrt(1 + E): d|f_b|/g = dE / 2 near |f_b| = g.
             match (&mut sums.noise, variance) {
