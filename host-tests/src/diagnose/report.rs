@@ -129,6 +129,10 @@ pub struct Probe {
     pub heldout_gain: f64,
     /// The best parametrisation.
     pub detail: String,
+    /// Evidence by which it must exceed a family's to veto it (`unexplained`): 0, or more for a shape
+    /// a catalogue family can take (a bias step is a fast drift).
+    #[serde(skip)]
+    pub veto_margin: f64,
 }
 
 /// The whole diagnosis.

@@ -65,15 +65,6 @@ fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation]) -> Option<(usize
     })
 }
 
-/// Evidence by which a bias step must exceed a family to veto it: a warm-up or a wander is a smooth
-/// step, and on a few poses a step fits a slow drift nearly as well as the drift does.
-const STEP_OVER_DRIFT: f64 = 0.2;
-
-/// Evidence by which a probe of this shape must exceed a family to veto it.
-fn veto_margin(shape: &str) -> f64 {
-    if shape == "bias-step" { STEP_OVER_DRIFT } else { 0.0 }
-}
-
 /// Picks the verdict among the evaluated families and measures the shrink.
 pub(crate) fn decide(m: &Measured, evaluations: &[Evaluation], probes: &[Probe]) -> Decision {
     let significant = m.gap.significant;
@@ -83,7 +74,7 @@ pub(crate) fn decide(m: &Measured, evaluations: &[Evaluation], probes: &[Probe])
         .max_by(|a, b| a.heldout_gain.total_cmp(&b.heldout_gain));
     let best = best_family(m, evaluations);
     // A family wins only if no out-of-catalogue probe explains the withheld poses better.
-    let beaten = |gain: f64| probes.iter().any(|p| p.heldout_gain > gain + veto_margin(p.shape));
+    let beaten = |gain: f64| probes.iter().any(|p| p.heldout_gain > gain + p.veto_margin);
     let winner = best
         .filter(|(_, e)| significant && e.candidate.evidence() >= MIN_GAIN && !beaten(e.candidate.evidence()))
         .map(|(i, _)| i);
