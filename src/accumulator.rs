@@ -198,7 +198,7 @@ fn raw_i16_axis_sums(samples: &[[i16; 3]], axis: usize) -> (i32, i64) {
 /// by the block's bound ([`i16_may_saturate`], from the exact `n^2` variance `n sum_sq - sum^2`) and only
 /// then sample by sample, as for a full block.
 #[inline(always)]
-fn i16_axis(values: &[i16], limit: i32) -> (i32, i64, bool) {
+fn i16_axis_chunk(values: &[i16], limit: i32) -> (i32, i64, bool) {
     let (mut sum, mut sum_sq) = (0i32, 0i64);
     for &v in values {
         (sum, sum_sq) = (sum + i32::from(v), sum_sq + i64::from(v) * i64::from(v));
@@ -206,6 +206,19 @@ fn i16_axis(values: &[i16], limit: i32) -> (i32, i64, bool) {
     let n = values.len();
     let spread = (n as i64 * sum_sq - i64::from(sum) * i64::from(sum)) as u64;
     let saturated = i16_may_saturate(sum.unsigned_abs(), spread, n, limit) && i16_any_saturated(values, limit);
+    (sum, sum_sq, saturated)
+}
+
+/// One axis of any number of samples (exact up to `2^33` samples, where the sum of squares could reach
+/// `2^63`): raw `(sum, sum of squares, saturated)`, summed in chunks of `2^16` samples
+/// ([`i16_axis_chunk`]: its `i32` sum and saturation pre-test are exact there).
+fn i16_axis(values: &[i16], limit: i32) -> (i64, i64, bool) {
+    let (mut sum, mut sum_sq, mut saturated) = (0i64, 0i64, false);
+    for chunk in values.chunks(1 << 16) {
+        let (s, q, chunk_saturated) = i16_axis_chunk(chunk, limit);
+        (sum, sum_sq) = (sum + i64::from(s), sum_sq + q);
+        saturated |= chunk_saturated;
+    }
     (sum, sum_sq, saturated)
 }
 
@@ -276,8 +289,7 @@ impl Reading for i16 {
         i64::from(n)
     }
     fn axis_sums(values: &[i16], limit: i32) -> (i64, i64, bool) {
-        let (sum, sum_sq, saturated) = i16_axis(values, limit);
-        (i64::from(sum), sum_sq, saturated)
+        i16_axis(values, limit)
     }
     #[inline(always)]
     fn full_block<const N: usize>(
@@ -1212,6 +1224,27 @@ mod tests {
             }
         }
         assert!(saturated_blocks > 500 && cleared > 500, "{saturated_blocks} saturated, {cleared} cleared");
+    }
+
+    #[test]
+    fn block_sums_of_a_slice_longer_than_2_to_the_16_are_exact() {
+        // 3 2^16 + 5 samples near a rail: an i32 sum of one axis would overflow; the one saturated
+        // sample is the last one, in the short final chunk.
+        let n = 3 * (1usize << 16) + 5;
+        let x: Vec<i16> = (0..n).map(|i| if i + 1 == n { i16::MAX } else { 32_000 - (i % 7) as i16 }).collect();
+        let y: Vec<i16> = (0..n).map(|i| i16::MIN + 1 + (i % 5) as i16).collect();
+        let z: Vec<i16> = (0..n).map(|i| (i % 1_001) as i16 - 500).collect();
+        let limit = i16::saturation_limit(f32::INFINITY);
+        let out = i16::block_sums([&x, &y, &z], limit);
+        for (a, values) in [&x, &y, &z].iter().enumerate() {
+            let sum: i128 = values.iter().map(|&v| i128::from(v)).sum();
+            let sum_sq: i128 = values.iter().map(|&v| i128::from(v) * i128::from(v)).sum();
+            assert_eq!(i128::from(out.sum[a]), sum, "axis {a}");
+            assert_eq!(i128::from(out.sum_sq[a]), sum_sq, "axis {a}");
+        }
+        assert!(out.saturated);
+        let clear = i16::block_sums([&x[..n - 1], &y[..n - 1], &z[..n - 1]], limit);
+        assert!(!clear.saturated);
     }
 
     #[test]
