@@ -209,19 +209,6 @@ fn i16_axis_chunk(values: &[i16], limit: i32) -> (i32, i64, bool) {
     (sum, sum_sq, saturated)
 }
 
-/// One axis of any number of samples (exact up to `2^33` samples, where the sum of squares could reach
-/// `2^63`): raw `(sum, sum of squares, saturated)`, summed in chunks of `2^16` samples
-/// ([`i16_axis_chunk`]: its `i32` sum and saturation pre-test are exact there).
-fn i16_axis(values: &[i16], limit: i32) -> (i64, i64, bool) {
-    let (mut sum, mut sum_sq, mut saturated) = (0i64, 0i64, false);
-    for chunk in values.chunks(1 << 16) {
-        let (s, q, chunk_saturated) = i16_axis_chunk(chunk, limit);
-        (sum, sum_sq) = (sum + i64::from(s), sum_sq + q);
-        saturated |= chunk_saturated;
-    }
-    (sum, sum_sq, saturated)
-}
-
 /// The raw sums of a full block of samples, axis after axis: `sum` and `sum_sq` written, the total `n^2`
 /// variance `sum_a (n sum_sq_a - sum_a^2)` returned (exact: each term at most `2^62`, three fit a `u64`).
 /// Inlined into the block close (one call fewer per axis than an out-of-line axis function); each axis
@@ -288,8 +275,16 @@ impl Reading for i16 {
     fn count(n: u32) -> i64 {
         i64::from(n)
     }
+    /// Any number of samples (exact below `2^33`, where the sum of squares could reach `2^63`), in
+    /// chunks of `2^16` samples: [`i16_axis_chunk`]'s `i32` sum and saturation pre-test are exact there.
     fn axis_sums(values: &[i16], limit: i32) -> (i64, i64, bool) {
-        i16_axis(values, limit)
+        let (mut sum, mut sum_sq, mut saturated) = (0i64, 0i64, false);
+        for chunk in values.chunks(1 << 16) {
+            let (s, q, chunk_saturated) = i16_axis_chunk(chunk, limit);
+            (sum, sum_sq) = (sum + i64::from(s), sum_sq + q);
+            saturated |= chunk_saturated;
+        }
+        (sum, sum_sq, saturated)
     }
     #[inline(always)]
     fn full_block<const N: usize>(
