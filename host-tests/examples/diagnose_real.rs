@@ -55,7 +55,7 @@ fn main() {
                 } else if r.gap.significant {
                     format!(
                         "unexplained: {} (best family {})",
-                        r.unexplained_where.as_deref().unwrap_or("-"),
+                        r.located.as_deref().unwrap_or("-"),
                         best.map_or("-", |c| c.effect)
                     )
                 } else {

@@ -49,8 +49,8 @@ fn check_kinds(kinds: &[Outside]) {
                 "{} (ratio {:.1}, gains: family {family_gain:.2}, probe {probe_gain:.2})",
                 report.verdict, report.gap.ratio_before
             ));
-            if let Some(w) = &report.unexplained_where {
-                println!("    {} seed {seed}: unexplained, {w}", kind.name());
+            if let Some(w) = &report.located {
+                println!("    {} seed {seed}: {}, {w}", kind.name(), report.verdict);
             }
         }
         println!("{:<14} {}", kind.name(), answers.join(", "));

@@ -175,7 +175,8 @@ pub fn diagnose(table: &Table, opts: &DiagnoseOptions) -> Result<Diagnosis, Diag
         None => Vec::new(),
     };
     let probes = ctx.as_ref().map(probe::run).unwrap_or_default();
-    let decision = verdict::decide(&m, &evaluations, &probes);
+    let drifting_holds = ctx.as_ref().and_then(family::drifting_holds);
+    let decision = verdict::decide(&m, &evaluations, &probes, drifting_holds);
     let scale: [f64; 3] = std::array::from_fn(|a| m.model.ka[a][a]);
     let mut d = Diagnosis {
         file: table.file.clone(),
@@ -193,16 +194,16 @@ pub fn diagnose(table: &Table, opts: &DiagnoseOptions) -> Result<Diagnosis, Diag
         heldout_ratio_nominal: ctx.as_ref().map_or(f64::NAN, |c| c.heldout_ratio_nominal),
         probes,
         verdict: decision.verdict,
-        unexplained_where: None,
+        located: decision.located,
         explained: decision.winner.is_some(),
         shrink: decision.shrink,
         not_calibrated: None,
     };
     if d.verdict == "unexplained" {
-        d.unexplained_where = Some(decision.probe_where.unwrap_or_else(|| locate::unexplained_location(&d)));
+        d.located = Some(decision.probe_where.unwrap_or_else(|| locate::unexplained_location(&d)));
         if ctx.is_none() {
-            let place = d.unexplained_where.take().unwrap_or_default();
-            d.unexplained_where = Some(format!("{place}; too few poses to test the catalogue on withheld poses"));
+            let place = d.located.take().unwrap_or_default();
+            d.located = Some(format!("{place}; too few poses to test the catalogue on withheld poses"));
         }
     }
     Ok(d)
@@ -240,7 +241,7 @@ fn moving_holds(table: &Table, opts: &DiagnoseOptions, still_poses: usize, rate:
         heldout_ratio_nominal: f64::NAN,
         probes: Vec::new(),
         verdict: "motion",
-        unexplained_where: None,
+        located: None,
         explained: true,
         shrink: f64::NAN,
         not_calibrated: Some(format!("{} still poses: too few to calibrate", still_poses)),
@@ -322,7 +323,7 @@ mod tests {
         }
         let d = diagnose(&table, &DiagnoseOptions::DEFAULT).unwrap();
         assert_eq!(d.verdict, "unexplained", "{}", d.to_text());
-        assert!(d.unexplained_where.as_deref().is_some_and(|w| w.contains("bias step")), "{}", d.to_text());
+        assert!(d.located.as_deref().is_some_and(|w| w.contains("bias step")), "{}", d.to_text());
     }
 
     #[test]

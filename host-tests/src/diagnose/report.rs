@@ -169,8 +169,9 @@ pub struct Diagnosis {
     /// Step 3 verdict: an [`EFFECT_NAMES`](super::EFFECT_NAMES) entry, `none`, or `unexplained` (a significant gap no
     /// family explains on withheld poses).
     pub verdict: &'static str,
-    /// For `unexplained`: where the gap lies.
-    pub unexplained_where: Option<String>,
+    /// For `unexplained`: where the gap lies; for a verdict the withheld poses do not test (drift
+    /// seen only within the holds): what supports it.
+    pub located: Option<String>,
     /// `true` when the gap is significant and a candidate explains it (gain >= [`MIN_GAIN`](super::MIN_GAIN)).
     pub explained: bool,
     /// Step 4.
@@ -375,7 +376,7 @@ impl Diagnosis {
         let best = self.candidates.iter().find(|c| c.effect == self.verdict);
         VerdictSummary {
             effect: self.verdict,
-            located: self.unexplained_where.as_deref(),
+            located: self.located.as_deref(),
             explained: self.explained,
             heldout_gain: best.map(|c| c.heldout_gain),
             shrink: self.shrink,
@@ -447,7 +448,7 @@ mod tests {
             probes: vec![],
             heldout_ratio_nominal: 3.0,
             verdict: "unexplained",
-            unexplained_where: Some("one orientation: +z".into()),
+            located: Some("one orientation: +z".into()),
             explained: false,
             shrink: 0.0,
             not_calibrated: None,

@@ -18,6 +18,8 @@ pub(crate) struct Decision {
     pub(crate) after: Vec<Option<f64>>,
     /// For `unexplained`: the probe that explains the withheld poses best, if one does.
     pub(crate) probe_where: Option<String>,
+    /// For a verdict the withheld poses do not test: what within the holds supports it.
+    pub(crate) located: Option<String>,
 }
 
 /// Evidence by which a noise model must exceed every value-predicting family to be named before
@@ -65,8 +67,16 @@ fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation]) -> Option<(usize
     })
 }
 
-/// Picks the verdict among the evaluated families and measures the shrink.
-pub(crate) fn decide(m: &Measured, evaluations: &[Evaluation], probes: &[Probe]) -> Decision {
+/// Picks the verdict among the evaluated families and measures the shrink. `drifting_holds`
+/// describes holds that drift smoothly ([`super::family::drifting_holds`]): when no family explains
+/// the withheld poses and no probe does either, that names drift (with no shrink: the pose means
+/// cannot follow it).
+pub(crate) fn decide(
+    m: &Measured,
+    evaluations: &[Evaluation],
+    probes: &[Probe],
+    drifting_holds: Option<String>,
+) -> Decision {
     let significant = m.gap.significant;
     let best_probe = probes
         .iter()
@@ -79,6 +89,7 @@ pub(crate) fn decide(m: &Measured, evaluations: &[Evaluation], probes: &[Probe])
         .filter(|(_, e)| significant && e.candidate.evidence() >= MIN_GAIN && !beaten(e.candidate.evidence()))
         .map(|(i, _)| i);
     let mut gap = m.gap.clone();
+    let mut located = None;
     let (verdict, after) = match winner {
         Some(i) => {
             let e = &evaluations[i];
@@ -89,7 +100,13 @@ pub(crate) fn decide(m: &Measured, evaluations: &[Evaluation], probes: &[Probe])
             (e.candidate.effect, e.after.clone())
         }
         None => {
-            let verdict = if significant { "unexplained" } else { "none" };
+            let within = drifting_holds.filter(|_| significant && best_probe.is_none());
+            let verdict = match (&within, significant) {
+                (Some(_), _) => "drift",
+                (None, true) => "unexplained",
+                (None, false) => "none",
+            };
+            located = within;
             (verdict, m.r.iter().map(|v| Some(*v)).collect())
         }
     };
@@ -100,5 +117,5 @@ pub(crate) fn decide(m: &Measured, evaluations: &[Evaluation], probes: &[Probe])
         0.0
     };
     let probe_where = best_probe.map(|p| format!("{} (held-out gain {:.2})", p.detail, p.heldout_gain));
-    Decision { verdict, winner, gap, shrink, after, probe_where }
+    Decision { verdict, winner, gap, shrink, after, probe_where, located }
 }

@@ -113,9 +113,10 @@ impl Diagnosis {
             s,
             "   verdict: {}{}",
             self.verdict,
-            self.unexplained_where
-                .as_ref()
-                .map_or(String::new(), |w| format!(" (significant gap, no family explains it; it lies in: {w})"))
+            self.located.as_ref().map_or(String::new(), |w| match self.verdict {
+                "unexplained" => format!(" (significant gap, no family explains it; it lies in: {w})"),
+                _ => format!(" ({w})"),
+            })
         );
         let _ = writeln!(
             s,

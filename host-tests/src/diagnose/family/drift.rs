@@ -18,7 +18,28 @@ const HARMONICS: [usize; 5] = [1, 2, 3, 4, 6];
 /// Time constants tried, as fractions of the log's duration.
 const TAU_FACTORS: [f64; 6] = [0.05, 0.1, 0.2, 0.4, 0.8, 1.6];
 
+/// Least share of the holds' movement beyond white noise a line per hold must explain for
+/// [`drifting_holds`] (a random walk's path: about 0.7; see [`Within::line_share`]).
+const HOLD_LINES_EXPLAIN: f64 = 0.9;
+
 pub(crate) struct Drift;
+
+/// The holds drift smoothly: their movement is significant, a line in time through each hold
+/// explains nearly all of it (a random walk's or flicker's path is rougher), and it does not decay
+/// from the start of the holds (not settling). A drift faster than the poses are spaced (a wander
+/// with a fresh rate in each hold) shows so even when the pose means cannot follow its course.
+/// The description, or `None`.
+pub(crate) fn drifting_holds(ctx: &Context<'_>) -> Option<String> {
+    let within = ctx.within.as_ref().filter(|w| w.significant)?;
+    let share = within.line_share();
+    (share >= HOLD_LINES_EXPLAIN && !super::settling::transient_decays(ctx)).then(|| {
+        format!(
+            "the holds drift smoothly: a line per hold explains {:.0} % of their movement beyond white noise ({:.1}x white), too fast for the pose means to follow",
+            100.0 * share.min(1.0),
+            within.nominal_ratio
+        )
+    })
+}
 
 /// Per axis, the bias basis functions `phi_k(t)` along the pose direction.
 fn columns(ctx: &Context<'_>, basis: &dyn Fn(f64) -> Vec<f64>) -> Vec<Vec<f64>> {

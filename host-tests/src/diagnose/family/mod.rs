@@ -14,6 +14,8 @@ mod smooth;
 mod temperature;
 pub(super) mod tremor;
 
+pub(super) use drift::drifting_holds;
+
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
 
