@@ -175,8 +175,8 @@ pub fn diagnose(table: &Table, opts: &DiagnoseOptions) -> Result<Diagnosis, Diag
         None => Vec::new(),
     };
     let probes = ctx.as_ref().map(probe::run).unwrap_or_default();
-    let drifting_holds = ctx.as_ref().and_then(family::drifting_holds);
-    let decision = verdict::decide(&m, &evaluations, &probes, drifting_holds);
+    let from_holds = ctx.as_ref().and_then(family::from_holds);
+    let decision = verdict::decide(&m, &evaluations, &probes, from_holds);
     let scale: [f64; 3] = std::array::from_fn(|a| m.model.ka[a][a]);
     let mut d = Diagnosis {
         file: table.file.clone(),

@@ -67,15 +67,15 @@ fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation]) -> Option<(usize
     })
 }
 
-/// Picks the verdict among the evaluated families and measures the shrink. `drifting_holds`
-/// describes holds that drift smoothly ([`super::family::drifting_holds`]): when no family explains
-/// the withheld poses and no probe does either, that names drift (with no shrink: the pose means
-/// cannot follow it).
+/// Picks the verdict among the evaluated families and measures the shrink. `from_holds` is the
+/// holds' own answer ([`super::family::from_holds`]: settling or drift, and why): when no family
+/// explains the withheld poses and no probe does either, it names the effect (with no shrink: the
+/// pose means cannot follow it).
 pub(crate) fn decide(
     m: &Measured,
     evaluations: &[Evaluation],
     probes: &[Probe],
-    drifting_holds: Option<String>,
+    from_holds: Option<(&'static str, String)>,
 ) -> Decision {
     let significant = m.gap.significant;
     let best_probe = probes
@@ -100,13 +100,13 @@ pub(crate) fn decide(
             (e.candidate.effect, e.after.clone())
         }
         None => {
-            let within = drifting_holds.filter(|_| significant && best_probe.is_none());
-            let verdict = match (&within, significant) {
-                (Some(_), _) => "drift",
+            let holds = from_holds.filter(|_| significant && best_probe.is_none());
+            let verdict = match (&holds, significant) {
+                (Some((effect, _)), _) => *effect,
                 (None, true) => "unexplained",
                 (None, false) => "none",
             };
-            located = within;
+            located = holds.map(|(_, why)| why);
             (verdict, m.r.iter().map(|v| Some(*v)).collect())
         }
     };

@@ -141,6 +141,42 @@ impl Within {
         if excess > 0.0 { ((before - white_before) - (after - white_after)) / excess } else { 0.0 }
     }
 
+    /// Whether the holds' movement slows down within each hold: per pose a quadratic in time through
+    /// its deviations, slope `b` and curvature `c` (in their standard errors under white noise); a
+    /// decay has `b c < 0` in every hold, a drift or a random walk either sign. Returns the pooled
+    /// `sum(b c) / sqrt(sum (b c)^2)`: about -sqrt(holds) for a decay, near 0 otherwise.
+    pub(crate) fn slowing(&self) -> f64 {
+        let (mut sum, mut sum_sq) = (0.0, 0.0);
+        for (d, t) in self.by_pose() {
+            let k = d.len() as f64;
+            let tm = t.iter().sum::<f64>() / k;
+            let x: Vec<f64> = t.iter().map(|v| v - tm).collect();
+            let x2m = x.iter().map(|v| v * v).sum::<f64>() / k;
+            let q: Vec<f64> = x.iter().map(|v| v * v - x2m).collect();
+            let (sxx, sqq) = (x.iter().map(|v| v * v).sum::<f64>(), q.iter().map(|v| v * v).sum::<f64>());
+            if !(sxx > 0.0 && sqq > 0.0) {
+                continue;
+            }
+            // Centred `x` and `x^2 - mean` are orthogonal over symmetric segment times.
+            let b = x.iter().zip(d).map(|(a, y)| a * y).sum::<f64>() / sxx.sqrt();
+            let c = q.iter().zip(d).map(|(a, y)| a * y).sum::<f64>() / sqq.sqrt();
+            sum += b * c;
+            sum_sq += (b * c).powi(2);
+        }
+        if sum_sq > 0.0 { sum / sum_sq.sqrt() } else { 0.0 }
+    }
+
+    /// Each pose's deviations and segment times.
+    fn by_pose(&self) -> impl Iterator<Item = (&[f64], &[f64])> {
+        let mut i = 0;
+        std::iter::from_fn(move || {
+            let j = (i..self.d.len()).find(|&j| self.pose[j] != self.pose[i]).unwrap_or(self.d.len());
+            let out = (i < self.d.len()).then(|| (&self.d[i..j], &self.t[i..j]));
+            i = j;
+            out
+        })
+    }
+
     /// Per pose, a line in time through its deviations: the sums of squares before and after, and the
     /// poses.
     fn line_fit(&self) -> (f64, f64, usize) {
@@ -297,6 +333,40 @@ mod tests {
         w
     }
 
+    fn median(v: &mut [f64]) -> f64 {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    }
+
+    #[test]
+    fn a_transient_slows_within_each_hold_a_drift_and_a_random_walk_do_not() {
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(11);
+        let mut draw = Xoshiro256PlusPlus::seed_from_u64(12);
+        let mut normal = move || <StandardNormal as Distribution<f64>>::sample(&StandardNormal, &mut draw);
+        let (mut settling, mut drift, mut walk) = (Vec::new(), Vec::new(), Vec::new());
+        for _ in 0..9 {
+            // Each placement starts a transient of its own sign and size decaying over about a hold
+            // (tau 2 segments): 6 white sigmas or more at the start (a visible settling's movement).
+            let sizes: Vec<f64> = (0..15).map(|_| normal().signum() * (6.0 + normal().abs())).collect();
+            settling.push(channel(15, &mut rng, &mut |p, k| sizes[p] * (-(k as f64) / 2.0).exp()).slowing());
+            // A drift whose rate changes from hold to hold, and a random walk: neither slows.
+            let rates: Vec<f64> = (0..15).map(|_| normal()).collect();
+            drift.push(channel(15, &mut rng, &mut |p, k| rates[p] * k as f64).slowing());
+            let mut level = 0.0;
+            walk.push(
+                channel(15, &mut rng, &mut |_, k| {
+                    level = if k == 0 { 0.0 } else { level } + 2.0 * normal();
+                    level
+                })
+                .slowing(),
+            );
+        }
+        let (settling, drift, walk) = (median(&mut settling), median(&mut drift), median(&mut walk));
+        assert!(settling <= -2.5, "transient: median slowing {settling}");
+        assert!(drift.abs() < 1.0, "drift: median slowing {drift}");
+        assert!(walk.abs() < 1.0, "random walk: median slowing {walk}");
+    }
+
     #[test]
     fn a_line_per_hold_explains_a_smooth_drift_but_not_a_random_walk() {
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(7);
@@ -322,10 +392,6 @@ mod tests {
                 .line_share(),
             );
         }
-        let median = |v: &mut Vec<f64>| {
-            v.sort_by(f64::total_cmp);
-            v[v.len() / 2]
-        };
         let (smooth, walk) = (median(&mut smooth), median(&mut walk));
         assert!(smooth >= 0.95, "smooth drift: line share {smooth}");
         assert!(walk < 0.85, "random walk: line share {walk}");

@@ -14,8 +14,6 @@ mod smooth;
 mod temperature;
 pub(super) mod tremor;
 
-pub(super) use drift::drifting_holds;
-
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
 
@@ -110,6 +108,13 @@ pub(crate) fn standard_evaluation<F: Family + ?Sized>(family: &F, ctx: &Context<
         joint::add(ctx, &mut e, fit);
     }
     e
+}
+
+/// A verdict from the holds' movement alone, for when no family explains the withheld poses:
+/// settling when the movement slows within each hold, else drift when a line per hold explains it;
+/// with what supports it.
+pub(crate) fn from_holds(ctx: &Context<'_>) -> Option<(&'static str, String)> {
+    settling::settling_holds(ctx).map(|d| ("settling", d)).or_else(|| drift::drifting_holds(ctx).map(|d| ("drift", d)))
 }
 
 /// Every family, in report order.

@@ -35,7 +35,26 @@ const DECAY_RATIO: f64 = 3.0;
 /// white noise.
 const DECAY_Z: f64 = 3.0;
 
+/// Pooled slowing ([`crate::diagnose::within::Within::slowing`]) at or below which the holds settle: minus this many of its
+/// standard deviations under a movement that does not slow (a drift, a random walk).
+const SLOWING_Z: f64 = 2.0;
+
 pub(crate) struct Settling;
+
+/// The holds settle: their movement is significant and slows down within each hold (the decay test
+/// of [`transient_decays`], or the pooled slowing), whatever its direction. A transient in a fresh
+/// direction at each placement does not carry to the withheld poses, so only the holds show it.
+/// The description, or `None`.
+pub(crate) fn settling_holds(ctx: &Context<'_>) -> Option<String> {
+    let within = ctx.within.as_ref().filter(|w| w.significant)?;
+    let slowing = within.slowing();
+    (slowing <= -SLOWING_Z || transient_decays(ctx)).then(|| {
+        format!(
+            "the holds settle: their movement ({:.1}x white) slows down within each hold (pooled slowing {slowing:.1} sigma), in a direction that does not carry to the withheld poses",
+            within.nominal_ratio
+        )
+    })
+}
 
 /// The holds, pooled, move more in their first half than in their second, beyond white noise: the
 /// chi-square of each half's segment means about their own mean, summed over the poses, less its
