@@ -166,13 +166,6 @@ fn assign_folds(n: usize, folds: usize, seed: u64) -> Vec<usize> {
     fold
 }
 
-/// Every fold trains on more poses than `params`. With exactly as many, the calibration
-/// interpolates its training poses and predicts a withheld one with no check on the fit: any
-/// regularised shape (a penalised spline) then wins or loses by chance.
-fn trains_beyond(fold: &[usize], folds: usize, params: usize) -> bool {
-    (0..folds).all(|f| fold.iter().filter(|&&g| g != f).count() > params)
-}
-
 impl<'a> Context<'a> {
     /// The cross-validation set-up; `None` when a fold leaves too few poses.
     pub(crate) fn new(table: &'a Table, m: &'a Measured, opts: &'a DiagnoseOptions) -> Option<Self> {
@@ -189,7 +182,7 @@ impl<'a> Context<'a> {
         let e_white = expected_cv_ms(&base_rows, &white_draws, &fold, folds, &none_dropped);
         // Too few poses to withhold some at the pose level: only the within-pose channel tests.
         let nominal_cv = cv_residuals(&base_rows, &m.r, &fold, folds, &none_dropped);
-        let pose_level = nominal_cv.is_some() && trains_beyond(&fold, folds, base_rows.first().map_or(0, Vec::len));
+        let pose_level = nominal_cv.is_some();
         let nominal_cv = nominal_cv.unwrap_or_else(|| vec![None; n]);
         let heldout_ratio_nominal =
             if pose_level { ((sum_sq(&nominal_cv).0 / n as f64) / e_white).sqrt() } else { f64::NAN };
@@ -364,19 +357,6 @@ mod tests {
     use super::*;
     use crate::diagnose::gap;
     use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
-
-    #[test]
-    fn folds_that_train_on_as_many_poses_as_parameters_are_refused() {
-        // Ten poses left out one at a time train on nine: the nine calibration parameters interpolate.
-        let one_out: Vec<usize> = (0..10).collect();
-        assert!(!trains_beyond(&one_out, 10, 9));
-        let one_out: Vec<usize> = (0..11).collect();
-        assert!(trains_beyond(&one_out, 11, 9));
-        // Two folds of 20 poses, unevenly: the fold of 11 leaves 9 to train on.
-        let uneven: Vec<usize> = (0..20).map(|i| usize::from(i < 11)).collect();
-        assert!(!trains_beyond(&uneven, 2, 9));
-        assert!(trains_beyond(&uneven, 2, 8));
-    }
 
     #[test]
     fn a_design_that_would_interpolate_its_training_poses_leaves_no_residual_dof() {
