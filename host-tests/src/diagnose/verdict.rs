@@ -28,7 +28,7 @@ const NOISE_FAR_AHEAD: f64 = 0.2;
 
 /// Evidence within which the measured cause of a slow change (the thermometer) is named before
 /// its proxy (time): when the thermometer ramps steadily both explain the same change.
-const CAUSE_OVER_PROXY: f64 = 0.02;
+const CAUSE_OVER_PROXY: f64 = 0.05;
 
 /// The evidence a family is ranked by among its kind.
 fn ranking(e: &Evaluation) -> f64 {
