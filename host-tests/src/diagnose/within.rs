@@ -3,8 +3,10 @@
 //! calibration (a constant per pose), so it tests time-varying effects (drift, temperature,
 //! settling) even on logs with too few poses to withhold some at the pose level.
 //!
-//! The deviations are whitened by the white noise measured from successive differences (blind to
-//! anything slower than a sample), so pure white noise gives a ratio of 1. A family's
+//! The deviations are whitened by the white-equivalent noise of a mean (the per-sample variance
+//! times the sensor low-pass filter's correlation factor, as at the pose level), so pure white noise
+//! gives a ratio of 1 on a filtered sensor too (with the per-sample noise alone, a digitally
+//! low-passed part's holds all looked as if they moved). A family's
 //! parametrisation is fitted on the deviations of some poses and predicts the withheld poses'
 //! (the folds of the pose level), with the same per-parameter penalty.
 
@@ -90,7 +92,7 @@ impl Within {
         // Withheld poses are spread in time (pose i in fold i mod folds): a smooth effect is then
         // interpolated between the kept neighbours, not extrapolated over a gap.
         let folds = m.poses.len().min(MAX_FOLDS);
-        let white = white_from_differences(table, &m.poses);
+        let white = m.white;
         let mut w = Within {
             d: Vec::new(),
             pose: Vec::new(),
@@ -164,6 +166,17 @@ impl Within {
             sum_sq += (b * c).powi(2);
         }
         if sum_sq > 0.0 { sum / sum_sq.sqrt() } else { 0.0 }
+    }
+
+    /// How evenly the holds move: the median hold's movement beyond white noise (the sum of its
+    /// squared deviations less their number) over the mean hold's. About 0.4-0.9 when every hold
+    /// moves alike (a noise); near 0 when a few holds carry the movement (a knock, a step, one
+    /// disturbed pose).
+    pub(crate) fn evenness(&self) -> f64 {
+        let excess: Vec<f64> =
+            self.by_pose().map(|(d, _)| d.iter().map(|v| v * v).sum::<f64>() - d.len() as f64).collect();
+        let mean = excess.iter().sum::<f64>() / excess.len().max(1) as f64;
+        if mean > 0.0 { super::math::median(&excess) / mean } else { 0.0 }
     }
 
     /// Each pose's deviations and segment times.
@@ -365,6 +378,29 @@ mod tests {
         assert!(settling <= -2.5, "transient: median slowing {settling}");
         assert!(drift.abs() < 1.0, "drift: median slowing {drift}");
         assert!(walk.abs() < 1.0, "random walk: median slowing {walk}");
+    }
+
+    #[test]
+    fn a_walk_moves_every_hold_alike_a_knock_moves_few() {
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(21);
+        let mut draw = Xoshiro256PlusPlus::seed_from_u64(22);
+        let mut normal = move || <StandardNormal as Distribution<f64>>::sample(&StandardNormal, &mut draw);
+        let (mut walk, mut knock) = (Vec::new(), Vec::new());
+        for _ in 0..9 {
+            let mut level = 0.0;
+            walk.push(
+                channel(15, &mut rng, &mut |_, k| {
+                    level = if k == 0 { 0.0 } else { level } + 1.5 * normal();
+                    level
+                })
+                .evenness(),
+            );
+            // Two holds of fifteen knocked (an offset of 15 white sigmas over one segment).
+            knock.push(channel(15, &mut rng, &mut |p, k| if p % 7 == 3 && k == 2 { 15.0 } else { 0.0 }).evenness());
+        }
+        let (walk, knock) = (median(&mut walk), median(&mut knock));
+        assert!(walk >= 0.4, "random walk: median evenness {walk}");
+        assert!(knock <= 0.1, "two knocked holds: median evenness {knock}");
     }
 
     #[test]

@@ -11,6 +11,25 @@ use crate::diagnose::math::{V3, lstsq, mean, predict};
 use crate::diagnose::within::white_from_differences;
 use crate::diagnose::{CV_NOISE_DRAWS, PARAMETER_PENALTY, WALK_EXCESS};
 
+/// Least evenness ([`crate::diagnose::within::Within::evenness`]) of holds that all wander.
+const EVEN_HOLDS: f64 = 0.25;
+
+/// The holds wander: their movement is significant, every hold moves about alike (a noise, not a
+/// few disturbed holds) and, asked after settling and drift, it neither slows nor follows a line
+/// per hold. A walk or flicker wanders through every hold; the withheld pose means show it only as
+/// spread. The description, or `None`.
+pub(crate) fn wandering_holds(ctx: &Context<'_>) -> Option<String> {
+    let within = ctx.within.as_ref().filter(|w| w.significant)?;
+    let evenness = within.evenness();
+    (evenness >= EVEN_HOLDS).then(|| {
+        format!(
+            "the holds wander alike ({:.1}x white, evenness {evenness:.2}), rougher than a line per hold ({:.0} % explained)",
+            within.nominal_ratio,
+            100.0 * within.line_share().clamp(0.0, 1.0)
+        )
+    })
+}
+
 pub(crate) struct ColoredNoise;
 
 /// Share of the squared held-out residual in the largest pose (0 without residuals).

@@ -111,10 +111,13 @@ pub(crate) fn standard_evaluation<F: Family + ?Sized>(family: &F, ctx: &Context<
 }
 
 /// A verdict from the holds' movement alone, for when no family explains the withheld poses:
-/// settling when the movement slows within each hold, else drift when a line per hold explains it;
-/// with what supports it.
+/// settling when the movement slows within each hold, else drift when a line per hold explains it,
+/// else colored noise when every hold wanders alike; with what supports it.
 pub(crate) fn from_holds(ctx: &Context<'_>) -> Option<(&'static str, String)> {
-    settling::settling_holds(ctx).map(|d| ("settling", d)).or_else(|| drift::drifting_holds(ctx).map(|d| ("drift", d)))
+    settling::settling_holds(ctx)
+        .map(|d| ("settling", d))
+        .or_else(|| drift::drifting_holds(ctx).map(|d| ("drift", d)))
+        .or_else(|| colored_noise::wandering_holds(ctx).map(|d| ("colored-noise", d)))
 }
 
 /// Every family, in report order.
