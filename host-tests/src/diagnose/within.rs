@@ -86,14 +86,9 @@ pub(crate) fn white_from_differences(table: &Table, poses: &[PoseData]) -> V3 {
 }
 
 impl Within {
-    /// The deviations of every pose with enough samples per segment; `None` when fewer than three
-    /// poses qualify or the noise is not measurable.
-    pub(crate) fn new(table: &Table, m: &Measured) -> Option<Self> {
-        // Withheld poses are spread in time (pose i in fold i mod folds): a smooth effect is then
-        // interpolated between the kept neighbours, not extrapolated over a gap.
-        let folds = m.poses.len().min(MAX_FOLDS);
-        let white = m.white;
-        let mut w = Within {
+    /// A channel with no deviations yet, over `folds` folds.
+    fn empty(folds: usize) -> Self {
+        Within {
             d: Vec::new(),
             pose: Vec::new(),
             rows: Vec::new(),
@@ -103,7 +98,17 @@ impl Within {
             folds,
             nominal_ratio: 1.0,
             significant: false,
-        };
+        }
+    }
+
+    /// The deviations of every pose with enough samples per segment; `None` when fewer than three
+    /// poses qualify or the noise is not measurable.
+    pub(crate) fn new(table: &Table, m: &Measured) -> Option<Self> {
+        // Withheld poses are spread in time (pose i in fold i mod folds): a smooth effect is then
+        // interpolated between the kept neighbours, not extrapolated over a gap.
+        let folds = m.poses.len().min(MAX_FOLDS);
+        let white = m.white;
+        let mut w = Within::empty(folds);
         let mut used = 0;
         for (p, pose) in m.poses.iter().enumerate() {
             if pose.seg_n < MIN_SEGMENT_SAMPLES {
@@ -317,17 +322,7 @@ mod tests {
     /// A channel of `poses` holds whose segment deviations are `path(pose, segment)` (whitened
     /// units) plus white noise whitened as the channel does it (mean square 1).
     fn channel(poses: usize, rng: &mut Xoshiro256PlusPlus, path: &mut dyn FnMut(usize, usize) -> f64) -> Within {
-        let mut w = Within {
-            d: Vec::new(),
-            pose: Vec::new(),
-            rows: Vec::new(),
-            t: Vec::new(),
-            weight: Vec::new(),
-            fold: Vec::new(),
-            folds: poses,
-            nominal_ratio: 1.0,
-            significant: true,
-        };
+        let mut w = Within { significant: true, ..Within::empty(poses) };
         let white = (SEGMENTS as f64 / (SEGMENTS - 1) as f64).sqrt();
         for p in 0..poses {
             let raw: Vec<f64> = (0..SEGMENTS)
