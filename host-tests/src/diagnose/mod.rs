@@ -23,8 +23,11 @@
 //!    on logs too short to withhold a pose and still fit 9 + k parameters.
 //!    The verdict is the candidate with the largest gain, if the gap is significant and the gain is
 //!    at least [`MIN_GAIN`] (the thermometer named before time when both explain alike; a noise
-//!    model before a value family only when far ahead of one that leaves half the gap); `unexplained` (with where the gap lies) when the gap is significant
-//!    and no family explains it; `none` when there is no significant gap.
+//!    model before a value family only when far ahead of one that leaves half the gap). When the
+//!    gap is significant and no family or probe explains it, the holds answer from how each one
+//!    moves (`family::from_holds`: settling if it slows, drift if a line per hold explains it,
+//!    colored noise if every hold wanders alike; no shrink claimed); else `unexplained` (with where
+//!    the gap lies). `none` when there is no significant gap.
 //! 4. **How far it shrinks.** The winner is added (to the model, or to the simulator for
 //!    `colored-noise`) and step 1 redone: `shrink = (before - after) / (before - 1)`, clipped to
 //!    `[0, 1]`.

@@ -109,21 +109,22 @@ impl Diagnosis {
                 let _ = writeln!(s, "   {:<19} within-pose gain {:>6.2}  {}", "", c.within_gain, c.within_detail);
             }
         }
-        let _ = writeln!(
-            s,
-            "   verdict: {}{}",
-            self.verdict,
-            self.located.as_ref().map_or(String::new(), |w| match self.verdict {
-                "unexplained" => format!(" (significant gap, no family explains it; it lies in: {w})"),
-                _ => format!(" ({w})"),
-            })
-        );
+        let _ = writeln!(s, "   verdict: {}{}", self.verdict, self.located_text());
         let _ = writeln!(
             s,
             "4. ratio {:.2} -> {:.2} (real {:.4} mg, simulated {:.4} mg): shrink {:.2}",
             g.ratio_before, g.ratio_after, g.real_rmse_after_mg, g.sim_rmse_after_mg, self.shrink
         );
         s
+    }
+
+    /// What the verdict line adds: where an unexplained gap lies, or what supports a verdict the
+    /// withheld poses do not test.
+    fn located_text(&self) -> String {
+        self.located.as_ref().map_or(String::new(), |w| match self.verdict {
+            "unexplained" => format!(" (significant gap, no family explains it; it lies in: {w})"),
+            _ => format!(" ({w})"),
+        })
     }
 
     /// Writes the SVG plots into `dir` (created if needed): residual per pose before/after, against

@@ -27,9 +27,8 @@ pub(crate) struct Drift;
 /// The holds drift smoothly: their movement is significant and a line in time through each hold
 /// explains nearly all of it (a random walk's or flicker's path is rougher; ask
 /// [`super::settling::settling_holds`] first: a transient as slow as the hold is nearly a line too).
-/// A drift faster than the poses are spaced (a wander
-/// with a fresh rate in each hold) shows so even when the pose means cannot follow its course.
-/// The description, or `None`.
+/// A drift faster than the poses are spaced (a wander with a fresh rate in each hold) shows so even
+/// when the pose means cannot follow its course. The description, or `None`.
 pub(crate) fn drifting_holds(ctx: &Context<'_>) -> Option<String> {
     let within = ctx.within.as_ref().filter(|w| w.significant)?;
     let share = within.line_share();

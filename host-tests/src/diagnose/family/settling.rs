@@ -35,8 +35,9 @@ const DECAY_RATIO: f64 = 3.0;
 /// white noise.
 const DECAY_Z: f64 = 3.0;
 
-/// Pooled slowing ([`crate::diagnose::within::Within::slowing`]) at or below which the holds settle: minus this many of its
-/// standard deviations under a movement that does not slow (a drift, a random walk).
+/// Pooled slowing ([`crate::diagnose::within::Within::slowing`]) at or below which the holds
+/// settle: minus this many of its standard deviations under a movement that does not slow (a
+/// drift, a random walk).
 const SLOWING_Z: f64 = 2.0;
 
 pub(crate) struct Settling;
