@@ -68,7 +68,7 @@ fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation]) -> Option<(usize
 }
 
 /// Picks the verdict among the evaluated families and measures the shrink. `from_holds` is the
-/// holds' own answer ([`super::family::from_holds`]: settling or drift, and why): when no family
+/// holds' own answer ([`super::family::from_holds`]: settling, drift or colored noise, and why): when no family
 /// explains the withheld poses and no probe does either, it names the effect (with no shrink: the
 /// pose means cannot follow it).
 pub(crate) fn decide(
@@ -89,25 +89,21 @@ pub(crate) fn decide(
         .filter(|(_, e)| significant && e.candidate.evidence() >= MIN_GAIN && !beaten(e.candidate.evidence()))
         .map(|(i, _)| i);
     let mut gap = m.gap.clone();
-    let mut located = None;
-    let (verdict, after) = match winner {
+    let (verdict, after, located) = match winner {
         Some(i) => {
             let e = &evaluations[i];
             gap.ratio_after = e.candidate.ratio_after;
             if e.predicts_values {
                 gap.real_rmse_after_mg = m.to_mg(rms(&e.after.iter().flatten().copied().collect::<Vec<_>>()));
             }
-            (e.candidate.effect, e.after.clone())
+            (e.candidate.effect, e.after.clone(), None)
         }
         None => {
-            let holds = from_holds.filter(|_| significant && best_probe.is_none());
-            let verdict = match (&holds, significant) {
-                (Some((effect, _)), _) => *effect,
-                (None, true) => "unexplained",
-                (None, false) => "none",
-            };
-            located = holds.map(|(_, why)| why);
-            (verdict, m.r.iter().map(|v| Some(*v)).collect())
+            let unchanged = m.r.iter().map(|v| Some(*v)).collect();
+            match from_holds.filter(|_| significant && best_probe.is_none()) {
+                Some((effect, why)) => (effect, unchanged, Some(why)),
+                None => (if significant { "unexplained" } else { "none" }, unchanged, None),
+            }
         }
     };
     gap.sim_rmse_after_mg = if gap.ratio_after > 0.0 { gap.real_rmse_after_mg / gap.ratio_after } else { f64::NAN };

@@ -199,10 +199,7 @@ impl Within {
     /// poses.
     fn line_fit(&self) -> (f64, f64, usize) {
         let (mut before, mut after, mut poses) = (0.0, 0.0, 0);
-        let mut i = 0;
-        while i < self.d.len() {
-            let j = (i..self.d.len()).find(|&j| self.pose[j] != self.pose[i]).unwrap_or(self.d.len());
-            let (d, t) = (&self.d[i..j], &self.t[i..j]);
+        for (d, t) in self.by_pose() {
             let tm = t.iter().sum::<f64>() / t.len() as f64;
             let dm = d.iter().sum::<f64>() / d.len() as f64;
             let stt: f64 = t.iter().map(|x| (x - tm).powi(2)).sum();
@@ -211,7 +208,6 @@ impl Within {
             before += d.iter().map(|y| y * y).sum::<f64>();
             after += t.iter().zip(d).map(|(x, y)| (y - dm - slope * (x - tm)).powi(2)).sum::<f64>();
             poses += 1;
-            i = j;
         }
         (before, after, poses)
     }
