@@ -228,10 +228,10 @@ fn i16_block_sums(samples: &[[i16; 3]], sum: &mut [i64; 3], sum_sq: &mut [i64; 3
 }
 
 /// `false` when no sample of a block of `n` samples (one axis or three) can be saturated, from the
-/// largest `|sum|` of its axes and its total `n^2` variance `spread` (exact integers): on every axis `sum_i (n x_i - sum)^2 = n spread_axis <= n
-/// spread`, so every `|n x_i| <= |sum| + sqrt(n spread)`, and none reaches `min(limit, i16::MAX)` (nor a
-/// rail) when `margin = n min(limit, i16::MAX) - max |sum| > 0` and `margin^2 > n spread`. Only otherwise
-/// are the samples checked.
+/// largest `|sum|` of its axes and its total `n^2` variance `spread` (exact integers): on every axis
+/// `sum_i (n x_i - sum)^2 = n spread_axis <= n spread`, so every `|n x_i| <= |sum| + sqrt(n spread)`, and
+/// none reaches `min(limit, i16::MAX)` (nor a rail) when `margin = n min(limit, i16::MAX) - max |sum| > 0`
+/// and `margin^2 > n spread`. Only otherwise are the samples checked.
 #[inline(always)]
 fn i16_may_saturate(largest: u32, spread: u64, n: usize, limit: i32) -> bool {
     // n min(limit, i16::MAX) < 2^16 2^15 = 2^31.
