@@ -28,6 +28,10 @@ const STEP_HZ: f64 = 0.25;
 /// The summed periodogram's peak over its median for a common frequency.
 const PEAK_OVER_MEDIAN: f64 = 8.0;
 
+/// Fewest disturbed holds for a common frequency: one hold's oscillation has a frequency of its own
+/// (a tap rings the mount too, once); a mount that rings after every placement rings in several.
+const MIN_HOLDS: usize = 2;
+
 /// The first half's power at the peak over the second half's for a damped ringing.
 const DAMPED_RATIO: f64 = 1.2;
 
@@ -59,7 +63,7 @@ pub(crate) fn rings(samples: &[[f64; 3]], poses: &[PoseData], disturbed: &[bool]
     let held: Vec<&PoseData> = poses.iter().zip(disturbed).filter(|(_, d)| **d).map(|(p, _)| p).collect();
     let half = |p: &PoseData| (p.rows.len() / 2).min(MAX_HALF);
     let shortest = held.iter().map(|p| half(p)).min().unwrap_or(0);
-    if held.is_empty() || shortest < MIN_HALF || !(rate > 0.0) {
+    if held.len() < MIN_HOLDS || shortest < MIN_HALF || !(rate > 0.0) {
         return false;
     }
     // A grid from MIN_HZ to MAX_HZ (or near the Nyquist frequency), evaluated on every hold's own
@@ -136,5 +140,7 @@ mod tests {
         let (s, p) = holds(&steady);
         assert!(!rings(&s, &p, &all, RATE_HZ), "a steady pickup is not damped");
         assert!(!rings(&s, &p, &[false; 3], RATE_HZ), "no disturbed hold");
+        let (s, p) = holds(&damped);
+        assert!(!rings(&s, &p, &[true, false, false], RATE_HZ), "one hold: a tap's ringing, no common frequency");
     }
 }
