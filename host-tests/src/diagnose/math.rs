@@ -108,6 +108,42 @@ pub(crate) fn lstsq(rows: &[Vec<f64>], r: &[f64], train: &[usize]) -> Option<Vec
     None
 }
 
+/// `min |r + X c|` with the covariance of `c` per unit residual variance (`(X^T X)^-1`) and the
+/// residual mean square over its degrees of freedom; `None` when `X` is rank deficient or has no
+/// more rows than columns.
+pub(crate) fn lstsq_with_covariance(rows: &[Vec<f64>], r: &[f64]) -> Option<(Vec<f64>, Vec<Vec<f64>>, f64)> {
+    let p = rows.first()?.len();
+    if rows.len() <= p {
+        return None;
+    }
+    let scale: Vec<f64> = (0..p)
+        .map(|j| {
+            let s = (rows.iter().map(|x| x[j] * x[j]).sum::<f64>() / rows.len() as f64).sqrt();
+            if s > 0.0 && s.is_finite() { s } else { 1.0 }
+        })
+        .collect();
+    let mut a = vec![vec![0.0; p]; p];
+    let mut b = vec![0.0; p];
+    for (x, ri) in rows.iter().zip(r) {
+        for j in 0..p {
+            b[j] -= x[j] / scale[j] * ri;
+            for k in 0..=j {
+                a[j][k] += x[j] / scale[j] * x[k] / scale[k];
+            }
+        }
+    }
+    let unit: Vec<Vec<f64>> = (0..p).map(|j| (0..p).map(|k| f64::from(u8::from(j == k))).collect()).collect();
+    let mut rhs: Vec<&[f64]> = vec![&b];
+    rhs.extend(unit.iter().map(Vec::as_slice));
+    let mut solved = cholesky_solve_many(&a, &rhs, 1e-12 * (0..p).map(|j| a[j][j]).sum::<f64>() / p as f64)?;
+    let inverse = solved.split_off(1);
+    let c: Vec<f64> = solved[0].iter().zip(&scale).map(|(v, s)| v / s).collect();
+    let cov = (0..p).map(|j| (0..p).map(|k| inverse[j][k] / (scale[j] * scale[k])).collect()).collect();
+    let ss: f64 =
+        rows.iter().zip(r).map(|(x, ri)| (ri + x.iter().zip(&c).map(|(a, b)| a * b).sum::<f64>()).powi(2)).sum();
+    Some((c, cov, ss / (rows.len() - p) as f64))
+}
+
 pub(crate) fn cholesky_solve(a: &[Vec<f64>], b: &[f64], ridge: f64) -> Option<Vec<f64>> {
     cholesky_solve_many(a, &[b], ridge)?.pop()
 }

@@ -18,7 +18,7 @@ use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
 
 use super::gap::{Measured, Noise, PoseData, expected_cv_ms, expected_fit_rmse_mg, residual_noise_draws};
-use super::math::{V3, cv_residuals, fit_residuals, jacobian_row, rms, sum_sq};
+use super::math::{V3, cv_residuals, fit_residuals, jacobian_row, lstsq_with_covariance, rms, sum_sq};
 use super::report::Candidate;
 use super::within::{Within, WithinFit, WithinVariant};
 use super::{CV_NOISE_DRAWS, DiagnoseOptions, OVERSHOOT_WEIGHT, PARAMETER_PENALTY};
@@ -27,6 +27,12 @@ use crate::csvio::Table;
 /// Fewest training poses beyond a design's columns (9 calibration parameters plus the probe's) for
 /// an out-of-catalogue probe's held-out test (see [`Context::leaves_residual_dof`]).
 const MIN_RESIDUAL_DOF: usize = 3;
+
+/// Chi-square per parameter of the difference between an effect's coefficients from the holds and
+/// from the pose means above which the two channels disagree ([`Context::channel_disagreement`]).
+/// A misspecified shape (a polynomial for a wander) inflates it: true drifts on the development
+/// sets reached 15.
+const CHANNELS_DISAGREE: f64 = 25.0;
 
 /// Logs of at most this many poses are cross-validated leaving one pose out.
 const LEAVE_ONE_OUT_BELOW: usize = 16;
@@ -101,6 +107,10 @@ pub(crate) fn standard_evaluation<F: Family + ?Sized>(family: &F, ctx: &Context<
     let Some(w) = ctx.within.as_ref().filter(|w| w.significant) else { return e };
     let variants = family.within_variants(ctx, w);
     let stacked = joint::best(ctx, w, &variants);
+    let variants: Vec<WithinVariant> = variants
+        .into_iter()
+        .filter(|v| ctx.channel_disagreement(w, v).is_none_or(|x| x <= CHANNELS_DISAGREE))
+        .collect();
     if let Some(fit) = w.best_of(variants) {
         ctx.add_within(&mut e, w, fit);
     }
@@ -322,6 +332,36 @@ impl<'a> Context<'a> {
         Evaluation { candidate, after: self.m.r.iter().map(|v| Some(*v)).collect(), predicts_values: true }
     }
 
+    /// Chi-square (per degree of freedom, the effect's coefficients) of the difference between
+    /// the effect's coefficients fitted on the holds alone and on the pose means alone (with the
+    /// calibration), each with its covariance scaled by its own residual mean square (at least 1).
+    /// A time-varying effect moves both the holds and the pose means; when the two disagree far
+    /// beyond their uncertainty, the parametrisation is not what moves the holds (a transient
+    /// repeated in every hold is a line in each, but not a drift of the pose means over the log).
+    /// `None` without the pose level or with too few poses.
+    pub(crate) fn channel_disagreement(&self, w: &Within, v: &WithinVariant) -> Option<f64> {
+        if !self.pose_level || !(self.e_white > 0.0) {
+            return None;
+        }
+        let (cw, covw, msw) = lstsq_with_covariance(&v.rows, &w.d)?;
+        let weight = 1.0 / self.e_white.sqrt();
+        let rows: Vec<Vec<f64>> = self
+            .base_rows
+            .iter()
+            .zip(&v.pose_extra)
+            .map(|(b, e)| b.iter().chain(e).map(|x| x * weight).collect())
+            .collect();
+        let r: Vec<f64> = self.m.r.iter().map(|x| x * weight).collect();
+        let (cp, covp, msp) = lstsq_with_covariance(&rows, &r)?;
+        let (k, base) = (cw.len(), cp.len() - cw.len());
+        let delta: Vec<f64> = (0..k).map(|j| cw[j] - cp[base + j]).collect();
+        let sum: Vec<Vec<f64>> = (0..k)
+            .map(|j| (0..k).map(|l| covw[j][l] * msw.max(1.0) + covp[base + j][base + l] * msp.max(1.0)).collect())
+            .collect();
+        let x = crate::diagnose::math::cholesky_solve(&sum, &delta, 0.0)?;
+        Some(delta.iter().zip(&x).map(|(a, b)| a * b).sum::<f64>() / k as f64)
+    }
+
     /// Adds the within-pose evidence to a family's evaluation. When it is the stronger channel, the
     /// pose means are corrected by the effect it fitted and the nominal model refitted: that is the
     /// residual "after".
@@ -373,5 +413,56 @@ mod tests {
         let most = fewest_train - ctx.base_rows[0].len() - MIN_RESIDUAL_DOF;
         assert!(ctx.leaves_residual_dof(&columns(most)), "{most} extra columns on {n} poses");
         assert!(!ctx.leaves_residual_dof(&columns(most + 1)), "{} extra columns on {n} poses", most + 1);
+    }
+
+    /// A clean simulated log with `bias(pose, seconds into its hold, seconds into the log)` (mg,
+    /// sensor frame) added to every static pose's rows.
+    fn log_with(seed: u64, bias: &dyn Fn(usize, f64, f64) -> V3) -> Table {
+        let mut table = to_table(&generate(&random_scenario(EffectClass::None, seed)), "sim").unwrap();
+        let m = gap::measure(&table, &DiagnoseOptions::DEFAULT).unwrap();
+        let mg = table.median_magnitude * 1e-3;
+        for (p, pose) in m.poses.iter().enumerate() {
+            for row in pose.rows.clone() {
+                let t = gap::row_time(&table, row, m.rate);
+                let b = bias(p, t - pose.t_start, t);
+                table.samples[row] = std::array::from_fn(|a| table.samples[row][a] + b[a] * mg);
+            }
+        }
+        table
+    }
+
+    /// Chi-square per coefficient between the holds' and the pose means' fits of a family's
+    /// within-pose variant.
+    fn disagreement(table: &Table, family: &dyn Family, detail: &str) -> f64 {
+        let opts = DiagnoseOptions::DEFAULT;
+        let m = gap::measure(table, &opts).unwrap();
+        let ctx = Context::new(table, &m, &opts).unwrap();
+        let w = ctx.within.as_ref().unwrap();
+        let variants = family.within_variants(&ctx, w);
+        let variant = variants.iter().find(|v| v.detail == detail).unwrap();
+        ctx.channel_disagreement(w, variant).unwrap()
+    }
+
+    fn linear_drift_disagreement(table: &Table) -> f64 {
+        disagreement(table, &drift::Drift, "bias polynomial in time, degree 1")
+    }
+
+    #[test]
+    fn a_transient_repeated_in_every_hold_is_no_drift_of_the_pose_means() {
+        // 3 mg along one sensor direction.
+        let v = [0.6, -0.48, 0.64];
+        for seed in [3, 4] {
+            // Package stress relaxing after each set-down, tau 5 s: nearly a line in each hold.
+            let settling = log_with(seed, &|_, t, _| v.map(|c| 3.0 * c * (-t / 5.0).exp()));
+            let chi = linear_drift_disagreement(&settling);
+            assert!(chi > CHANNELS_DISAGREE, "seed {seed}: transient: {chi}");
+            let transient = "bias transient along one sensor direction from each hold's start, tau 4 s";
+            let chi = disagreement(&settling, &settling::Settling, transient);
+            assert!(chi < CHANNELS_DISAGREE, "seed {seed}: transient as settling: {chi}");
+            // The same bias drifting over the log at a tenth of the rate it has at a hold's start.
+            let drift = log_with(seed, &|_, _, t| v.map(|c| -0.06 * c * t));
+            let chi = linear_drift_disagreement(&drift);
+            assert!(chi < CHANNELS_DISAGREE, "seed {seed}: drift: {chi}");
+        }
     }
 }

@@ -20,9 +20,13 @@ use crate::diagnose::PARAMETER_PENALTY;
 use crate::diagnose::SEGMENTS;
 use crate::diagnose::locate::within_chi2_of;
 use crate::diagnose::math::{V3, cv_residuals, dot, fit_residuals, mean_of, median, norm, rms, sum_sq};
+use crate::diagnose::within::{Within, WithinVariant};
 
 /// Leading segments of each hold left out by the start-trimmed variants.
 const TRIMS: [usize; 2] = [1, 2];
+
+/// Time constants of the within-pose transient tried, s (mechanical to thermal).
+const WITHIN_TAUS_S: [f64; 7] = [0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0];
 
 /// Time constants tried, s.
 const TAUS_S: [f64; 5] = [0.25, 0.5, 1.0, 2.0, 4.0];
@@ -126,6 +130,25 @@ fn ringing_holds_dropped(ctx: &Context<'_>) -> Option<Evaluation> {
 impl Family for Settling {
     fn name(&self) -> &'static str {
         "settling"
+    }
+
+    /// A bias transient along one sensor-frame direction from every hold's start, decaying over
+    /// `tau` (package stress released by the set-down, a hand's warmth leaving the board): the same
+    /// course in every hold, whose sign and size along each pose's direction follow that direction.
+    /// `tau` up to the median hold (slower is a line per hold: drift's).
+    fn within_variants(&self, ctx: &Context<'_>, within: &Within) -> Vec<WithinVariant> {
+        let hold = median(&ctx.poses.iter().map(|p| p.duration()).collect::<Vec<_>>());
+        WITHIN_TAUS_S
+            .iter()
+            .filter(|tau| **tau <= hold)
+            .map(|&tau| {
+                let detail = format!("bias transient along one sensor direction from each hold's start, tau {tau} s");
+                within.variant(ctx.m, 3, detail, &|p, t, _| {
+                    let x = (-(t - ctx.poses[p].t_start) / tau).exp();
+                    (0..3).map(|a| std::array::from_fn(|i| if i == a { x } else { 0.0 })).collect()
+                })
+            })
+            .collect()
     }
 
     fn evaluate(&self, ctx: &Context<'_>) -> Evaluation {
