@@ -39,7 +39,13 @@ fn ranking(e: &Evaluation) -> f64 {
 /// The strongest family: one that predicts the withheld values if it explains enough, else the
 /// better of those and the noise models.
 fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation]) -> Option<(usize, &'e Evaluation)> {
-    let usable = |e: &&Evaluation| e.candidate.applicable && e.candidate.evidence().is_finite();
+    // The gap is in the pose means: when a family explains the withheld ones, a family with evidence
+    // in the holds only (a transient repeated in every hold) does not explain the gap.
+    let explains_poses = |e: &Evaluation| e.candidate.applicable && e.candidate.heldout_gain >= MIN_GAIN;
+    let some_explains_poses = evaluations.iter().any(explains_poses);
+    let usable = |e: &&Evaluation| {
+        e.candidate.applicable && e.candidate.evidence().is_finite() && (explains_poses(e) || !some_explains_poses)
+    };
     let strongest = |noise: bool| {
         evaluations
             .iter()
