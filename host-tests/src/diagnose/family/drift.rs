@@ -2,7 +2,11 @@
 //! `c (1 - exp(-t / tau))` per axis (`tau` from a grid), two exponentials (a fast and a slow
 //! time constant), polynomials in time of degree 1 to 3, and, on the within-pose channel (where
 //! every hold shows the drift's course), a smooth wander: piecewise-linear in time with knots
-//! evenly spaced over the log.
+//! evenly spaced over the log. The scale factors can drift too (a ratiometric front end on a
+//! discharging supply, a reference that ages or warms with no thermometer): a relative scale per
+//! axis linear in time, alone or with the bias, on logs without a thermometer (with one, a scale
+//! that changes as the log goes on is the temperature family's: time is then the temperature's
+//! proxy, and on a steady warm-up the two cannot be told apart).
 
 use super::{Context, Evaluation, Family, Variant, smooth, standard_evaluation};
 use crate::diagnose::gap::PoseData;
@@ -90,6 +94,21 @@ fn time_bases(t_end: f64) -> Vec<(String, Vec<Basis>)> {
     out
 }
 
+/// The calibrated-reading change per parameter of a scale per axis (and a bias per axis first,
+/// when `bias`) changing as `x`, at the calibrated reading `f`.
+fn scale_effect(f: V3, x: f64, bias: bool) -> Vec<V3> {
+    let biases = (0..3).filter(move |_| bias).map(move |a| axis(a, x));
+    biases.chain((0..3).map(|a| axis(a, f[a] * x))).collect()
+}
+
+/// Scale (with or without the bias) linear in time: whether with the bias, and the description.
+const SCALE_SHAPES: [(bool, &str); 2] = [(false, "scale linear in time"), (true, "bias and scale linear in time")];
+
+/// The scale shapes the log tests: none when it has a thermometer.
+fn scale_shapes(ctx: &Context<'_>) -> &'static [(bool, &'static str)] {
+    if ctx.table.temps_c.is_some() { &[] } else { &SCALE_SHAPES }
+}
+
 impl Family for Drift {
     fn name(&self) -> &'static str {
         "drift"
@@ -97,7 +116,7 @@ impl Family for Drift {
 
     fn within_variants(&self, ctx: &Context<'_>, within: &Within) -> Vec<WithinVariant> {
         let t_end = ctx.poses.last().map_or(1.0, |p| p.t_end).max(1e-9);
-        time_bases(t_end)
+        let mut out: Vec<WithinVariant> = time_bases(t_end)
             .into_iter()
             .map(|(detail, bases)| {
                 let params = 3 * bases.len();
@@ -105,7 +124,16 @@ impl Family for Drift {
                     bases.iter().flat_map(|phi| (0..3).map(move |a| axis(a, phi(t)))).collect()
                 })
             })
-            .collect()
+            .collect();
+        for &(bias, detail) in scale_shapes(ctx) {
+            let params = 3 + 3 * usize::from(bias);
+            out.push(
+                within.variant(ctx.m, params, detail.into(), &|p, t, _| {
+                    scale_effect(ctx.calibrated()[p], t / t_end, bias)
+                }),
+            );
+        }
+        out
     }
 
     fn evaluate(&self, ctx: &Context<'_>) -> Evaluation {
@@ -144,6 +172,15 @@ impl Family for Drift {
                 format!("bias polynomial in time, degree {degree}")
             };
             out.push(Variant { extra, params: 3 * degree, detail });
+        }
+        for &(bias, detail) in scale_shapes(ctx) {
+            let extra = (ctx.poses.iter().zip(ctx.directions()).zip(ctx.calibrated()))
+                .map(|((p, u), f)| {
+                    let effect = scale_effect(*f, p.t_mid() / t_end, bias);
+                    effect.iter().map(|e| u.iter().zip(e).map(|(a, b)| a * b).sum()).collect()
+                })
+                .collect();
+            out.push(Variant { extra, params: 3 + 3 * usize::from(bias), detail: detail.into() });
         }
         out
     }

@@ -398,7 +398,7 @@ impl<'a> Context<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::diagnose::gap;
+    use crate::diagnose::{MIN_GAIN, gap};
     use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
 
     #[test]
@@ -464,5 +464,29 @@ mod tests {
             let chi = linear_drift_disagreement(&drift);
             assert!(chi < CHANNELS_DISAGREE, "seed {seed}: drift: {chi}");
         }
+    }
+
+    #[test]
+    fn a_scale_sagging_over_the_log_is_drift_on_a_log_without_a_thermometer() {
+        // A ratiometric front end on a discharging supply: every axis' scale falls by 0.2 % over the
+        // log (2 mg at 1 g), readings between the poses included.
+        let mut table = to_table(&generate(&random_scenario(EffectClass::None, 5)), "sim").unwrap();
+        let end = gap::row_time(&table, table.samples.len() - 1, 100.0);
+        for row in 0..table.samples.len() {
+            let sag = 1.0 - 0.002 * gap::row_time(&table, row, 100.0) / end;
+            table.samples[row] = table.samples[row].map(|v| v * sag);
+        }
+        let with_thermometer = table.clone();
+        table.temps_c = None;
+        let opts = DiagnoseOptions::DEFAULT;
+        let m = gap::measure(&table, &opts).unwrap();
+        let ctx = Context::new(&table, &m, &opts).unwrap();
+        let e = drift::Drift.evaluate(&ctx);
+        assert!(e.candidate.heldout_gain >= MIN_GAIN, "{:?}", e.candidate);
+        assert!(e.candidate.detail.contains("scale"), "{}", e.candidate.detail);
+        // With a thermometer, a scale changing over the log is the temperature family's to test.
+        let m = gap::measure(&with_thermometer, &opts).unwrap();
+        let ctx = Context::new(&with_thermometer, &m, &opts).unwrap();
+        assert!(drift::Drift.variants(&ctx).iter().all(|v| !v.detail.contains("scale")));
     }
 }
