@@ -34,6 +34,11 @@ const MIN_RESIDUAL_DOF: usize = 3;
 /// sets reached 15.
 const CHANNELS_DISAGREE: f64 = 25.0;
 
+/// Fewest training poses beyond a family parametrisation's columns: a design with as many columns
+/// as its training poses interpolates them and "predicts" a withheld pose by chance (a 13-pose
+/// log's four-parameter transient fitted its poses to 0.4 of white noise).
+const MIN_FIT_DOF: usize = 1;
+
 /// Logs of at most this many poses are cross-validated leaving one pose out.
 const LEAVE_ONE_OUT_BELOW: usize = 16;
 
@@ -251,11 +256,16 @@ impl<'a> Context<'a> {
     /// [`MIN_RESIDUAL_DOF`]: a design that (nearly) interpolates its training poses predicts the
     /// withheld ones by chance, not by physics.
     pub(crate) fn leaves_residual_dof(&self, extra: &[Vec<f64>]) -> bool {
+        self.trains_beyond(extra, MIN_RESIDUAL_DOF)
+    }
+
+    /// Every fold's training poses outnumber the columns of the design with `extra` by `dof`.
+    fn trains_beyond(&self, extra: &[Vec<f64>], dof: usize) -> bool {
         let columns = self.base_rows.first().map_or(0, Vec::len) + extra.first().map_or(0, Vec::len);
         let dropped = &self.none_dropped;
         (0..self.folds).all(|f| {
             let train = (0..dropped.len()).filter(|&i| self.fold[i] != f && !dropped[i]).count();
-            train >= columns + MIN_RESIDUAL_DOF
+            train >= columns + dof
         })
     }
 
@@ -266,7 +276,7 @@ impl<'a> Context<'a> {
         }
         let mut best: Option<Fitted> = None;
         let mut tried = Vec::new();
-        for v in variants {
+        for v in variants.into_iter().filter(|v| self.trains_beyond(&v.extra, MIN_FIT_DOF)) {
             let rows = self.rows_with(&v.extra);
             let dropped = self.none_dropped.clone();
             let Some(ratio) = self.heldout_ratio(&rows, &dropped, v.params) else { continue };
@@ -413,6 +423,14 @@ mod tests {
         let most = fewest_train - ctx.base_rows[0].len() - MIN_RESIDUAL_DOF;
         assert!(ctx.leaves_residual_dof(&columns(most)), "{most} extra columns on {n} poses");
         assert!(!ctx.leaves_residual_dof(&columns(most + 1)), "{} extra columns on {n} poses", most + 1);
+        // A family's parametrisation is fitted with one residual degree of freedom at least.
+        let random = |k: usize| -> Vec<Vec<f64>> {
+            (0..n).map(|i| (0..k).map(|j| ((i * 7 + j * 13) % 11) as f64 - 5.0).collect()).collect()
+        };
+        let variant = |k: usize| Variant { extra: random(k), params: k, detail: String::new() };
+        let widest = fewest_train - ctx.base_rows[0].len() - MIN_FIT_DOF;
+        assert!(ctx.best_of(vec![variant(widest)]).is_some(), "{widest} extra columns on {n} poses");
+        assert!(ctx.best_of(vec![variant(widest + 1)]).is_none(), "{} extra columns on {n} poses", widest + 1);
     }
 
     /// A clean simulated log with `bias(pose, seconds into its hold, seconds into the log)` (mg,
