@@ -49,7 +49,7 @@ pub(crate) struct SmoothFit {
 
 /// Basis function `j` of `count` uniform cubic B-splines over `0..t_end` at `t` (their sum is 1 on
 /// `0..t_end`; centres `h` apart from `-h` to `t_end + h`).
-fn bspline(j: usize, count: usize, t_end: f64, t: f64) -> f64 {
+pub(crate) fn bspline(j: usize, count: usize, t_end: f64, t: f64) -> f64 {
     let h = t_end / (count - 3) as f64;
     let x = ((t - (j as f64 - 1.0) * h) / h).abs();
     if x < 1.0 {

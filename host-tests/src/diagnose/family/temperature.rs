@@ -1,22 +1,87 @@
 //! Temperature: bias, relative scale, or both, linear or quadratic (a second-order temperature
 //! coefficient) in the temperature the sensor sees: the thermometer's reading, or that reading
 //! through a first-order lag (the sensor warms later than the thermometer), with the lag's time
-//! constant from a grid.
+//! constant from a grid, or as a smooth course in time (a coarse thermometer's staircase).
 
-use super::{Context, Family, Variant};
+use super::{Context, Family, Variant, smooth};
 use crate::diagnose::gap::row_time;
-use crate::diagnose::math::{V3, mean};
+use crate::diagnose::math::{V3, lstsq, mean};
 use crate::diagnose::within::{Within, WithinVariant};
 
 /// Lag time constants tried, s (0 = no lag).
 const LAGS_S: [f64; 5] = [0.0, 30.0, 100.0, 300.0, 1000.0];
 
+/// Knot spacing of the smooth course through which the thermometer is also read, s: a coarse
+/// thermometer (1 degC steps) is a staircase whose steps misplace a pose's temperature by up to half
+/// a step; the die's own temperature moves smoothly (its thermal time constants are minutes).
+const SMOOTH_S: f64 = 200.0;
+
+/// The thermometer as read: through a first-order lag of `lag` s (0: none), or, with `smooth`,
+/// as a smooth course in time (knots [`SMOOTH_S`] apart, no lag). The parameters the choice costs.
+#[derive(Clone, Copy)]
+struct Source {
+    lag: f64,
+    smooth: bool,
+}
+
+impl Source {
+    fn all() -> impl Iterator<Item = Source> {
+        std::iter::once(Source { lag: 0.0, smooth: true })
+            .chain(LAGS_S.iter().map(|&lag| Source { lag, smooth: false }))
+    }
+
+    /// The extra parameter a lag or a smoothing costs.
+    fn params(&self) -> usize {
+        usize::from(self.lag > 0.0 || self.smooth)
+    }
+
+    fn detail(&self) -> String {
+        if self.smooth {
+            format!(" (thermometer smoothed, knots {SMOOTH_S:.0} s apart)")
+        } else if self.lag > 0.0 {
+            format!(" (thermometer lagged {:.0} s)", self.lag)
+        } else {
+            String::new()
+        }
+    }
+
+    /// The temperature per row.
+    fn temps(&self, ctx: &Context<'_>) -> Option<Vec<f64>> {
+        if self.smooth { smoothed_temps(ctx, SMOOTH_S) } else { lagged_temps(ctx, self.lag) }
+    }
+}
+
+/// The temperature column smoothed in time, per row: a least-squares cubic spline with knots
+/// `spacing` seconds apart through its one-second means. A thermometer's steps (1 degC on some
+/// boards) are a staircase around the die's smooth course; the spline follows the course.
+fn smoothed_temps(ctx: &Context<'_>, spacing: f64) -> Option<Vec<f64>> {
+    let temps = ctx.table.temps_c.as_ref()?;
+    let times: Vec<f64> = (0..temps.len()).map(|i| row_time(ctx.table, i, ctx.m.rate)).collect();
+    let (t0, t_end) = (*times.first()?, *times.last()?);
+    let span = (t_end - t0).max(1e-9);
+    let count = ((span / spacing).ceil() as usize).max(1) + 3;
+    // One-second block means as the data the spline is fitted to.
+    let mut blocks: Vec<(f64, f64, f64)> = Vec::new();
+    for (t, temp) in times.iter().zip(temps) {
+        match blocks.last_mut() {
+            Some((start, sum_t, n)) if t - *start < 1.0 => (*sum_t, *n) = (*sum_t + temp, *n + 1.0),
+            _ => blocks.push((*t, *temp, 1.0)),
+        }
+    }
+    let basis = |t: f64| -> Vec<f64> { (0..count).map(|j| smooth::bspline(j, count, span, t - t0)).collect() };
+    let rows: Vec<Vec<f64>> = blocks.iter().map(|(t, _, _)| basis(*t)).collect();
+    let target: Vec<f64> = blocks.iter().map(|(_, sum, n)| -sum / n).collect();
+    let train: Vec<usize> = (0..rows.len()).collect();
+    let c = lstsq(&rows, &target, &train)?;
+    Some(times.iter().map(|t| basis(*t).iter().zip(&c).map(|(b, x)| b * x).sum()).collect())
+}
+
 pub(crate) struct Temperature;
 
-/// The temperature column through a first-order lag of `tau` seconds, averaged over each pose.
-fn lagged_pose_temps(ctx: &Context<'_>, tau: f64) -> Option<Vec<f64>> {
-    let lagged = lagged_temps(ctx, tau)?;
-    Some(ctx.poses.iter().map(|p| mean(&lagged[p.rows.clone()])).collect())
+/// The temperature as read through `source`, averaged over each pose.
+fn pose_temps(ctx: &Context<'_>, source: Source) -> Option<Vec<f64>> {
+    let temps = source.temps(ctx)?;
+    Some(ctx.poses.iter().map(|p| mean(&temps[p.rows.clone()])).collect())
 }
 
 /// The temperature column through a first-order lag of `tau` seconds, per row.
@@ -39,16 +104,15 @@ fn lagged_temps(ctx: &Context<'_>, tau: f64) -> Option<Vec<f64>> {
 /// quadratic in the (lagged) temperature of each segment.
 fn within_variants(ctx: &Context<'_>, w: &Within) -> Vec<WithinVariant> {
     let mut out = Vec::new();
-    for lag in LAGS_S {
-        let Some(lagged) = lagged_temps(ctx, lag) else { return out };
+    for source in Source::all() {
+        let Some(lagged) = source.temps(ctx) else { return out };
         let temps: Vec<f64> = w.rows.iter().map(|r| mean(&lagged[r.clone()])).collect();
         let t0 = mean(&temps);
         let lagged = &lagged;
         if temps.iter().map(|t| (t - t0).abs()).fold(0.0, f64::max) < 0.05 {
             continue;
         }
-        let through = if lag > 0.0 { format!(" (thermometer lagged {lag:.0} s)") } else { String::new() };
-        let lag_params = usize::from(lag > 0.0);
+        let (through, lag_params) = (source.detail(), source.params());
         for power in 1..=2 {
             let shape = if power == 1 { "linear" } else { "quadratic" };
             for (bias, scale, what) in [(true, false, "bias"), (false, true, "scale"), (true, true, "bias and scale")] {
@@ -108,14 +172,13 @@ impl Family for Temperature {
 
     fn variants(&self, ctx: &Context<'_>) -> Vec<Variant> {
         let mut out = Vec::new();
-        for lag in LAGS_S {
-            let Some(temps) = lagged_pose_temps(ctx, lag) else { return out };
+        for source in Source::all() {
+            let Some(temps) = pose_temps(ctx, source) else { return out };
             let t0 = mean(&temps);
             if temps.iter().map(|t| (t - t0).abs()).fold(0.0, f64::max) < 0.05 {
                 continue;
             }
-            let lag_params = usize::from(lag > 0.0);
-            let through = if lag > 0.0 { format!(" (thermometer lagged {lag:.0} s)") } else { String::new() };
+            let (through, lag_params) = (source.detail(), source.params());
             for (bias, scale, what) in [(true, false, "bias"), (false, true, "scale"), (true, true, "bias and scale")] {
                 for (power, shape) in [(1, "linear"), (2, "quadratic")] {
                     let params = 3 * power * (usize::from(bias) + usize::from(scale)) + lag_params;
@@ -125,5 +188,31 @@ impl Family for Temperature {
             }
         }
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::diagnose::{DiagnoseOptions, diagnose, gap};
+    use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
+
+    #[test]
+    fn a_warm_up_read_by_a_one_degree_thermometer_is_temperature() {
+        // A board warming by 12 degC (time constant 300 s); its bias follows the die temperature at
+        // 0.4 mg/K along one sensor direction; the thermometer reads whole degrees.
+        let mut table = to_table(&generate(&random_scenario(EffectClass::None, 8)), "sim").unwrap();
+        let mg = table.median_magnitude * 1e-3;
+        let die = |t: f64| 20.0 + 12.0 * (1.0 - (-t / 300.0).exp());
+        let direction = [0.48, -0.6, 0.64];
+        let times: Vec<f64> = (0..table.samples.len()).map(|i| gap::row_time(&table, i, 100.0)).collect();
+        for (sample, t) in table.samples.iter_mut().zip(&times) {
+            let bias = 0.4 * (die(*t) - 20.0) * mg;
+            *sample = std::array::from_fn(|a| sample[a] + direction[a] * bias);
+        }
+        table.temps_c = Some(times.iter().map(|t| die(*t).round()).collect());
+        let d = diagnose(&table, &DiagnoseOptions::DEFAULT).unwrap();
+        let temperature = d.candidates.iter().find(|c| c.effect == "temperature").unwrap();
+        assert_eq!(d.verdict, "temperature", "{:?}", d.candidates);
+        assert!(temperature.detail.contains("smoothed"), "{}", temperature.detail);
     }
 }
