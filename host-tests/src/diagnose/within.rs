@@ -69,6 +69,17 @@ pub(crate) struct Within {
     pub(crate) significant: bool,
 }
 
+/// A Brownian path's segment means about their own mean over a hold of unit duration cut in
+/// [`SEGMENTS`]: the mean variance of a segment's deviation. Segment `i`'s mean has variance
+/// `h (i + 1/3)`, two segments' means covary by `h (min + 1/2)` (`h` a segment's duration).
+fn brownian_deviation_share() -> f64 {
+    let (s, h) = (SEGMENTS, 1.0 / SEGMENTS as f64);
+    let cov = |i: usize, j: usize| h * (i.min(j) as f64 + if i == j { 1.0 / 3.0 } else { 0.5 });
+    let mean_var: f64 = (0..s).flat_map(|i| (0..s).map(move |j| cov(i, j))).sum::<f64>() / (s * s) as f64;
+    (0..s).map(|j| cov(j, j) - 2.0 * (0..s).map(|i| cov(i, j)).sum::<f64>() / s as f64 + mean_var).sum::<f64>()
+        / s as f64
+}
+
 /// White variance per axis from successive differences (`var(x[i+1] - x[i]) / 2`), median over
 /// the poses: slow movements within a pose do not inflate it.
 pub(crate) fn white_from_differences(table: &Table, poses: &[PoseData]) -> V3 {
@@ -132,6 +143,36 @@ impl Within {
         w.nominal_ratio = ms.sqrt();
         w.significant = ms > 1.0 + SIGNIFICANT_Z * spread && w.nominal_ratio >= MIN_RATIO;
         Some(w)
+    }
+
+    /// The mean square of the whitened deviations a noise model predicts beyond white noise (0 for
+    /// white noise): per segment, a bias-instability floor `floor` (variance per axis, input unit)
+    /// moves its mean as an independent draw, a random walk `walk` (variance per second per axis) as
+    /// a Brownian path over the hold does, both along the pose's direction.
+    pub(crate) fn predicted_excess(&self, m: &Measured, walk: V3, floor: V3) -> f64 {
+        if self.d.is_empty() {
+            return 0.0;
+        }
+        let s = SEGMENTS as f64;
+        let brownian = brownian_deviation_share();
+        let total: f64 = (0..self.d.len())
+            .map(|i| {
+                let p = self.pose[i];
+                let kt = m.model.kt_times(m.directions[p]);
+                let along = |v: V3| (0..3).map(|a| kt[a] * kt[a] * v[a]).sum::<f64>();
+                let hold = m.poses[p].duration();
+                (along(floor) * (s - 1.0) / s + along(walk) * hold * brownian) * self.weight[i] * self.weight[i]
+            })
+            .sum();
+        total / self.d.len() as f64
+    }
+
+    /// The mean square of the whitened deviations beyond white noise, and its standard deviation
+    /// under white noise (over the deviations' degrees of freedom).
+    pub(crate) fn observed_excess(&self) -> (f64, f64) {
+        let poses = self.pose.iter().collect::<std::collections::BTreeSet<_>>().len();
+        let dof = self.d.len().saturating_sub(poses).max(1) as f64;
+        (self.nominal_ratio * self.nominal_ratio - 1.0, (2.0 / dof).sqrt())
     }
 
     /// The share of the holds' movement beyond white noise that a line in time through each pose's
@@ -422,5 +463,35 @@ mod tests {
         let (smooth, walk) = (median(&mut smooth), median(&mut walk));
         assert!(smooth >= 0.95, "smooth drift: line share {smooth}");
         assert!(walk < 0.85, "random walk: line share {walk}");
+    }
+
+    #[test]
+    fn a_brownian_paths_segment_means_deviate_as_predicted() {
+        // A unit-variance-per-unit-time random walk over a hold of unit length, 600 steps: the mean
+        // variance of its six segment means about their mean, over 4000 paths.
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(31);
+        let (steps, paths) = (600, 4000);
+        let mut total = 0.0;
+        for _ in 0..paths {
+            let mut level = 0.0;
+            let means: Vec<f64> = (0..SEGMENTS)
+                .map(|_| {
+                    let per = steps / SEGMENTS;
+                    (0..per)
+                        .map(|_| {
+                            level += (1.0 / steps as f64).sqrt()
+                                * <StandardNormal as Distribution<f64>>::sample(&StandardNormal, &mut rng);
+                            level
+                        })
+                        .sum::<f64>()
+                        / per as f64
+                })
+                .collect();
+            let centre = means.iter().sum::<f64>() / SEGMENTS as f64;
+            total += means.iter().map(|m| (m - centre).powi(2)).sum::<f64>() / SEGMENTS as f64;
+        }
+        let simulated = total / paths as f64;
+        let predicted = brownian_deviation_share();
+        assert!((simulated / predicted - 1.0).abs() < 0.05, "simulated {simulated}, predicted {predicted}");
     }
 }

@@ -39,6 +39,26 @@ fn largest_share(cv: &[Option<f64>]) -> f64 {
     if total > 0.0 { squares.iter().copied().fold(0.0, f64::max) / total } else { 0.0 }
 }
 
+/// A noise estimate: random walk and floor (variances per axis), and whether it is pooled over the
+/// holds (else from the longest rest).
+type Estimate = (V3, V3, bool);
+
+/// Standard deviations (under white noise) by which the holds' movement may fall short of what a
+/// noise model predicts for them.
+const HOLDS_SHORT_Z: f64 = 3.0;
+
+/// The holds move far less than the noise model predicts they would (its floor and walk move every
+/// hold's segment means; the holds are where it was measured): the model's level is an artefact of
+/// the white level it was measured against (successive differences understate a digitally
+/// low-passed sensor's white noise, and its excess then reads as a floor), not a noise the holds
+/// carry.
+fn holds_refute(ctx: &Context<'_>, walk: V3, floor: V3) -> bool {
+    let Some(within) = ctx.within.as_ref() else { return false };
+    let predicted = within.predicted_excess(ctx.m, walk, floor);
+    let (observed, sigma) = within.observed_excess();
+    observed < predicted - HOLDS_SHORT_Z * sigma * (1.0 + predicted)
+}
+
 /// Fewest noise draws out of [`CV_NOISE_DRAWS`] that must put as large a share of the scatter in one
 /// pose as the data do, for the noise model to stay credible.
 const MIN_DRAWS_AS_CONCENTRATED: usize = 1;
@@ -69,12 +89,15 @@ impl ColoredNoise {
     /// The noise model the withheld poses' scatter agrees with best, among each estimate's random
     /// walk and floor together and each alone (their levels come from the holds, not from the pose
     /// means): `(ratio, walk, floor)`.
-    fn best_noise(&self, ctx: &Context<'_>, estimates: &[(V3, V3)]) -> Option<(f64, V3, V3)> {
+    /// An estimate pooled over the holds is checked against the holds' own movement
+    /// ([`holds_refute`]); the longest rest's reaches time scales longer than a hold, where a slow
+    /// Gauss-Markov noise has not yet reached its floor.
+    fn best_noise(&self, ctx: &Context<'_>, estimates: &[Estimate]) -> Option<(f64, V3, V3)> {
         let zero = [0.0; 3];
         let mut best: Option<(f64, V3, V3)> = None;
-        for &(walk, floor) in estimates {
+        for &(walk, floor, pooled) in estimates {
             for (w, f) in [(walk, floor), (walk, zero), (zero, floor)] {
-                if !(ctx.pose_level && w.iter().chain(&f).any(|v| *v > 0.0)) {
+                if !(ctx.pose_level && w.iter().chain(&f).any(|v| *v > 0.0)) || (pooled && holds_refute(ctx, w, f)) {
                     continue;
                 }
                 let Some(ratio) = self.heldout_ratio(ctx, w, f) else { continue };
@@ -92,7 +115,7 @@ impl ColoredNoise {
 /// noise of successive differences (blind to slow wander, at least the rounding's `q^2 / 12`),
 /// and the holds' median variance (which counts a wander faster than a hold as white: the lower
 /// estimate when the wander does not grow as a random walk over the log, as a Gauss-Markov noise).
-fn hold_estimates(ctx: &Context<'_>) -> Vec<(V3, V3)> {
+fn hold_estimates(ctx: &Context<'_>) -> Vec<Estimate> {
     let m = ctx.m;
     let q = quantisation_step(ctx.table);
     let diff = white_from_differences(ctx.table, ctx.poses);
@@ -102,8 +125,9 @@ fn hold_estimates(ctx: &Context<'_>) -> Vec<(V3, V3)> {
     [white, m.white]
         .iter()
         .flat_map(|&w| {
-            let rest = colored_noise_estimate(ctx.table, rows.start, rows.end, m.rate, w);
-            [rest, pooled_estimate(ctx.table, ctx.poses, m.rate, w)]
+            let (walk, floor) = colored_noise_estimate(ctx.table, rows.start, rows.end, m.rate, w);
+            let (pooled_walk, pooled_floor) = pooled_estimate(ctx.table, ctx.poses, m.rate, w);
+            [(walk, floor, false), (pooled_walk, pooled_floor, true)]
         })
         .collect()
 }
@@ -138,7 +162,7 @@ impl ColoredNoise {
         let m = ctx.m;
         let estimates = hold_estimates(ctx);
         let best = self.best_noise(ctx, &estimates);
-        let (walk, floor) = estimates[0];
+        let (walk, floor, _) = estimates[0];
         let applicable = best.is_some();
         let (heldout_ratio, walk, floor) = best.unwrap_or((ctx.heldout_ratio_nominal, walk, floor));
         let noise = Noise { white: m.white, walk, floor: std::array::from_fn(|a| floor[a] + m.quantisation[a]) };
