@@ -173,17 +173,27 @@ impl Family for Drift {
             };
             out.push(Variant { extra, params: 3 * degree, detail });
         }
-        for &(bias, detail) in scale_shapes(ctx) {
-            let extra = (ctx.poses.iter().zip(ctx.directions()).zip(ctx.calibrated()))
+        out.extend(scale_variants(ctx, t_end));
+        out
+    }
+}
+
+/// The scale shapes at the pose level, the log ending at `t_end`.
+fn scale_variants(ctx: &Context<'_>, t_end: f64) -> Vec<Variant> {
+    let poses = ctx.poses.iter().zip(ctx.directions()).zip(ctx.calibrated());
+    scale_shapes(ctx)
+        .iter()
+        .map(|&(bias, detail)| {
+            let extra = poses
+                .clone()
                 .map(|((p, u), f)| {
                     let effect = scale_effect(*f, p.t_mid() / t_end, bias);
                     effect.iter().map(|e| u.iter().zip(e).map(|(a, b)| a * b).sum()).collect()
                 })
                 .collect();
-            out.push(Variant { extra, params: 3 + 3 * usize::from(bias), detail: detail.into() });
-        }
-        out
-    }
+            Variant { extra, params: 3 + 3 * usize::from(bias), detail: detail.into() }
+        })
+        .collect()
 }
 
 /// `v` along axis `a`.
