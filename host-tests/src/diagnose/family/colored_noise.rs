@@ -89,6 +89,7 @@ impl ColoredNoise {
     /// The noise model the withheld poses' scatter agrees with best, among each estimate's random
     /// walk and floor together and each alone (their levels come from the holds, not from the pose
     /// means): `(ratio, walk, floor)`.
+    ///
     /// An estimate pooled over the holds is checked against the holds' own movement
     /// ([`holds_refute`]); the longest rest's reaches time scales longer than a hold, where a slow
     /// Gauss-Markov noise has not yet reached its floor.

@@ -18,7 +18,7 @@ use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
 
 use super::gap::{Measured, Noise, PoseData, expected_cv_ms, expected_fit_rmse_mg, residual_noise_draws};
-use super::math::{V3, cv_residuals, fit_residuals, jacobian_row, lstsq_with_covariance, rms, sum_sq};
+use super::math::{V3, cholesky_solve, cv_residuals, fit_residuals, jacobian_row, lstsq_with_covariance, rms, sum_sq};
 use super::report::Candidate;
 use super::within::{Within, WithinFit, WithinVariant};
 use super::{CV_NOISE_DRAWS, DiagnoseOptions, OVERSHOOT_WEIGHT, PARAMETER_PENALTY};
@@ -264,7 +264,7 @@ impl<'a> Context<'a> {
         self.trains_beyond(extra, MIN_RESIDUAL_DOF)
     }
 
-    /// Every fold's training poses outnumber the columns of the design with `extra` by `dof`.
+    /// Every fold's training poses number at least the columns of the design with `extra` plus `dof`.
     fn trains_beyond(&self, extra: &[Vec<f64>], dof: usize) -> bool {
         let columns = self.base_rows.first().map_or(0, Vec::len) + extra.first().map_or(0, Vec::len);
         let dropped = &self.none_dropped;
@@ -373,7 +373,7 @@ impl<'a> Context<'a> {
         let sum: Vec<Vec<f64>> = (0..k)
             .map(|j| (0..k).map(|l| covw[j][l] * msw.max(1.0) + covp[base + j][base + l] * msp.max(1.0)).collect())
             .collect();
-        let x = crate::diagnose::math::cholesky_solve(&sum, &delta, 0.0)?;
+        let x = cholesky_solve(&sum, &delta, 0.0)?;
         Some(delta.iter().zip(&x).map(|(a, b)| a * b).sum::<f64>() / k as f64)
     }
 

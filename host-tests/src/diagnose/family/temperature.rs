@@ -64,7 +64,7 @@ fn smoothed_temps(ctx: &Context<'_>, spacing: f64) -> Option<Vec<f64>> {
     let mut blocks: Vec<(f64, f64, f64)> = Vec::new();
     for (t, temp) in times.iter().zip(temps) {
         match blocks.last_mut() {
-            Some((start, sum_t, n)) if t - *start < 1.0 => (*sum_t, *n) = (*sum_t + temp, *n + 1.0),
+            Some((start, sum, n)) if t - *start < 1.0 => (*sum, *n) = (*sum + temp, *n + 1.0),
             _ => blocks.push((*t, *temp, 1.0)),
         }
     }
@@ -105,7 +105,7 @@ fn lagged_temps(ctx: &Context<'_>, tau: f64) -> Option<Vec<f64>> {
 fn within_variants(ctx: &Context<'_>, w: &Within) -> Vec<WithinVariant> {
     let mut out = Vec::new();
     for source in Source::all() {
-        let Some(lagged) = source.temps(ctx) else { return out };
+        let Some(lagged) = source.temps(ctx) else { continue };
         let temps: Vec<f64> = w.rows.iter().map(|r| mean(&lagged[r.clone()])).collect();
         let t0 = mean(&temps);
         let lagged = &lagged;
@@ -173,7 +173,7 @@ impl Family for Temperature {
     fn variants(&self, ctx: &Context<'_>) -> Vec<Variant> {
         let mut out = Vec::new();
         for source in Source::all() {
-            let Some(temps) = pose_temps(ctx, source) else { return out };
+            let Some(temps) = pose_temps(ctx, source) else { continue };
             let t0 = mean(&temps);
             if temps.iter().map(|t| (t - t0).abs()).fold(0.0, f64::max) < 0.05 {
                 continue;
