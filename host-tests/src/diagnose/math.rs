@@ -4,6 +4,11 @@ use accelcal::model::{PARAM_COUNT, Params};
 
 pub(crate) type V3 = [f64; 3];
 
+/// `v` along axis `a`.
+pub(crate) fn axis(a: usize, v: f64) -> V3 {
+    std::array::from_fn(|i| if i == a { v } else { 0.0 })
+}
+
 pub(crate) fn dot(a: V3, b: V3) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
@@ -73,13 +78,10 @@ pub(crate) fn jacobian_row(m: V3, u: V3) -> [f64; PARAM_COUNT] {
     [-u[0], -u[1], -u[2], u[0] * m[0], u[1] * m[1], u[2] * m[2], u[1] * m[0], u[2] * m[0], u[2] * m[1]]
 }
 
-/// Least squares: the `x` minimising `sum over train of (r_i + rows_i . x)^2` (columns scaled, a tiny
-/// ridge keeps collinear columns finite).
-pub(crate) fn lstsq(rows: &[Vec<f64>], r: &[f64], train: &[usize]) -> Option<Vec<f64>> {
-    let p = rows.first()?.len();
-    if train.len() < p {
-        return None;
-    }
+/// The normal equations of `min sum over train of (r_i + rows_i . x)^2` with each column scaled to
+/// unit root mean square over `train`: the scales, the lower triangle of `X^T X` and `-X^T r` (scaled).
+fn scaled_normals(rows: &[Vec<f64>], r: &[f64], train: &[usize]) -> (Vec<f64>, Vec<Vec<f64>>, Vec<f64>) {
+    let p = rows.first().map_or(0, Vec::len);
     let scale: Vec<f64> = (0..p)
         .map(|j| {
             let s = (train.iter().map(|&i| rows[i][j] * rows[i][j]).sum::<f64>() / train.len() as f64).sqrt();
@@ -97,6 +99,17 @@ pub(crate) fn lstsq(rows: &[Vec<f64>], r: &[f64], train: &[usize]) -> Option<Vec
             }
         }
     }
+    (scale, a, b)
+}
+
+/// Least squares: the `x` minimising `sum over train of (r_i + rows_i . x)^2` (columns scaled, a tiny
+/// ridge keeps collinear columns finite).
+pub(crate) fn lstsq(rows: &[Vec<f64>], r: &[f64], train: &[usize]) -> Option<Vec<f64>> {
+    let p = rows.first()?.len();
+    if train.len() < p {
+        return None;
+    }
+    let (scale, a, b) = scaled_normals(rows, r, train);
     let trace: f64 = (0..p).map(|j| a[j][j]).sum();
     let mut ridge = 1e-11 * trace / p as f64;
     for _ in 0..6 {
@@ -116,22 +129,8 @@ pub(crate) fn lstsq_with_covariance(rows: &[Vec<f64>], r: &[f64]) -> Option<(Vec
     if rows.len() <= p {
         return None;
     }
-    let scale: Vec<f64> = (0..p)
-        .map(|j| {
-            let s = (rows.iter().map(|x| x[j] * x[j]).sum::<f64>() / rows.len() as f64).sqrt();
-            if s > 0.0 && s.is_finite() { s } else { 1.0 }
-        })
-        .collect();
-    let mut a = vec![vec![0.0; p]; p];
-    let mut b = vec![0.0; p];
-    for (x, ri) in rows.iter().zip(r) {
-        for j in 0..p {
-            b[j] -= x[j] / scale[j] * ri;
-            for k in 0..=j {
-                a[j][k] += x[j] / scale[j] * x[k] / scale[k];
-            }
-        }
-    }
+    let train: Vec<usize> = (0..rows.len()).collect();
+    let (scale, a, b) = scaled_normals(rows, r, &train);
     let unit: Vec<Vec<f64>> = (0..p).map(|j| (0..p).map(|k| f64::from(u8::from(j == k))).collect()).collect();
     let mut rhs: Vec<&[f64]> = vec![&b];
     rhs.extend(unit.iter().map(Vec::as_slice));

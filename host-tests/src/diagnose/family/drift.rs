@@ -8,9 +8,9 @@
 //! that changes as the log goes on is the temperature family's: time is then the temperature's
 //! proxy, and on a steady warm-up the two cannot be told apart).
 
-use super::{Context, Evaluation, Family, Variant, smooth, standard_evaluation};
+use super::{Context, Evaluation, Family, Variant, bias_scale_effect, smooth, standard_evaluation};
 use crate::diagnose::gap::PoseData;
-use crate::diagnose::math::V3;
+use crate::diagnose::math::axis;
 use crate::diagnose::within::{Within, WithinVariant};
 
 /// Knot counts of the piecewise-linear wander (within-pose channel).
@@ -94,13 +94,6 @@ fn time_bases(t_end: f64) -> Vec<(String, Vec<Basis>)> {
     out
 }
 
-/// The calibrated-reading change per parameter of a scale per axis (and a bias per axis first,
-/// when `bias`) changing as `x`, at the calibrated reading `f`.
-fn scale_effect(f: V3, x: f64, bias: bool) -> Vec<V3> {
-    let biases = (0..3).filter(move |_| bias).map(move |a| axis(a, x));
-    biases.chain((0..3).map(|a| axis(a, f[a] * x))).collect()
-}
-
 /// Scale (with or without the bias) linear in time: whether with the bias, and the description.
 const SCALE_SHAPES: [(bool, &str); 2] = [(false, "scale linear in time"), (true, "bias and scale linear in time")];
 
@@ -127,11 +120,9 @@ impl Family for Drift {
             .collect();
         for &(bias, detail) in scale_shapes(ctx) {
             let params = 3 + 3 * usize::from(bias);
-            out.push(
-                within.variant(ctx.m, params, detail.into(), &|p, t, _| {
-                    scale_effect(ctx.calibrated()[p], t / t_end, bias)
-                }),
-            );
+            out.push(within.variant(ctx.m, params, detail.into(), &|p, t, _| {
+                bias_scale_effect(ctx.calibrated()[p], t / t_end, 1, bias, true)
+            }));
         }
         out
     }
@@ -187,16 +178,11 @@ fn scale_variants(ctx: &Context<'_>, t_end: f64) -> Vec<Variant> {
             let extra = poses
                 .clone()
                 .map(|((p, u), f)| {
-                    let effect = scale_effect(*f, p.t_mid() / t_end, bias);
+                    let effect = bias_scale_effect(*f, p.t_mid() / t_end, 1, bias, true);
                     effect.iter().map(|e| u.iter().zip(e).map(|(a, b)| a * b).sum()).collect()
                 })
                 .collect();
             Variant { extra, params: 3 + 3 * usize::from(bias), detail: detail.into() }
         })
         .collect()
-}
-
-/// `v` along axis `a`.
-fn axis(a: usize, v: f64) -> V3 {
-    std::array::from_fn(|i| if i == a { v } else { 0.0 })
 }

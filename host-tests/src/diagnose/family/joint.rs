@@ -23,11 +23,8 @@ pub(crate) struct JointFit {
 /// Rows of the stacked design (pose means first, weighted by `1 / sqrt(e_white)`, then the
 /// within-pose segments, already whitened), their targets and folds.
 fn stacked(ctx: &Context<'_>, w: &Within, v: &WithinVariant) -> (Vec<Vec<f64>>, Vec<f64>, Vec<usize>) {
-    let weight = 1.0 / ctx.e_white.sqrt();
     let base = ctx.base_rows.first().map_or(0, Vec::len);
-    let mut rows: Vec<Vec<f64>> =
-        ctx.base_rows.iter().zip(&v.pose_extra).map(|(b, e)| b.iter().chain(e).map(|x| x * weight).collect()).collect();
-    let mut r: Vec<f64> = ctx.m.r.iter().map(|x| x * weight).collect();
+    let (mut rows, mut r) = ctx.whitened_pose_rows(&v.pose_extra);
     let mut fold = ctx.fold.clone();
     for (i, row) in v.rows.iter().enumerate() {
         rows.push(std::iter::repeat_n(0.0, base).chain(row.iter().copied()).collect());

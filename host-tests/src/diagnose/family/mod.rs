@@ -18,7 +18,9 @@ use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
 
 use super::gap::{Measured, Noise, PoseData, expected_cv_ms, expected_fit_rmse_mg, residual_noise_draws};
-use super::math::{V3, cholesky_solve, cv_residuals, fit_residuals, jacobian_row, lstsq_with_covariance, rms, sum_sq};
+use super::math::{
+    V3, axis, cholesky_solve, cv_residuals, fit_residuals, jacobian_row, lstsq_with_covariance, rms, sum_sq,
+};
 use super::report::Candidate;
 use super::within::{Within, WithinFit, WithinVariant};
 use super::{CV_NOISE_DRAWS, DiagnoseOptions, OVERSHOOT_WEIGHT, PARAMETER_PENALTY};
@@ -128,6 +130,23 @@ pub(crate) fn standard_evaluation<F: Family + ?Sized>(family: &F, ctx: &Context<
         joint::add(ctx, &mut e, fit);
     }
     e
+}
+
+/// The calibrated-reading change per parameter of a bias per axis and/or a relative scale per axis
+/// (in that order) changing as `x`, for each power of `x` up to `power`, at the calibrated reading
+/// `f` (temperature's coefficients, and drift's scale in time).
+pub(crate) fn bias_scale_effect(f: V3, x: f64, power: usize, bias: bool, scale: bool) -> Vec<V3> {
+    let mut out = Vec::new();
+    for k in 1..=power {
+        let xk = x.powi(k as i32);
+        if bias {
+            out.extend((0..3).map(|a| axis(a, xk)));
+        }
+        if scale {
+            out.extend((0..3).map(|a| axis(a, f[a] * xk)));
+        }
+    }
+    out
 }
 
 /// A verdict from the holds' movement alone, for when no family explains the withheld poses:
@@ -347,6 +366,14 @@ impl<'a> Context<'a> {
         Evaluation { candidate, after: self.m.r.iter().map(|v| Some(*v)).collect(), predicts_values: true }
     }
 
+    /// The pose rows with `extra` columns (calibration columns first) and the nominal residuals,
+    /// each weighted by `1 / sqrt(e_white)` (held-out white noise of a pose mean to 1).
+    pub(crate) fn whitened_pose_rows(&self, extra: &[Vec<f64>]) -> (Vec<Vec<f64>>, Vec<f64>) {
+        let weight = 1.0 / self.e_white.sqrt();
+        let rows = self.rows_with(extra).into_iter().map(|row| row.into_iter().map(|x| x * weight).collect()).collect();
+        (rows, self.m.r.iter().map(|x| x * weight).collect())
+    }
+
     /// Chi-square (per degree of freedom, the effect's coefficients) of the difference between
     /// the effect's coefficients fitted on the holds alone and on the pose means alone (with the
     /// calibration), each with its covariance scaled by its own residual mean square (at least 1).
@@ -359,14 +386,7 @@ impl<'a> Context<'a> {
             return None;
         }
         let (cw, covw, msw) = lstsq_with_covariance(&v.rows, &w.d)?;
-        let weight = 1.0 / self.e_white.sqrt();
-        let rows: Vec<Vec<f64>> = self
-            .base_rows
-            .iter()
-            .zip(&v.pose_extra)
-            .map(|(b, e)| b.iter().chain(e).map(|x| x * weight).collect())
-            .collect();
-        let r: Vec<f64> = self.m.r.iter().map(|x| x * weight).collect();
+        let (rows, r) = self.whitened_pose_rows(&v.pose_extra);
         let (cp, covp, msp) = lstsq_with_covariance(&rows, &r)?;
         let (k, base) = (cw.len(), cp.len() - cw.len());
         let delta: Vec<f64> = (0..k).map(|j| cw[j] - cp[base + j]).collect();

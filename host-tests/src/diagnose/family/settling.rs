@@ -19,7 +19,7 @@ use super::{Context, Evaluation, Family, Variant, motion, ringing, standard_eval
 use crate::diagnose::PARAMETER_PENALTY;
 use crate::diagnose::SEGMENTS;
 use crate::diagnose::locate::within_chi2_of;
-use crate::diagnose::math::{V3, cv_residuals, dot, fit_residuals, mean_of, median, norm, rms, sum_sq};
+use crate::diagnose::math::{V3, axis, cv_residuals, dot, fit_residuals, mean_of, median, norm, rms, sum_sq};
 use crate::diagnose::within::{Within, WithinVariant};
 
 /// Leading segments of each hold left out by the start-trimmed variants.
@@ -145,7 +145,7 @@ impl Family for Settling {
                 let detail = format!("bias transient along one sensor direction from each hold's start, tau {tau} s");
                 within.variant(ctx.m, 3, detail, &|p, t, _| {
                     let x = (-(t - ctx.poses[p].t_start) / tau).exp();
-                    (0..3).map(|a| std::array::from_fn(|i| if i == a { x } else { 0.0 })).collect()
+                    (0..3).map(|a| axis(a, x)).collect()
                 })
             })
             .collect()

@@ -11,7 +11,7 @@
 
 use super::{Context, Evaluation};
 use crate::diagnose::PARAMETER_PENALTY;
-use crate::diagnose::math::{V3, cholesky_solve_many, dot, rms};
+use crate::diagnose::math::{V3, axis, cholesky_solve_many, dot, rms};
 
 /// Knot counts tried.
 const KNOTS: [usize; 4] = [4, 6, 10, 18];
@@ -66,13 +66,13 @@ pub(crate) fn bspline(j: usize, count: usize, t_end: f64, t: f64) -> f64 {
 /// when the log has the within-pose channel, its segments' rows (the wander's course during each
 /// hold, already whitened); their targets and folds (a segment in its pose's fold).
 fn design(ctx: &Context<'_>, knots: usize, t_end: f64) -> (Vec<Vec<f64>>, Vec<f64>, Vec<usize>) {
-    let w = 1.0 / ctx.e_white.sqrt();
     let base = ctx.base_rows.first().map_or(0, Vec::len);
     let effect = |_: usize, t: f64, _: std::ops::Range<usize>| -> Vec<V3> {
         (0..knots).flat_map(|j| (0..3).map(move |a| axis(a, bspline(j, knots, t_end, t)))).collect()
     };
-    let pose_extra: Vec<Vec<f64>> = match &ctx.within {
-        Some(within) => within.variant(ctx.m, 3 * knots, String::new(), &effect).pose_extra,
+    let within = ctx.within.as_ref().map(|w| (w, w.variant(ctx.m, 3 * knots, String::new(), &effect)));
+    let pose_extra: Vec<Vec<f64>> = match &within {
+        Some((_, v)) => v.pose_extra.clone(),
         None => ctx
             .poses
             .iter()
@@ -80,12 +80,9 @@ fn design(ctx: &Context<'_>, knots: usize, t_end: f64) -> (Vec<Vec<f64>>, Vec<f6
             .map(|(p, u)| effect(0, p.t_mid(), 0..0).iter().map(|e| dot(*u, *e)).collect())
             .collect(),
     };
-    let mut rows: Vec<Vec<f64>> =
-        ctx.base_rows.iter().zip(&pose_extra).map(|(b, e)| b.iter().chain(e).map(|x| x * w).collect()).collect();
-    let mut r: Vec<f64> = ctx.m.r.iter().map(|x| x * w).collect();
+    let (mut rows, mut r) = ctx.whitened_pose_rows(&pose_extra);
     let mut fold = ctx.fold.clone();
-    if let Some(within) = &ctx.within {
-        let v = within.variant(ctx.m, 3 * knots, String::new(), &effect);
+    if let Some((within, v)) = within {
         for (i, row) in v.rows.iter().enumerate() {
             rows.push(std::iter::repeat_n(0.0, base).chain(row.iter().copied()).collect());
             r.push(within.d[i]);
@@ -93,11 +90,6 @@ fn design(ctx: &Context<'_>, knots: usize, t_end: f64) -> (Vec<Vec<f64>>, Vec<f6
         }
     }
     (rows, r, fold)
-}
-
-/// `v` along axis `a`.
-fn axis(a: usize, v: f64) -> V3 {
-    std::array::from_fn(|i| if i == a { v } else { 0.0 })
 }
 
 /// The prior's normal matrix per axis: the knots' differences of `order` (1: a random walk's

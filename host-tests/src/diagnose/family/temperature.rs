@@ -3,9 +3,9 @@
 //! through a first-order lag (the sensor warms later than the thermometer), with the lag's time
 //! constant from a grid, or as a smooth course in time (a coarse thermometer's staircase).
 
-use super::{Context, Family, Variant, smooth};
+use super::{Context, Family, Variant, bias_scale_effect, smooth};
 use crate::diagnose::gap::row_time;
-use crate::diagnose::math::{V3, lstsq, mean};
+use crate::diagnose::math::{lstsq, mean};
 use crate::diagnose::within::{Within, WithinVariant};
 
 /// Lag time constants tried, s (0 = no lag).
@@ -16,38 +16,41 @@ const LAGS_S: [f64; 5] = [0.0, 30.0, 100.0, 300.0, 1000.0];
 /// a step; the die's own temperature moves smoothly (its thermal time constants are minutes).
 const SMOOTH_S: f64 = 200.0;
 
-/// The thermometer as read: through a first-order lag of `lag` s (0: none), or, with `smooth`,
-/// as a smooth course in time (knots [`SMOOTH_S`] apart, no lag). The parameters the choice costs.
+/// The thermometer as read: through a first-order lag of so many seconds (0: as it reads), or as a
+/// smooth course in time (knots [`SMOOTH_S`] apart, no lag).
 #[derive(Clone, Copy)]
-struct Source {
-    lag: f64,
-    smooth: bool,
+enum Source {
+    Lagged(f64),
+    Smoothed,
 }
 
 impl Source {
     fn all() -> impl Iterator<Item = Source> {
-        std::iter::once(Source { lag: 0.0, smooth: true })
-            .chain(LAGS_S.iter().map(|&lag| Source { lag, smooth: false }))
+        std::iter::once(Source::Smoothed).chain(LAGS_S.iter().map(|&lag| Source::Lagged(lag)))
     }
 
     /// The extra parameter a lag or a smoothing costs.
     fn params(&self) -> usize {
-        usize::from(self.lag > 0.0 || self.smooth)
+        match self {
+            Source::Smoothed => 1,
+            Source::Lagged(lag) => usize::from(*lag > 0.0),
+        }
     }
 
     fn detail(&self) -> String {
-        if self.smooth {
-            format!(" (thermometer smoothed, knots {SMOOTH_S:.0} s apart)")
-        } else if self.lag > 0.0 {
-            format!(" (thermometer lagged {:.0} s)", self.lag)
-        } else {
-            String::new()
+        match self {
+            Source::Smoothed => format!(" (thermometer smoothed, knots {SMOOTH_S:.0} s apart)"),
+            Source::Lagged(lag) if *lag > 0.0 => format!(" (thermometer lagged {lag:.0} s)"),
+            Source::Lagged(_) => String::new(),
         }
     }
 
     /// The temperature per row.
     fn temps(&self, ctx: &Context<'_>) -> Option<Vec<f64>> {
-        if self.smooth { smoothed_temps(ctx, SMOOTH_S) } else { lagged_temps(ctx, self.lag) }
+        match self {
+            Source::Smoothed => smoothed_temps(ctx, SMOOTH_S),
+            Source::Lagged(lag) => lagged_temps(ctx, *lag),
+        }
     }
 }
 
@@ -120,27 +123,10 @@ fn within_variants(ctx: &Context<'_>, w: &Within) -> Vec<WithinVariant> {
                 let detail = format!("{what} {shape} in temperature{through}");
                 out.push(w.variant(ctx.m, params, detail, &|p, _, rows| {
                     let dt = mean(&lagged[rows]) - t0;
-                    temperature_effect(ctx.calibrated()[p], dt, power, bias, scale)
+                    bias_scale_effect(ctx.calibrated()[p], dt, power, bias, scale)
                 }));
                 out.last_mut().expect("just pushed").params += lag_params;
             }
-        }
-    }
-    out
-}
-
-/// The calibrated-reading change per parameter: bias per axis, then relative scale per axis, for
-/// each power of the temperature change `dt`.
-fn temperature_effect(f: V3, dt: f64, power: usize, bias: bool, scale: bool) -> Vec<V3> {
-    let axis = |a: usize, v: f64| -> V3 { std::array::from_fn(|i| if i == a { v } else { 0.0 }) };
-    let mut out = Vec::new();
-    for k in 1..=power {
-        let x = dt.powi(k as i32);
-        if bias {
-            out.extend((0..3).map(|a| axis(a, x)));
-        }
-        if scale {
-            out.extend((0..3).map(|a| axis(a, f[a] * x)));
         }
     }
     out
@@ -155,7 +141,7 @@ fn design(ctx: &Context<'_>, temps: &[f64], power: usize, bias: bool, scale: boo
         .zip(ctx.directions())
         .zip(ctx.calibrated())
         .map(|((t, u), f)| {
-            let effect = temperature_effect(*f, t - t0, power, bias, scale);
+            let effect = bias_scale_effect(*f, t - t0, power, bias, scale);
             effect.iter().map(|e| u.iter().zip(e).map(|(a, b)| a * b).sum()).collect()
         })
         .collect()
