@@ -12,6 +12,7 @@ use super::report::Gap;
 use super::{DiagnoseError, DiagnoseOptions, SEGMENTS, SIGNIFICANT_RATIO, SIGNIFICANT_Z, err};
 use crate::calib;
 use crate::csvio::{self, AccumulateOptions, Table};
+use crate::poses::PoseSpan;
 use crate::sim::random::standard_normal;
 
 /// One pose's statistics from its own samples (input unit).
@@ -205,6 +206,8 @@ pub(crate) fn expected_fit_rmse_mg(rows: &[Vec<f64>], draws: &[Vec<f64>], droppe
 pub(crate) struct Measured {
     pub(crate) rate: f64,
     pub(crate) poses: Vec<PoseData>,
+    /// Still intervals left out as shorter than the least pose duration.
+    pub(crate) short_poses: usize,
     pub(crate) params: Params,
     pub(crate) model: Model,
     pub(crate) calibrated: Vec<V3>,
@@ -250,21 +253,33 @@ impl From<DiagnoseError> for Refusal {
     }
 }
 
-/// The poses of the table (the CSV reader's accumulation) and the sample rate.
-fn read_poses(table: &Table) -> Result<(Vec<Pose>, Vec<PoseData>, f64), Refusal> {
+/// Shortest still interval used as a pose, seconds. A fragment of a hold cut short by motion (a
+/// knock, a hand still on the part) is still by the detector's test but its mean carries the
+/// motion's edges: on clean logs such fragments of 0.1-0.3 s raised the gap 30-60 times.
+pub const MIN_POSE_S: f64 = 0.5;
+
+/// The still intervals of the table (the CSV reader's accumulation) of at least `min_pose_s`, the
+/// number of shorter ones left out and the sample rate.
+fn read_poses(table: &Table, min_pose_s: f64) -> Result<(Vec<Pose>, Vec<PoseData>, usize, f64), Refusal> {
     let acc =
         csvio::accumulate(table, &AccumulateOptions::default()).map_err(|e| err(format!("{}: {e}", table.file)))?;
     let rate = acc.sample_rate_hz.or_else(|| table.sample_rate_hz()).filter(|r| *r > 0.0).unwrap_or(1.0);
     // The fewest `calibrate` accepts: six faces fit six parameters (with no degree of freedom left, the
     // gap is not significant and the answer is `none`).
     let min_poses = 6;
-    if acc.poses.len() < min_poses {
-        let error =
-            err(format!("{}: {} static poses found, diagnose needs at least {min_poses}", table.file, acc.poses.len()));
-        return Err(Refusal::NotCalibrated { still_poses: acc.poses.len(), rate, error });
+    let long = |s: &PoseSpan| (s.last_row + 1 - s.first_row) as f64 >= min_pose_s * rate;
+    let kept: Vec<(Pose, &PoseSpan)> = acc.poses.iter().zip(&acc.spans).filter(|(_, s)| long(s)).map(|(p, s)| (*p, s)).collect();
+    let short = acc.poses.len() - kept.len();
+    if kept.len() < min_poses {
+        let error = err(format!(
+            "{}: {} static poses of at least {min_pose_s} s found, diagnose needs at least {min_poses}",
+            table.file,
+            kept.len()
+        ));
+        return Err(Refusal::NotCalibrated { still_poses: kept.len(), rate, error });
     }
-    let poses = acc.spans.iter().map(|s| pose_data(table, s.first_row, s.last_row + 1, rate)).collect();
-    Ok((acc.poses, poses, rate))
+    let poses = kept.iter().map(|(_, s)| pose_data(table, s.first_row, s.last_row + 1, rate)).collect();
+    Ok((kept.into_iter().map(|(p, _)| p).collect(), poses, short, rate))
 }
 
 /// White-equivalent variance per axis: the median within-pose variance (quantisation included: a
@@ -376,9 +391,15 @@ pub(crate) fn quantisation_step(table: &Table) -> V3 {
 }
 
 /// Step 1: the library's nominal fit and the simulated experiment.
+/// Poses shorter than [`MIN_POSE_S`] are left out (counted in [`Measured::short_poses`]).
 pub(crate) fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Measured, Refusal> {
+    measure_with(table, opts, MIN_POSE_S)
+}
+
+/// [`measure`] leaving out the poses shorter than `min_pose_s` seconds.
+pub(crate) fn measure_with(table: &Table, opts: &DiagnoseOptions, min_pose_s: f64) -> Result<Measured, Refusal> {
     let gravity = opts.gravity;
-    let (lib_poses, poses, rate) = read_poses(table)?;
+    let (lib_poses, poses, short_poses, rate) = read_poses(table, min_pose_s)?;
     let config = CalibrationConfig { gravity: gravity as f32, ..CalibrationConfig::DEFAULT };
     let cal = calib::run(&lib_poses, &config, opts.seed).map_err(|e| Refusal::NotCalibrated {
         still_poses: lib_poses.len(),
@@ -400,6 +421,7 @@ pub(crate) fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Measured,
     Ok(Measured {
         rate,
         poses,
+        short_poses,
         params: cal.params,
         model,
         calibrated,
@@ -452,7 +474,7 @@ mod tests {
     #[test]
     fn the_correlation_factor_is_one_for_white_noise_and_the_averaging_width_for_averaged_noise() {
         // The poses as found in the raw log (the pose detection is not under test here).
-        let (_, poses, rate) = read_poses(&clean_log_averaged(1)).unwrap();
+        let (_, poses, _, rate) = read_poses(&clean_log_averaged(1), MIN_POSE_S).unwrap();
         // Width 8 with 20-sample blocks: 8 (1 - 8 / 60) = 6.9 expected, a little less with the
         // most varying tenth of the poses left out.
         for (width, low, high) in [(1, 1.0, 1.2), (8, 5.5, 8.5)] {

@@ -1,7 +1,9 @@
 //! `accelcal diagnose`: why a calibration leaves more residual than the noise explains, and which
 //! physical effect the 9-parameter model leaves out.
 //!
-//! 1. **The gap.** The library fits the nominal 9-parameter model ([`calib::run`], TAGA+LM). The same
+//! 1. **The gap.** The poses are the still intervals of at least [`MIN_POSE_S`] (shorter ones, a hold
+//!    cut up by motion, are counted and left out; all are used when too few full holds remain and
+//!    the holds do not move). The library fits the nominal 9-parameter model ([`calib::run`], TAGA+LM). The same
 //!    experiment (the fitted orientations, sample counts, durations and the white noise measured
 //!    within the poses) is simulated `repeats` times and refitted by the library (LM); the gap is
 //!    the real modulus RMSE over the mean simulated RMSE (1 = no gap), significant when the real RMSE
@@ -75,6 +77,7 @@ mod within;
 
 use std::fmt;
 
+pub use gap::MIN_POSE_S;
 pub(crate) use locate::orientation_label;
 pub use report::{Allan, Candidate, Diagnosis, DiagnosisDocument, Gap, PoseReport, Probe};
 
@@ -160,12 +163,9 @@ pub fn diagnose(table: &Table, opts: &DiagnoseOptions) -> Result<Diagnosis, Diag
     if opts.folds < 2 || opts.repeats < 2 {
         return Err(err("diagnose needs at least 2 folds and 2 repeats"));
     }
-    let m = match gap::measure(table, opts) {
+    let m = match measure(table, opts)? {
         Ok(m) => m,
-        Err(gap::Refusal::Other(e)) => return Err(e),
-        Err(gap::Refusal::NotCalibrated { still_poses, rate, error }) => {
-            return moving_holds(table, opts, still_poses, rate).ok_or(error);
-        }
+        Err(moving) => return Ok(moving),
     };
     // Too few poses to withhold some (a short log that calibrate still accepts): the gap is measured and
     // answered (`none` or `unexplained`), with no catalogue candidate tested.
@@ -192,6 +192,7 @@ pub fn diagnose(table: &Table, opts: &DiagnoseOptions) -> Result<Diagnosis, Diag
         white_mg: std::array::from_fn(|a| m.to_mg(m.white[a].sqrt() * scale[a])),
         gap: decision.gap,
         poses: locate::pose_reports(&m, &decision.after),
+        short_poses: m.short_poses,
         allan: locate::longest_rest_allan(table, &m),
         candidates: evaluations.into_iter().map(|e| e.candidate).collect(),
         heldout_ratio_nominal: ctx.as_ref().map_or(f64::NAN, |c| c.heldout_ratio_nominal),
@@ -210,6 +211,25 @@ pub fn diagnose(table: &Table, opts: &DiagnoseOptions) -> Result<Diagnosis, Diag
         }
     }
     Ok(d)
+}
+
+/// Step 1 on the still intervals of at least [`MIN_POSE_S`]; when those cannot be calibrated, the
+/// answer of holds that move (`Err`), else step 1 on every still interval (a log that calibrate
+/// accepts is answered).
+fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Result<gap::Measured, Diagnosis>, DiagnoseError> {
+    match gap::measure(table, opts) {
+        Ok(m) => return Ok(Ok(m)),
+        Err(gap::Refusal::NotCalibrated { still_poses, rate, .. }) => {
+            if let Some(d) = moving_holds(table, opts, still_poses, rate) {
+                return Ok(Err(d));
+            }
+        }
+        Err(gap::Refusal::Other(_)) => {}
+    }
+    match gap::measure_with(table, opts, 0.0) {
+        Ok(m) => Ok(Ok(m)),
+        Err(gap::Refusal::NotCalibrated { error, .. } | gap::Refusal::Other(error)) => Err(error),
+    }
 }
 
 /// The answer for a log whose still poses cannot be calibrated but whose holds mostly move
@@ -239,6 +259,7 @@ fn moving_holds(table: &Table, opts: &DiagnoseOptions, still_poses: usize, rate:
         white_mg: [f64::NAN; 3],
         gap: Gap::UNMEASURED,
         poses: Vec::new(),
+        short_poses: 0,
         allan: Allan { rest_s: 0.0, tau_s: Vec::new(), adev_mg: Vec::new(), white_mg: Vec::new() },
         candidates: vec![candidate],
         heldout_ratio_nominal: f64::NAN,
@@ -253,6 +274,8 @@ fn moving_holds(table: &Table, opts: &DiagnoseOptions, still_poses: usize, rate:
 
 #[cfg(test)]
 mod tests {
+    use std::f64::consts::PI;
+
     use super::math::{Model, lstsq};
     use super::*;
     use accelcal::model::Params;
@@ -264,6 +287,62 @@ mod tests {
         let idx: Vec<usize> = (0..10).collect();
         let x = lstsq(&rows, &r, &idx).unwrap();
         assert!((x[0] - 2.0).abs() < 1e-9 && (x[1] - 0.5).abs() < 1e-9, "{x:?}");
+    }
+
+    /// A clean simulated log read at 800 Hz (the library keeps still intervals of 100 samples, 0.125 s),
+    /// with knocks in some holds: from `at` of the hold's length on, `pattern` repeated `times` times: 0.1 s
+    /// of shaking (0.3 g at 37 Hz), then `rest_s` resting pressed (a finger's force, 3 % along the
+    /// reading), then the hold goes on.
+    fn knocked_log(every: usize, at: f64, rest_s: f64, times: usize) -> Table {
+        use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
+        let mut scenario = random_scenario(EffectClass::None, 7);
+        scenario.sim.rate_hz = 800.0;
+        let mut table = to_table(&generate(&scenario), "knocked").unwrap();
+        let m = gap::measure_with(&table, &DiagnoseOptions::DEFAULT, 0.0).unwrap();
+        let amplitude = 0.3 * table.median_magnitude;
+        for p in m.poses.iter().step_by(every) {
+            let start = p.rows.start + (at * p.rows.len() as f64) as usize;
+            let period = 0.1 + rest_s;
+            let rows = start..(start + (period * times as f64 * m.rate) as usize).min(p.rows.end);
+            for row in rows {
+                let t = (row - start) as f64 / m.rate % period;
+                let sample = &mut table.samples[row];
+                *sample = if t < 0.1 {
+                    std::array::from_fn(|a| sample[a] + amplitude * (2.0 * PI * 37.0 * t + a as f64).sin())
+                } else {
+                    sample.map(|v| v * 1.03)
+                };
+            }
+        }
+        table
+    }
+
+    #[test]
+    fn the_short_still_fragments_of_a_knocked_hold_are_counted_and_left_out() {
+        // One knock in every fourth hold, mid-hold: a 0.45 s fragment pressed, then the hold resumes.
+        let table = knocked_log(4, 0.5, 0.45, 1);
+        let opts = DiagnoseOptions::DEFAULT;
+        let all = gap::measure_with(&table, &opts, 0.0).unwrap();
+        let full = gap::measure(&table, &opts).unwrap();
+        assert!(full.short_poses >= 3, "{} short of {} still intervals", full.short_poses, all.poses.len());
+        assert_eq!(all.poses.len(), full.poses.len() + full.short_poses);
+        // The fragments' 30 mg make a gap; without them there is none.
+        assert!(all.gap.significant, "{:?}", all.gap);
+        let d = diagnose(&table, &opts).unwrap();
+        assert!(!d.gap.significant && d.verdict == "none", "{}", d.to_text());
+        assert_eq!(d.short_poses, full.short_poses);
+        assert!(d.to_text().contains("shorter than 0.5 s left out"), "{}", d.to_text());
+    }
+
+    #[test]
+    fn a_log_of_short_holds_only_is_still_answered() {
+        // Every hold knocked from its start: still intervals of 0.4 s only, which calibrate accepts.
+        let table = knocked_log(1, 0.0, 0.4, 1000);
+        let opts = DiagnoseOptions::DEFAULT;
+        assert!(matches!(gap::measure(&table, &opts), Err(gap::Refusal::NotCalibrated { .. })));
+        assert!(gap::measure_with(&table, &opts, 0.0).is_ok());
+        let d = diagnose(&table, &opts).unwrap();
+        assert!(!d.verdict.is_empty(), "{}", d.to_text());
     }
 
     #[test]

@@ -158,6 +158,8 @@ pub struct Diagnosis {
     pub gap: Gap,
     /// Step 2: per pose.
     pub poses: Vec<PoseReport>,
+    /// Still intervals shorter than [`MIN_POSE_S`](super::MIN_POSE_S) left out.
+    pub short_poses: usize,
     /// Step 2: noise.
     pub allan: Allan,
     /// Step 3.
@@ -211,6 +213,8 @@ pub struct DiagnosisDocument<'a> {
     repeats: usize,
     /// The number of poses (their details are under `where.per_pose`).
     poses: usize,
+    /// Still intervals shorter than the least pose duration, left out.
+    short_poses_left_out: usize,
     params: &'a Params,
     noise: NoiseSummary,
     gap: &'a Gap,
@@ -323,6 +327,7 @@ impl Diagnosis {
             seed: self.seed,
             repeats: self.repeats,
             poses: self.poses.len(),
+            short_poses_left_out: self.short_poses,
             params: &self.params,
             noise: NoiseSummary { white_mg: self.white_mg, longest_rest_s: self.allan.rest_s },
             gap: &self.gap,
@@ -443,6 +448,7 @@ mod tests {
             white_mg: [0.1; 3],
             gap,
             poses: vec![pose(1.0, [0.0, 0.0, 1.0]), pose(9.0, [1.0, 0.0, 0.0])],
+            short_poses: 3,
             allan: Allan { rest_s: 5.0, tau_s: vec![0.1], adev_mg: vec![0.2], white_mg: vec![0.1] },
             candidates: vec![candidate],
             probes: vec![],
@@ -485,5 +491,6 @@ mod tests {
         assert_eq!(json["verdict"]["where"], "one orientation: +z");
         assert!(json["verdict"]["heldout_gain"].is_null());
         assert_eq!(json["poses"], 2);
+        assert_eq!(json["short_poses_left_out"], 3);
     }
 }

@@ -42,7 +42,7 @@ fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation]) -> Option<(usize
     // The gap is in the pose means: when a family explains the withheld ones, a family with evidence
     // in the holds only (a transient repeated in every hold) does not explain the gap.
     let explains_poses = |e: &Evaluation| e.candidate.applicable && e.candidate.heldout_gain >= MIN_GAIN;
-    let some_explains_poses = evaluations.iter().any(explains_poses);
+    let some_explains_poses = evaluations.iter().filter(|e| e.predicts_values).any(explains_poses);
     let usable = |e: &&Evaluation| {
         e.candidate.applicable && e.candidate.evidence().is_finite() && (explains_poses(e) || !some_explains_poses)
     };

@@ -66,9 +66,13 @@ impl Diagnosis {
         use std::fmt::Write as _;
         let mut s = String::new();
         let g = &self.gap;
+        let short = match self.short_poses {
+            0 => String::new(),
+            n => format!(" ({n} still intervals shorter than {} s left out)", crate::diagnose::MIN_POSE_S),
+        };
         let _ = writeln!(
             s,
-            "{}: {} rows ({}), {} poses, seed {}",
+            "{}: {} rows ({}), {} poses{short}, seed {}",
             self.file,
             self.samples,
             self.units,
