@@ -271,8 +271,9 @@ fn read_poses(table: &Table, min_pose_s: f64) -> Result<(Vec<Pose>, Vec<PoseData
     let kept: Vec<(Pose, &PoseSpan)> = acc.poses.iter().zip(&acc.spans).filter(|(_, s)| long(s)).map(|(p, s)| (*p, s)).collect();
     let short = acc.poses.len() - kept.len();
     if kept.len() < min_poses {
+        let longer = if min_pose_s > 0.0 { format!(" of at least {min_pose_s} s") } else { String::new() };
         let error = err(format!(
-            "{}: {} static poses of at least {min_pose_s} s found, diagnose needs at least {min_poses}",
+            "{}: {} static poses{longer} found, diagnose needs at least {min_poses}",
             table.file,
             kept.len()
         ));
