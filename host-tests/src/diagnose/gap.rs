@@ -268,7 +268,8 @@ fn read_poses(table: &Table, min_pose_s: f64) -> Result<(Vec<Pose>, Vec<PoseData
     // gap is not significant and the answer is `none`).
     let min_poses = 6;
     let long = |s: &PoseSpan| (s.last_row + 1 - s.first_row) as f64 >= min_pose_s * rate;
-    let kept: Vec<(Pose, &PoseSpan)> = acc.poses.iter().zip(&acc.spans).filter(|(_, s)| long(s)).map(|(p, s)| (*p, s)).collect();
+    let kept: Vec<(Pose, &PoseSpan)> =
+        acc.poses.iter().zip(&acc.spans).filter(|(_, s)| long(s)).map(|(p, s)| (*p, s)).collect();
     let short = acc.poses.len() - kept.len();
     if kept.len() < min_poses {
         let longer = if min_pose_s > 0.0 { format!(" of at least {min_pose_s} s") } else { String::new() };

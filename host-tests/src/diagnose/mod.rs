@@ -246,6 +246,7 @@ fn moving_holds(table: &Table, opts: &DiagnoseOptions, still_poses: usize, rate:
         detail: motion.describe(still_poses),
         within_gain: f64::NAN,
         within_detail: String::new(),
+        within_disagreement: f64::NAN,
         variants: Vec::new(),
     };
     Some(Diagnosis {

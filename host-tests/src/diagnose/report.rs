@@ -107,6 +107,9 @@ pub struct Candidate {
     pub within_gain: f64,
     /// The variant chosen on the within-pose channel (empty when none).
     pub within_detail: String,
+    /// Chi-square per coefficient between that variant fitted on the holds alone and on the pose
+    /// means alone (a time-varying effect moves both alike); NaN when not measured.
+    pub within_disagreement: f64,
     /// Every pose-level parametrisation tried, with its penalised held-out ratio (smaller is
     /// better; the chosen one is the smallest).
     #[serde(serialize_with = "variants_json")]
@@ -435,6 +438,7 @@ mod tests {
             detail: "tau 5 s".into(),
             within_gain: f64::NAN,
             within_detail: String::new(),
+            within_disagreement: f64::NAN,
             variants: vec![("tau 5 s".into(), 1.5)],
         };
         Diagnosis {

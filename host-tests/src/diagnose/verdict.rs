@@ -30,6 +30,12 @@ const NOISE_FAR_AHEAD: f64 = 0.2;
 /// its proxy (time): when the thermometer ramps steadily both explain the same change.
 const CAUSE_OVER_PROXY: f64 = 0.05;
 
+/// Chi-square per coefficient up to which a within-pose fit agrees with the pose means
+/// ([`Candidate::within_disagreement`](super::report::Candidate::within_disagreement)). A transient
+/// repeated in every hold agreed to 0.3-3.1 on the development sets, a drift line fitted to the same
+/// holds disagreed by 13-22.
+const CHANNELS_AGREE: f64 = 5.0;
+
 /// The evidence a family is ranked by among its kind.
 fn ranking(e: &Evaluation) -> f64 {
     let cause = if e.candidate.effect == "temperature" { CAUSE_OVER_PROXY } else { 0.0 };
@@ -41,10 +47,20 @@ fn ranking(e: &Evaluation) -> f64 {
 fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation]) -> Option<(usize, &'e Evaluation)> {
     // The gap is in the pose means: when a family explains the withheld ones, a family with evidence
     // in the holds only (a transient repeated in every hold) does not explain the gap.
+    // Among families with evidence in the holds only, one whose holds and pose means agree is named
+    // before one whose fit to the holds the pose means contradict.
     let explains_poses = |e: &Evaluation| e.candidate.applicable && e.candidate.heldout_gain >= MIN_GAIN;
+    let holds_only = |e: &Evaluation| {
+        e.predicts_values && e.candidate.applicable && !explains_poses(e) && e.candidate.within_gain >= MIN_GAIN
+    };
+    let agrees = |e: &Evaluation| e.candidate.within_disagreement <= CHANNELS_AGREE;
     let some_explains_poses = evaluations.iter().filter(|e| e.predicts_values).any(explains_poses);
+    let some_agrees = evaluations.iter().any(|e| holds_only(e) && agrees(e));
     let usable = |e: &&Evaluation| {
-        e.candidate.applicable && e.candidate.evidence().is_finite() && (explains_poses(e) || !some_explains_poses)
+        e.candidate.applicable
+            && e.candidate.evidence().is_finite()
+            && (explains_poses(e) || !some_explains_poses)
+            && !(holds_only(e) && !agrees(e) && some_agrees)
     };
     let strongest = |noise: bool| {
         evaluations
@@ -120,4 +136,47 @@ pub(crate) fn decide(
     };
     let probe_where = best_probe.map(|p| format!("{} (held-out gain {:.2})", p.detail, p.heldout_gain));
     Decision { verdict, winner, gap, shrink, after, probe_where, located }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diagnose::report::Candidate;
+    use crate::diagnose::{DiagnoseOptions, gap};
+    use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
+
+    fn holds_only(effect: &'static str, within_gain: f64, within_disagreement: f64) -> Evaluation {
+        let candidate = Candidate {
+            effect,
+            applicable: true,
+            heldout_ratio: 1.0,
+            heldout_gain: 0.0,
+            ratio_after: 2.0,
+            extra_params: 3,
+            detail: String::new(),
+            within_gain,
+            within_detail: String::new(),
+            within_disagreement,
+            variants: Vec::new(),
+        };
+        Evaluation { candidate, after: Vec::new(), predicts_values: true }
+    }
+
+    #[test]
+    fn of_two_families_seen_in_the_holds_only_the_one_the_pose_means_agree_with_is_named() {
+        let table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "sim").unwrap();
+        let m = gap::measure(&table, &DiagnoseOptions::DEFAULT).unwrap();
+        let named = |e: &[Evaluation]| best_family(&m, e).map(|(_, e)| e.candidate.effect);
+        // A hand's warmth leaving the board after each set-down (a development log): a drift line
+        // fits the holds a little better, but implies a drift of the pose means 17 chi-square per
+        // coefficient away from what they show; the transient from each hold's start agrees (3.1).
+        let drift = holds_only("drift", 0.77, 16.9);
+        assert_eq!(named(&[drift, holds_only("settling", 0.66, 3.1)]), Some("settling"));
+        // Neither agrees, or the better fit agrees too: the better fit.
+        let drift = || holds_only("drift", 0.77, 16.9);
+        assert_eq!(named(&[drift(), holds_only("settling", 0.66, 8.0)]), Some("drift"));
+        assert_eq!(named(&[holds_only("drift", 0.77, 1.0), holds_only("settling", 0.66, 3.1)]), Some("drift"));
+        // A family that agrees but does not explain the holds does not count.
+        assert_eq!(named(&[drift(), holds_only("settling", 0.2, 0.5)]), Some("drift"));
+    }
 }

@@ -110,7 +110,16 @@ impl Diagnosis {
                 c.effect, c.heldout_gain, c.heldout_ratio, c.ratio_after, c.extra_params, c.detail
             );
             if c.within_gain.is_finite() {
-                let _ = writeln!(s, "   {:<19} within-pose gain {:>6.2}  {}", "", c.within_gain, c.within_detail);
+                let agreement = if c.within_disagreement.is_finite() {
+                    format!(", pose means {:.1} chi2/coef away", c.within_disagreement)
+                } else {
+                    String::new()
+                };
+                let _ = writeln!(
+                    s,
+                    "   {:<19} within-pose gain {:>6.2}  {}{agreement}",
+                    "", c.within_gain, c.within_detail
+                );
             }
         }
         let _ = writeln!(s, "   verdict: {}{}", self.verdict, self.located_text());

@@ -194,6 +194,7 @@ impl ColoredNoise {
             ),
             within_gain: f64::NAN,
             within_detail: String::new(),
+            within_disagreement: f64::NAN,
             variants: Vec::new(),
         };
         Evaluation { candidate, after: m.r.iter().map(|v| Some(*v)).collect(), predicts_values: false }

@@ -119,12 +119,18 @@ pub(crate) fn standard_evaluation<F: Family + ?Sized>(family: &F, ctx: &Context<
     let Some(w) = ctx.within.as_ref().filter(|w| w.significant) else { return e };
     let variants = family.within_variants(ctx, w);
     let stacked = joint::best(ctx, w, &variants);
-    let variants: Vec<WithinVariant> = variants
+    let (variants, disagreements): (Vec<WithinVariant>, Vec<f64>) = variants
         .into_iter()
-        .filter(|v| ctx.channel_disagreement(w, v).is_none_or(|x| x <= CHANNELS_DISAGREE))
-        .collect();
+        .map(|v| {
+            let disagreement = ctx.channel_disagreement(w, &v).unwrap_or(f64::NAN);
+            (v, disagreement)
+        })
+        .filter(|(_, x)| !(*x > CHANNELS_DISAGREE))
+        .unzip();
+    let details: Vec<String> = variants.iter().map(|v| v.detail.clone()).collect();
     if let Some(fit) = w.best_of(variants) {
-        ctx.add_within(&mut e, w, fit);
+        let disagreement = details.iter().position(|d| *d == fit.detail).map_or(f64::NAN, |i| disagreements[i]);
+        ctx.add_within(&mut e, w, fit, disagreement);
     }
     if let Some(fit) = stacked {
         joint::add(ctx, &mut e, fit);
@@ -345,6 +351,7 @@ impl<'a> Context<'a> {
             detail: f.detail,
             within_gain: f64::NAN,
             within_detail: String::new(),
+            within_disagreement: f64::NAN,
             variants: f.tried,
         };
         Evaluation { candidate, after, predicts_values: true }
@@ -361,6 +368,7 @@ impl<'a> Context<'a> {
             detail: "not testable on this data".into(),
             within_gain: f64::NAN,
             within_detail: String::new(),
+            within_disagreement: f64::NAN,
             variants: Vec::new(),
         };
         Evaluation { candidate, after: self.m.r.iter().map(|v| Some(*v)).collect(), predicts_values: true }
@@ -400,7 +408,7 @@ impl<'a> Context<'a> {
     /// Adds the within-pose evidence to a family's evaluation. When it is the stronger channel, the
     /// pose means are corrected by the effect it fitted and the nominal model refitted: that is the
     /// residual "after".
-    fn add_within(&self, e: &mut Evaluation, w: &Within, fit: WithinFit) {
+    fn add_within(&self, e: &mut Evaluation, w: &Within, fit: WithinFit, disagreement: f64) {
         let before = w.nominal_ratio.ln();
         let miss = if fit.heldout_ratio >= 1.0 {
             fit.heldout_ratio.ln()
@@ -411,6 +419,7 @@ impl<'a> Context<'a> {
         let c = &mut e.candidate;
         c.within_gain = gain;
         c.within_detail = format!("{} (+{} params)", fit.detail, fit.params);
+        c.within_disagreement = disagreement;
         if c.applicable && c.heldout_gain >= gain {
             return;
         }
@@ -506,6 +515,27 @@ mod tests {
             let drift = log_with(seed, &|_, _, t| v.map(|c| -0.06 * c * t));
             let chi = linear_drift_disagreement(&drift);
             assert!(chi < CHANNELS_DISAGREE, "seed {seed}: drift: {chi}");
+        }
+    }
+
+    #[test]
+    fn a_slow_transient_in_every_hold_is_settling_and_a_drift_of_the_same_holds_is_drift() {
+        // A hand's warmth leaving the board after each set-down: 2 mg along one sensor direction,
+        // tau 10 s (longer than a hold: nearly a line in each).
+        let v = [0.6, -0.48, 0.64];
+        let opts = DiagnoseOptions::DEFAULT;
+        for seed in [3, 4] {
+            let touched = log_with(seed, &|_, t, _| v.map(|c| 2.0 * c * (-t / 10.0).exp()));
+            let d = crate::diagnose::diagnose(&touched, &opts).unwrap();
+            assert_eq!(d.verdict, "settling", "seed {seed}: {}", d.to_text());
+            let drift = d.candidates.iter().find(|c| c.effect == "drift").unwrap();
+            assert!(!(drift.within_disagreement <= 5.0), "seed {seed}: {drift:?}");
+            // The same holds' slope, but a drift of the whole log (no thermometer: a steady warm-up
+            // would explain it as well).
+            let mut drifting = log_with(seed, &|_, _, t| v.map(|c| -0.2 / 10.0 * c * t));
+            drifting.temps_c = None;
+            let d = crate::diagnose::diagnose(&drifting, &opts).unwrap();
+            assert_eq!(d.verdict, "drift", "seed {seed}: {}", d.to_text());
         }
     }
 

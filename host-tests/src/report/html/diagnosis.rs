@@ -56,6 +56,7 @@ const CANDIDATE_COLUMNS: Columns = &[
     ("heldout_ratio", "held-out ratio"),
     ("ratio_after", "ratio after"),
     ("within_gain", "within-pose gain"),
+    ("within_disagreement", "holds vs pose means (chi2/coef)"),
 ];
 const RANKED_COLUMNS: Columns = &[
     ("effect", "effect"),
