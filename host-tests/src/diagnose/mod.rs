@@ -164,8 +164,8 @@ pub fn diagnose(table: &Table, opts: &DiagnoseOptions) -> Result<Diagnosis, Diag
         return Err(err("diagnose needs at least 2 folds and 2 repeats"));
     }
     let m = match measure(table, opts)? {
-        Ok(m) => m,
-        Err(moving) => return Ok(moving),
+        Step1::Measured(m) => m,
+        Step1::HoldsMove(d) => return Ok(d),
     };
     // Too few poses to withhold some (a short log that calibrate still accepts): the gap is measured and
     // answered (`none` or `unexplained`), with no catalogue candidate tested.
@@ -213,21 +213,29 @@ pub fn diagnose(table: &Table, opts: &DiagnoseOptions) -> Result<Diagnosis, Diag
     Ok(d)
 }
 
+/// Step 1's outcome.
+enum Step1 {
+    /// The gap measured.
+    Measured(gap::Measured),
+    /// Too few still poses to calibrate, and the holds move: the answer ([`moving_holds`]).
+    HoldsMove(Diagnosis),
+}
+
 /// Step 1 on the still intervals of at least [`MIN_POSE_S`]; when those cannot be calibrated, the
-/// answer of holds that move (`Err`), else step 1 on every still interval (a log that calibrate
-/// accepts is answered).
-fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Result<gap::Measured, Diagnosis>, DiagnoseError> {
+/// answer of holds that move, else step 1 on every still interval (a log that calibrate accepts is
+/// answered).
+fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Step1, DiagnoseError> {
     match gap::measure(table, opts) {
-        Ok(m) => return Ok(Ok(m)),
+        Ok(m) => return Ok(Step1::Measured(m)),
         Err(gap::Refusal::NotCalibrated { still_poses, rate, .. }) => {
             if let Some(d) = moving_holds(table, opts, still_poses, rate) {
-                return Ok(Err(d));
+                return Ok(Step1::HoldsMove(d));
             }
         }
         Err(gap::Refusal::Other(_)) => {}
     }
     match gap::measure_with(table, opts, 0.0) {
-        Ok(m) => Ok(Ok(m)),
+        Ok(m) => Ok(Step1::Measured(m)),
         Err(gap::Refusal::NotCalibrated { error, .. } | gap::Refusal::Other(error)) => Err(error),
     }
 }
