@@ -31,6 +31,10 @@ const SIGNIFICANT_Z: f64 = 4.0;
 /// ... and at least this ratio.
 const MIN_RATIO: f64 = 1.15;
 
+/// The share of a random walk's movement within the holds a line per hold explains: about 0.7
+/// for a Brownian path's six segment means pooled over 12 holds ([`Within::line_share`]).
+pub(crate) const BROWNIAN_LINE_SHARE: f64 = 0.7;
+
 /// One parametrisation on both channels: whitened within-pose columns (per row) and the pose-level
 /// columns of the same parameters (per pose).
 pub(crate) struct WithinVariant {
@@ -180,13 +184,33 @@ impl Within {
     /// smooth drift; a Brownian path's six segment means give about 0.7 pooled over 12 holds (99 %
     /// below 0.87).
     pub(crate) fn line_share(&self) -> f64 {
+        self.line_share_with_error().0
+    }
+
+    /// The holds move more smoothly than a random walk: their line share exceeds a Brownian path's
+    /// ([`BROWNIAN_LINE_SHARE`]) by two standard errors.
+    pub(crate) fn smoother_than_a_walk(&self) -> bool {
+        let (share, error) = self.line_share_with_error();
+        share - 2.0 * error >= BROWNIAN_LINE_SHARE
+    }
+
+    /// [`Within::line_share`] and its standard error from the white noise in the deviations (the
+    /// part the lines take, `k / (k - 1)` chi-square with one degree of freedom per pose, and the
+    /// whole, with `k - 1`): a small movement beyond white noise leaves the share uncertain.
+    pub(crate) fn line_share_with_error(&self) -> (f64, f64) {
         let (before, after, poses) = self.line_fit();
         // Whitened so that a deviation's mean square is 1 under white noise: `k` of them per pose
         // carry `k - 1` degrees of freedom before the lines and `k - 2` after.
         let (k, poses) = (SEGMENTS as f64, poses as f64);
         let (white_before, white_after) = (poses * k, poses * (k - 2.0) * k / (k - 1.0));
         let excess = before - white_before;
-        if excess > 0.0 { ((before - white_before) - (after - white_after)) / excess } else { 0.0 }
+        if !(excess > 0.0) {
+            return (0.0, f64::INFINITY);
+        }
+        let share = ((before - white_before) - (after - white_after)) / excess;
+        let var_lines = 2.0 * poses * (k / (k - 1.0)).powi(2);
+        let var_whole = 2.0 * poses * k * k / (k - 1.0);
+        (share, (var_lines + share * share * var_whole).sqrt() / excess)
     }
 
     /// Whether the holds' movement slows down within each hold: per pose a quadratic in time through
@@ -463,6 +487,32 @@ mod tests {
         let (smooth, walk) = (median(&mut smooth), median(&mut walk));
         assert!(smooth >= 0.95, "smooth drift: line share {smooth}");
         assert!(walk < 0.85, "random walk: line share {walk}");
+    }
+
+    #[test]
+    fn a_small_random_walk_is_not_taken_for_a_smooth_drift() {
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(8);
+        let (mut walks, mut drifts) = (0, 0);
+        for _ in 0..200 {
+            // A random walk moving the holds about 1.3 times white noise, over 20 holds: a line
+            // explains all of its movement now and then, never beyond its standard error.
+            let mut steps = Xoshiro256PlusPlus::seed_from_u64(rng.next_u64());
+            let mut level = 0.0;
+            let walk = channel(20, &mut rng, &mut |_, k| {
+                if k == 0 {
+                    level = 0.0;
+                }
+                level += 0.5 * <StandardNormal as Distribution<f64>>::sample(&StandardNormal, &mut steps);
+                level
+            });
+            walks += usize::from(walk.smoother_than_a_walk());
+            // A drift moving the holds about twice white noise, at a fresh rate in each hold.
+            let rates: Vec<f64> =
+                (0..20).map(|_| <StandardNormal as Distribution<f64>>::sample(&StandardNormal, &mut rng)).collect();
+            drifts += usize::from(channel(20, &mut rng, &mut |p, k| 1.2 * rates[p] * k as f64).smoother_than_a_walk());
+        }
+        assert!(walks <= 10, "{walks} of 200 random walks smoother than a walk");
+        assert!(drifts >= 180, "{drifts} of 200 drifts smoother than a walk");
     }
 
     #[test]
