@@ -46,9 +46,9 @@ fn ranking(e: &Evaluation) -> f64 {
 /// better of those and the noise models.
 fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation]) -> Option<(usize, &'e Evaluation)> {
     // The gap is in the pose means: when a family explains the withheld ones, a family with evidence
-    // in the holds only (a transient repeated in every hold) does not explain the gap.
-    // Among families with evidence in the holds only, one whose holds and pose means agree is named
-    // before one whose fit to the holds the pose means contradict.
+    // in the holds only (a transient repeated in every hold) does not explain the gap. Among the
+    // families with evidence in the holds only, one whose fit to the holds the pose means agree with
+    // is named before one they contradict.
     let explains_poses = |e: &Evaluation| e.candidate.applicable && e.candidate.heldout_gain >= MIN_GAIN;
     let holds_only = |e: &Evaluation| {
         e.predicts_values && e.candidate.applicable && !explains_poses(e) && e.candidate.within_gain >= MIN_GAIN
