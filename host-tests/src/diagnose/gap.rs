@@ -394,6 +394,7 @@ pub(crate) fn quantisation_step(table: &Table) -> V3 {
 }
 
 /// Step 1: the library's nominal fit and the simulated experiment.
+///
 /// Poses shorter than [`MIN_POSE_S`] are left out (counted in [`Measured::short_poses`]).
 pub(crate) fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Measured, Refusal> {
     measure_with(table, opts, MIN_POSE_S)

@@ -197,7 +197,7 @@ impl Within {
     /// [`Within::line_share`] and its standard error from the white noise in the deviations (the
     /// part the lines take, `k / (k - 1)` chi-square with one degree of freedom per pose, and the
     /// whole, with `k - 1`): a small movement beyond white noise leaves the share uncertain.
-    pub(crate) fn line_share_with_error(&self) -> (f64, f64) {
+    fn line_share_with_error(&self) -> (f64, f64) {
         let (before, after, poses) = self.line_fit();
         // Whitened so that a deviation's mean square is 1 under white noise: `k` of them per pose
         // carry `k - 1` degrees of freedom before the lines and `k - 2` after.
@@ -207,7 +207,7 @@ impl Within {
         if !(excess > 0.0) {
             return (0.0, f64::INFINITY);
         }
-        let share = ((before - white_before) - (after - white_after)) / excess;
+        let share = (excess - (after - white_after)) / excess;
         let var_lines = 2.0 * poses * (k / (k - 1.0)).powi(2);
         let var_whole = 2.0 * poses * k * k / (k - 1.0);
         (share, (var_lines + share * share * var_whole).sqrt() / excess)
@@ -330,20 +330,23 @@ impl Within {
         (count > 0).then(|| ((ss + PARAMETER_PENALTY * v.params as f64) / count as f64).sqrt())
     }
 
-    /// The variant with the smallest penalised held-out ratio, refitted on every pose.
-    pub(crate) fn best_of(&self, variants: Vec<WithinVariant>) -> Option<WithinFit> {
-        let mut best: Option<(f64, WithinVariant)> = None;
-        for v in variants {
+    /// The variant with the smallest penalised held-out ratio, refitted on every pose, and its index
+    /// in `variants`.
+    pub(crate) fn best_of(&self, variants: Vec<WithinVariant>) -> Option<(usize, WithinFit)> {
+        let mut best: Option<(f64, usize, WithinVariant)> = None;
+        for (i, v) in variants.into_iter().enumerate() {
             if let Some(r) = self.heldout_ratio(&v)
-                && best.as_ref().is_none_or(|(b, _)| r < *b)
+                && best.as_ref().is_none_or(|(b, _, _)| r < *b)
             {
-                best = Some((r, v));
+                best = Some((r, i, v));
             }
         }
-        let (heldout_ratio, v) = best?;
+        let (heldout_ratio, i, v) = best?;
         let train: Vec<usize> = (0..self.d.len()).collect();
         let coefficients = super::math::lstsq(&v.rows, &self.d, &train)?;
-        Some(WithinFit { heldout_ratio, params: v.params, detail: v.detail, coefficients, pose_extra: v.pose_extra })
+        let fit =
+            WithinFit { heldout_ratio, params: v.params, detail: v.detail, coefficients, pose_extra: v.pose_extra };
+        Some((i, fit))
     }
 }
 
@@ -495,7 +498,7 @@ mod tests {
         let (mut walks, mut drifts) = (0, 0);
         for _ in 0..200 {
             // A random walk moving the holds about 1.3 times white noise, over 20 holds: a line
-            // explains all of its movement now and then, never beyond its standard error.
+            // explains all of its movement now and then, rarely beyond two standard errors.
             let mut steps = Xoshiro256PlusPlus::seed_from_u64(rng.next_u64());
             let mut level = 0.0;
             let walk = channel(20, &mut rng, &mut |_, k| {

@@ -127,10 +127,8 @@ pub(crate) fn standard_evaluation<F: Family + ?Sized>(family: &F, ctx: &Context<
         })
         .filter(|(_, x)| !(*x > CHANNELS_DISAGREE))
         .unzip();
-    let details: Vec<String> = variants.iter().map(|v| v.detail.clone()).collect();
-    if let Some(fit) = w.best_of(variants) {
-        let disagreement = details.iter().position(|d| *d == fit.detail).map_or(f64::NAN, |i| disagreements[i]);
-        ctx.add_within(&mut e, w, fit, disagreement);
+    if let Some((i, fit)) = w.best_of(variants) {
+        ctx.add_within(&mut e, w, fit, disagreements[i]);
     }
     if let Some(fit) = stacked {
         joint::add(ctx, &mut e, fit);
