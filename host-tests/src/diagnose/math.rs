@@ -102,23 +102,54 @@ fn scaled_normals(rows: &[Vec<f64>], r: &[f64], train: &[usize]) -> (Vec<f64>, V
     (scale, a, b)
 }
 
+/// A least-squares fit on some poses, kept with its factor to price predictions elsewhere.
+struct TrainedFit {
+    x: Vec<f64>,
+    scale: Vec<f64>,
+    /// Lower Cholesky factor of the scaled normal matrix (plus its ridge).
+    l: Vec<Vec<f64>>,
+}
+
+impl TrainedFit {
+    /// Least squares: the `x` minimising `sum over train of (r_i + rows_i . x)^2` (columns scaled, a
+    /// tiny ridge keeps collinear columns finite).
+    fn new(rows: &[Vec<f64>], r: &[f64], train: &[usize]) -> Option<Self> {
+        let p = rows.first()?.len();
+        if train.len() < p {
+            return None;
+        }
+        let (scale, a, b) = scaled_normals(rows, r, train);
+        let trace: f64 = (0..p).map(|j| a[j][j]).sum();
+        let mut ridge = 1e-11 * trace / p as f64;
+        for _ in 0..6 {
+            if let Some(l) = cholesky(&a, ridge)
+                && let Some(y) = solve_factored(&l, &b)
+            {
+                let x = y.iter().zip(&scale).map(|(v, s)| v / s).collect();
+                return Some(Self { x, scale, l });
+            }
+            ridge = ridge * 100.0 + 1e-300;
+        }
+        None
+    }
+
+    /// The variance of the fit's prediction at `row` in units of one training pose's variance
+    /// (`row^T (X^T X)^-1 row`; the leave-one-out `h / (1 - h)` of a pose's own leverage `h`).
+    fn variance_factor(&self, row: &[f64]) -> f64 {
+        let p = self.l.len();
+        let mut y = vec![0.0; p];
+        for i in 0..p {
+            let v = row[i] / self.scale[i];
+            y[i] = (v - (0..i).map(|k| self.l[i][k] * y[k]).sum::<f64>()) / self.l[i][i];
+        }
+        y.iter().map(|v| v * v).sum()
+    }
+}
+
 /// Least squares: the `x` minimising `sum over train of (r_i + rows_i . x)^2` (columns scaled, a tiny
 /// ridge keeps collinear columns finite).
 pub(crate) fn lstsq(rows: &[Vec<f64>], r: &[f64], train: &[usize]) -> Option<Vec<f64>> {
-    let p = rows.first()?.len();
-    if train.len() < p {
-        return None;
-    }
-    let (scale, a, b) = scaled_normals(rows, r, train);
-    let trace: f64 = (0..p).map(|j| a[j][j]).sum();
-    let mut ridge = 1e-11 * trace / p as f64;
-    for _ in 0..6 {
-        if let Some(y) = cholesky_solve(&a, &b, ridge) {
-            return Some(y.iter().zip(&scale).map(|(v, s)| v / s).collect());
-        }
-        ridge = ridge * 100.0 + 1e-300;
-    }
-    None
+    TrainedFit::new(rows, r, train).map(|f| f.x)
 }
 
 /// `min |r + X c|` with the covariance of `c` per unit residual variance (`(X^T X)^-1`) and the
@@ -151,20 +182,21 @@ pub(crate) fn cholesky_solve(a: &[Vec<f64>], b: &[f64], ridge: f64) -> Option<Ve
 /// read, plus `ridge` on the diagonal), one factorisation.
 pub(crate) fn cholesky_solve_many(a: &[Vec<f64>], rhs: &[&[f64]], ridge: f64) -> Option<Vec<Vec<f64>>> {
     let l = cholesky(a, ridge)?;
+    rhs.iter().map(|b| solve_factored(&l, b)).collect()
+}
+
+/// `L L^T x = b` by forward and back substitution (`None` when not finite).
+fn solve_factored(l: &[Vec<f64>], b: &[f64]) -> Option<Vec<f64>> {
     let p = l.len();
-    rhs.iter()
-        .map(|b| {
-            let mut y = vec![0.0; p];
-            for i in 0..p {
-                y[i] = (b[i] - (0..i).map(|k| l[i][k] * y[k]).sum::<f64>()) / l[i][i];
-            }
-            let mut x = vec![0.0; p];
-            for i in (0..p).rev() {
-                x[i] = (y[i] - (i + 1..p).map(|k| l[k][i] * x[k]).sum::<f64>()) / l[i][i];
-            }
-            x.iter().all(|v| v.is_finite()).then_some(x)
-        })
-        .collect()
+    let mut y = vec![0.0; p];
+    for i in 0..p {
+        y[i] = (b[i] - (0..i).map(|k| l[i][k] * y[k]).sum::<f64>()) / l[i][i];
+    }
+    let mut x = vec![0.0; p];
+    for i in (0..p).rev() {
+        x[i] = (y[i] - (i + 1..p).map(|k| l[k][i] * x[k]).sum::<f64>()) / l[i][i];
+    }
+    x.iter().all(|v| v.is_finite()).then_some(x)
 }
 
 /// The lower Cholesky factor of `a + ridge I` (`None`: not positive definite).
@@ -203,6 +235,20 @@ pub(crate) fn cv_residuals(
     folds: usize,
     dropped: &[bool],
 ) -> Option<Vec<Option<f64>>> {
+    cv_residuals_predictable(rows, r, fold, folds, dropped, f64::INFINITY)
+}
+
+/// [`cv_residuals`], with `None` also for a withheld pose its fold's fit cannot predict: the
+/// prediction's variance exceeds `max_variance_factor` times one pose's (the other folds leave the
+/// pose's row almost outside what they determine, and the prediction is the ridge's choice).
+pub(crate) fn cv_residuals_predictable(
+    rows: &[Vec<f64>],
+    r: &[f64],
+    fold: &[usize],
+    folds: usize,
+    dropped: &[bool],
+    max_variance_factor: f64,
+) -> Option<Vec<Option<f64>>> {
     let n = r.len();
     let mut out = vec![None; n];
     for f in 0..folds {
@@ -210,9 +256,11 @@ pub(crate) fn cv_residuals(
         if !(0..n).any(|i| fold[i] == f) {
             continue;
         }
-        let x = lstsq(rows, r, &train)?;
+        let fit = TrainedFit::new(rows, r, &train)?;
         for i in (0..n).filter(|&i| fold[i] == f && !dropped[i]) {
-            out[i] = Some(predict(rows, r, &x, i));
+            if fit.variance_factor(&rows[i]) <= max_variance_factor {
+                out[i] = Some(predict(rows, r, &fit.x, i));
+            }
         }
     }
     Some(out)
@@ -232,4 +280,31 @@ pub(crate) fn sum_sq(v: &[Option<f64>]) -> (f64, usize) {
 /// The mean of segment means.
 pub(crate) fn mean_of(segs: &[V3]) -> V3 {
     std::array::from_fn(|a| segs.iter().map(|s| s[a]).sum::<f64>() / segs.len() as f64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_withheld_pose_its_fold_barely_touches_is_not_predicted() {
+        // Residual r = 2 x1 + 3 x2 - noise, the second column tiny on every pose but the last:
+        // without it the training poses leave its coefficient to the ridge.
+        let n = 12;
+        let rows: Vec<Vec<f64>> = (0..n)
+            .map(|i| vec![1.0 + i as f64 * 0.1, if i == n - 1 { 1.0 } else { 1e-7 * (i as f64 - 5.0) }])
+            .collect();
+        let noise = |i: usize| 0.01 * ((i * 7 % 5) as f64 - 2.0);
+        let r: Vec<f64> = rows.iter().enumerate().map(|(i, x)| -(2.0 * x[0] + 3.0 * x[1]) + noise(i)).collect();
+        let fold: Vec<usize> = (0..n).collect();
+        let dropped = vec![false; n];
+        let all = cv_residuals(&rows, &r, &fold, n, &dropped).unwrap();
+        assert!(all[n - 1].unwrap().abs() > 1.0, "the ridge's guess: {:?}", all[n - 1]);
+        let predictable = cv_residuals_predictable(&rows, &r, &fold, n, &dropped, 1e6).unwrap();
+        assert_eq!(predictable[n - 1], None);
+        for i in 0..n - 1 {
+            assert_eq!(predictable[i], all[i], "pose {i}");
+            assert!(all[i].unwrap().abs() < 0.1, "pose {i}: {:?}", all[i]);
+        }
+    }
 }
