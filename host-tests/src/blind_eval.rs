@@ -124,8 +124,9 @@ pub fn evaluate(spec: &LogSpec) -> Outcome {
 
 /// `calibrate`'s path (the reader's poses, the library's calibration) succeeds on `table`.
 fn calibrate_accepts(table: &crate::csvio::Table, seed: u64) -> bool {
-    let Ok(acc) = crate::csvio::accumulate(table, &crate::csvio::AccumulateOptions::default()) else { return false };
-    acc.poses.len() >= 6
+    let opts = crate::csvio::AccumulateOptions::default();
+    let Ok(acc) = crate::csvio::accumulate_holds(table, &opts, crate::calib::MIN_POSES) else { return false };
+    acc.poses.len() >= crate::calib::MIN_POSES
         && crate::calib::run(&acc.poses, &accelcal::calibrate::CalibrationConfig::DEFAULT, seed).is_ok()
 }
 

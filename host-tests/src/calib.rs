@@ -19,6 +19,10 @@ pub const POPULATION: usize = 40;
 /// Largest pose count the host handles in one calibration.
 pub const MAX_POSES: usize = 512;
 
+/// Fewest poses a calibration is tried on: the six faces determine six parameters (the coarse
+/// start); with fewer the pose finder falls back to shorter holds ([`crate::poses::accumulate_holds`]).
+pub const MIN_POSES: usize = 6;
+
 /// Range of ratios of `--gravity` to the gravity the readings measure that [`check_gravity`] accepts.
 pub const GRAVITY_RATIO_RANGE: (f64, f64) = (0.5, 2.0);
 

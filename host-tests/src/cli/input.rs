@@ -221,8 +221,8 @@ fn check_pose_count(file: &Path, found: usize, last_fitting_line: Option<usize>)
 
 /// The poses of a raw log; more than one calibration takes is an error (never a silent drop).
 pub(super) fn accumulate_all(table: &csvio::Table, file: &Path) -> Result<csvio::Accumulation, Failure> {
-    let acc =
-        csvio::accumulate(table, &AccumulateOptions::default()).map_err(|e| format!("{}: {e}", file.display()))?;
+    let acc = csvio::accumulate_holds(table, &AccumulateOptions::default(), calib::MIN_POSES)
+        .map_err(|e| format!("{}: {e}", file.display()))?;
     check_accumulation(acc, file)
 }
 

@@ -253,25 +253,29 @@ impl From<DiagnoseError> for Refusal {
     }
 }
 
-/// Shortest still interval used as a pose, seconds. A fragment of a hold cut short by motion (a
-/// knock, a hand still on the part) is still by the detector's test but its mean carries the
-/// motion's edges: on three clean logs of the third generator, one to three fragments of 0.16-0.32 s
-/// with residuals of 5-11 mg raised the gap ratio to 35-59 (1.3 or less without them).
-pub const MIN_POSE_S: f64 = 0.5;
+pub use crate::poses::MIN_POSE_S;
 
-/// The still intervals of the table (the CSV reader's accumulation) of at least `min_pose_s`, the
-/// number of shorter ones left out and the sample rate.
+/// The still intervals of the table of at least `min_pose_s` (the CSV reader's accumulation, the
+/// library rejecting shorter ones), the number of those the library alone would have kept, and the
+/// sample rate.
 fn read_poses(table: &Table, min_pose_s: f64) -> Result<(Vec<Pose>, Vec<PoseData>, usize, f64), Refusal> {
-    let acc =
-        csvio::accumulate(table, &AccumulateOptions::default()).map_err(|e| err(format!("{}: {e}", table.file)))?;
+    let accumulate = |min_pose_s: f64| {
+        csvio::accumulate(table, &AccumulateOptions { min_pose_s, ..AccumulateOptions::default() })
+            .map_err(|e| err(format!("{}: {e}", table.file)))
+    };
+    let acc = accumulate(min_pose_s)?;
     let rate = acc.sample_rate_hz.or_else(|| table.sample_rate_hz()).filter(|r| *r > 0.0).unwrap_or(1.0);
     // The fewest `calibrate` accepts: six faces fit six parameters (with no degree of freedom left, the
     // gap is not significant and the answer is `none`).
-    let min_poses = 6;
-    let long = |s: &PoseSpan| (s.last_row + 1 - s.first_row) as f64 >= min_pose_s * rate;
-    let kept: Vec<(Pose, &PoseSpan)> =
-        acc.poses.iter().zip(&acc.spans).filter(|(_, s)| long(s)).map(|(p, s)| (*p, s)).collect();
-    let short = acc.poses.len() - kept.len();
+    let min_poses = calib::MIN_POSES;
+    // The intervals the library would keep but the shortest pose leaves out.
+    let short = if min_pose_s > 0.0 {
+        let library = accumulate(0.0)?.rejections.too_short;
+        acc.rejections.too_short.saturating_sub(library) as usize
+    } else {
+        0
+    };
+    let kept: Vec<(Pose, &PoseSpan)> = acc.poses.iter().copied().zip(&acc.spans).collect();
     if kept.len() < min_poses {
         let longer = if min_pose_s > 0.0 { format!(" of at least {min_pose_s} s") } else { String::new() };
         let error = err(format!(

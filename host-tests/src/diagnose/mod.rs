@@ -283,10 +283,10 @@ fn moving_holds(table: &Table, opts: &DiagnoseOptions, still_poses: usize, rate:
 
 #[cfg(test)]
 mod tests {
-    use std::f64::consts::PI;
 
     use super::math::{Model, lstsq};
     use super::*;
+    use crate::sim::knocked::knocked_log;
     use accelcal::model::Params;
 
     #[test]
@@ -296,34 +296,6 @@ mod tests {
         let idx: Vec<usize> = (0..10).collect();
         let x = lstsq(&rows, &r, &idx).unwrap();
         assert!((x[0] - 2.0).abs() < 1e-9 && (x[1] - 0.5).abs() < 1e-9, "{x:?}");
-    }
-
-    /// A clean simulated log read at 800 Hz (the library keeps still intervals of 100 samples, 0.125 s),
-    /// with knocks in some holds: from `at` of the hold's length on, `pattern` repeated `times` times: 0.1 s
-    /// of shaking (0.3 g at 37 Hz), then `rest_s` resting pressed (a finger's force, 3 % along the
-    /// reading), then the hold goes on.
-    fn knocked_log(every: usize, at: f64, rest_s: f64, times: usize) -> Table {
-        use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
-        let mut scenario = random_scenario(EffectClass::None, 7);
-        scenario.sim.rate_hz = 800.0;
-        let mut table = to_table(&generate(&scenario), "knocked").unwrap();
-        let m = gap::measure_with(&table, &DiagnoseOptions::DEFAULT, 0.0).unwrap();
-        let amplitude = 0.3 * table.median_magnitude;
-        for p in m.poses.iter().step_by(every) {
-            let start = p.rows.start + (at * p.rows.len() as f64) as usize;
-            let period = 0.1 + rest_s;
-            let rows = start..(start + (period * times as f64 * m.rate) as usize).min(p.rows.end);
-            for row in rows {
-                let t = (row - start) as f64 / m.rate % period;
-                let sample = &mut table.samples[row];
-                *sample = if t < 0.1 {
-                    std::array::from_fn(|a| sample[a] + amplitude * (2.0 * PI * 37.0 * t + a as f64).sin())
-                } else {
-                    sample.map(|v| v * 1.03)
-                };
-            }
-        }
-        table
     }
 
     #[test]

@@ -114,6 +114,7 @@ pub fn stream_poses(
         skipped_repeats: run.totals.skipped_repeats,
         min_noise_variance: settings.config.min_noise_variance,
         noise_variance: run.noise_variance,
+        min_pose_samples: settings.config.min_pose_samples,
     };
     Ok(Streamed { table, rows: run.totals.rows, accumulation })
 }
@@ -153,8 +154,7 @@ impl Settings {
         let fed_fraction = if skip_repeats { 1.0 - repeats } else { 1.0 };
         let sample_rate_hz = opts.sample_rate_hz.or_else(|| table.sample_rate_hz()).map(|r| r * fed_fraction);
         let block = opts.block_samples.unwrap_or_else(|| poses::choose_block_samples(sample_rate_hz));
-        let mut config = opts.config;
-        config.min_noise_variance = config.min_noise_variance.max(poses::quantisation_variance(&table.samples));
+        let config = poses::detector_config(opts, &table.samples, sample_rate_hz);
         let gap_s = table.times_s.as_ref().and_then(|t| {
             let span = t.last()? - t.first()?;
             (t.len() >= 2 && span > 0.0).then(|| opts.gap_factor * span / (t.len() - 1) as f64)

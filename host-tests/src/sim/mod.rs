@@ -75,6 +75,8 @@
 pub mod config;
 pub mod effects;
 pub mod i2c;
+#[cfg(test)]
+pub(crate) mod knocked;
 mod model;
 mod motion;
 pub mod plan;
