@@ -9,7 +9,7 @@ use accelcal_host::paper::format_sig;
 use accelcal_host::report::html;
 use serde::Serialize;
 
-use super::input::{InputArgs, Loaded, MethodArg, load_and_calibrate};
+use super::input::{InputArgs, Loaded, MethodArg, StillLeftOut, load_and_calibrate};
 use super::{Failure, print_json, progress_bar};
 
 #[derive(clap::Args)]
@@ -41,6 +41,7 @@ struct CalibrateDocument<'a> {
     gravity: f32,
     units: String,
     rows_dropped: RowsDropped,
+    still_intervals_left_out: Option<StillLeftOut>,
     units_header: Option<UnitsHeader<'a>>,
     poses: Vec<PoseRow>,
     params: Params,
@@ -135,7 +136,7 @@ fn bench(input: &InputArgs, method: Method, seed: u64, runs: usize) -> Result<Be
 }
 
 fn document<'a>(input: &InputArgs, loaded: &'a Loaded, bench: Option<Bench>) -> CalibrateDocument<'a> {
-    let Loaded { table, host, config, stale_repeats, .. } = loaded;
+    let Loaded { table, host, config, stale_repeats, left_out, .. } = loaded;
     let cal = host.calibration;
     let v = &cal.verdict;
     CalibrateDocument {
@@ -144,6 +145,7 @@ fn document<'a>(input: &InputArgs, loaded: &'a Loaded, bench: Option<Bench>) -> 
         gravity: config.gravity,
         units: table.units.to_string(),
         rows_dropped: RowsDropped::new(&table.dropped, *stale_repeats),
+        still_intervals_left_out: *left_out,
         units_header: table.units_header.as_ref().map(|h| UnitsHeader {
             column: &h.column,
             unit: h.label,
@@ -185,7 +187,7 @@ fn pose_rows(loaded: &Loaded) -> Vec<PoseRow> {
 }
 
 fn print_text(input: &InputArgs, loaded: &Loaded, bench: Option<Bench>) {
-    let Loaded { table, poses, host, config, stale_repeats, rows, .. } = loaded;
+    let Loaded { table, poses, host, config, stale_repeats, left_out, rows, .. } = loaded;
     let cal = host.calibration;
     let v = &cal.verdict;
     if let Some(Bench { runs, min, median, max }) = bench {
@@ -214,6 +216,9 @@ fn print_text(input: &InputArgs, loaded: &Loaded, bench: Option<Bench>) {
         outln!("warning: {warnings}");
     }
     if let Some(line) = calib::rows_dropped_line(&table.dropped, *stale_repeats) {
+        outln!("{line}");
+    }
+    if let Some(line) = left_out.as_ref().and_then(StillLeftOut::line) {
         outln!("{line}");
     }
 }

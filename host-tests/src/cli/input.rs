@@ -121,6 +121,8 @@ pub(super) struct Loaded {
     pub(super) config: CalibrationConfig,
     /// Rows the pose detection skipped as stale repeats.
     pub(super) stale_repeats: usize,
+    /// Still intervals of a raw log left out of the poses.
+    pub(super) left_out: Option<StillLeftOut>,
     /// Data rows read (a large file's `table` holds only its first rows).
     pub(super) rows: usize,
 }
@@ -141,7 +143,39 @@ fn read_input(input: &InputArgs) -> Result<(csvio::Table, usize, Option<csvio::A
 }
 
 /// Poses found: the poses, their spans in a raw log, the stale repeats skipped.
-type FoundPoses = (Vec<Pose>, Option<Vec<csvio::PoseSpan>>, usize);
+type FoundPoses = (Vec<Pose>, Option<Vec<csvio::PoseSpan>>, usize, Option<StillLeftOut>);
+
+/// Still intervals the pose finder left out of a raw log, and the shortest pose it kept.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub(super) struct StillLeftOut {
+    /// Shorter than the shortest pose.
+    pub(super) too_short: u32,
+    /// Moving more than noise allows.
+    pub(super) moving: u32,
+    /// A reading at the sensor's full scale.
+    pub(super) saturated: u32,
+    /// The shortest pose kept, seconds (with a known sample rate).
+    pub(super) shortest_pose_s: Option<f64>,
+}
+
+impl StillLeftOut {
+    fn of(acc: &csvio::Accumulation) -> Self {
+        let r = acc.rejections;
+        let shortest_pose_s = acc.sample_rate_hz.map(|rate| f64::from(acc.min_pose_samples) / rate);
+        Self { too_short: r.too_short, moving: r.moving, saturated: r.saturated, shortest_pose_s }
+    }
+
+    /// The text line, when any interval was left out.
+    pub(super) fn line(&self) -> Option<String> {
+        let shortest = self.shortest_pose_s.map_or(String::new(), |s| format!(" (shorter than {s:.2} s)"));
+        (self.too_short + self.moving + self.saturated > 0).then(|| {
+            format!(
+                "still intervals left out: {} too short{shortest}, {} moving, {} saturated",
+                self.too_short, self.moving, self.saturated
+            )
+        })
+    }
+}
 
 /// The poses of the table: the means, the label runs, or the still intervals found (streamed or
 /// not), with their spans and the stale repeats skipped.
@@ -151,16 +185,17 @@ fn find_poses(
     streamed: Option<csvio::Accumulation>,
 ) -> Result<FoundPoses, Failure> {
     if input.means {
-        return Ok((csvio::to_poses_from_means(table), None, 0));
+        return Ok((csvio::to_poses_from_means(table), None, 0, None));
     }
     if let Some(column) = &input.pose_column {
-        return Ok((accelcal_host::labelled::poses_by_label(table, &input.file, column)?, None, 0));
+        return Ok((accelcal_host::labelled::poses_by_label(table, &input.file, column)?, None, 0, None));
     }
     let acc = match streamed {
         Some(acc) => check_accumulation(acc, &input.file)?,
         None => accumulate_all(table, &input.file)?,
     };
-    Ok((acc.poses, Some(acc.spans), acc.skipped_repeats))
+    let left_out = StillLeftOut::of(&acc);
+    Ok((acc.poses, Some(acc.spans), acc.skipped_repeats, Some(left_out)))
 }
 
 /// The whole `calibrate` pipeline: read, find poses (or take the means), calibrate, leave-one-out.
@@ -174,7 +209,7 @@ pub(super) fn load_and_calibrate(input: &InputArgs, method: Method, seed: u64, w
             eprintln!("accelcal: warning: {w}");
         }
     }
-    let (poses, spans, stale_repeats) = find_poses(input, &table, streamed)?;
+    let (poses, spans, stale_repeats, left_out) = find_poses(input, &table, streamed)?;
     check_pose_count(&input.file, poses.len(), None)?;
     // Six faces fit biases and scales (the non-orthogonality held); nine directions or more fit all nine.
     if poses.len() < 6 {
@@ -188,7 +223,7 @@ pub(super) fn load_and_calibrate(input: &InputArgs, method: Method, seed: u64, w
     }
     let config = calibration_config(input, table.units, method);
     let host = calib::run_with_loo(&poses, &config, seed).map_err(|e| format!("{}: {e}", input.file.display()))?;
-    Ok(Loaded { table, poses, spans, host, config, stale_repeats, rows })
+    Ok(Loaded { table, poses, spans, host, config, stale_repeats, left_out, rows })
 }
 
 /// The configuration for the file's units: "before" is the readings taken at face value in their
