@@ -52,6 +52,9 @@ fn main() {
                     r.candidates.iter().filter(|c| c.applicable).max_by(|a, b| a.evidence().total_cmp(&b.evidence()));
                 let effect = if r.explained {
                     format!("**{}**", r.verdict)
+                } else if r.gap.significant && r.verdict != "unexplained" {
+                    // Named from the holds alone: the pose means do not follow it (no shrink).
+                    format!("{} (in the holds: {})", r.verdict, r.located.as_deref().unwrap_or("-"))
                 } else if r.gap.significant {
                     format!(
                         "unexplained: {} (best family {})",
