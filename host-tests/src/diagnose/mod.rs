@@ -165,7 +165,7 @@ pub fn diagnose(table: &Table, opts: &DiagnoseOptions) -> Result<Diagnosis, Diag
     }
     let m = match measure(table, opts)? {
         Step1::Measured(m) => m,
-        Step1::HoldsMove(d) => return Ok(d),
+        Step1::Answered(d) => return Ok(d),
     };
     // Too few poses to withhold some (a short log that calibrate still accepts): the gap is measured and
     // answered (`none` or `unexplained`), with no catalogue candidate tested.
@@ -217,8 +217,9 @@ pub fn diagnose(table: &Table, opts: &DiagnoseOptions) -> Result<Diagnosis, Diag
 enum Step1 {
     /// The gap measured.
     Measured(gap::Measured),
-    /// Too few still poses to calibrate, and the holds move: the answer ([`moving_holds`]).
-    HoldsMove(Diagnosis),
+    /// Too few still poses to calibrate, and the holds move, or poses that calibrate but determine
+    /// no gap: the answer ([`moving_holds`], [`undetermined`]).
+    Answered(Diagnosis),
 }
 
 /// Step 1 on the still intervals of at least [`MIN_POSE_S`]; when those cannot be calibrated, the
@@ -229,15 +230,29 @@ fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Step1, DiagnoseError
         Ok(m) => return Ok(Step1::Measured(m)),
         Err(gap::Refusal::NotCalibrated { still_poses, rate, .. }) => {
             if let Some(d) = moving_holds(table, opts, still_poses, rate) {
-                return Ok(Step1::HoldsMove(d));
+                return Ok(Step1::Answered(d));
             }
         }
-        Err(gap::Refusal::Other(_)) => {}
+        Err(gap::Refusal::Undetermined { .. } | gap::Refusal::Other(_)) => {}
     }
     match gap::measure_with(table, opts, 0.0) {
         Ok(m) => Ok(Step1::Measured(m)),
+        Err(gap::Refusal::Undetermined { still_poses, error }) => {
+            Ok(Step1::Answered(undetermined(table, opts, still_poses, &error)))
+        }
         Err(gap::Refusal::NotCalibrated { error, .. } | gap::Refusal::Other(error)) => Err(error),
     }
+}
+
+/// The answer for a log whose still poses calibrate (as `calibrate` does) but determine no gap: no
+/// simulated repeat of the experiment refits (fragments of holds, too few directions). `unexplained`
+/// with the reason, no gap measured: the log is answered, and no family is named.
+fn undetermined(table: &Table, opts: &DiagnoseOptions, still_poses: usize, error: &DiagnoseError) -> Diagnosis {
+    let reason = format!(
+        "{still_poses} still poses calibrate but do not determine the model ({}): no gap measured",
+        error.0.rsplit(": ").next().unwrap_or_default()
+    );
+    Diagnosis { verdict: "unexplained", explained: false, ..unmeasured(table, opts, Vec::new(), reason) }
 }
 
 /// The answer for a log whose still poses cannot be calibrated but whose holds mostly move
@@ -257,7 +272,14 @@ fn moving_holds(table: &Table, opts: &DiagnoseOptions, still_poses: usize, rate:
         within_disagreement: f64::NAN,
         variants: Vec::new(),
     };
-    Some(Diagnosis {
+    let reason = format!("{} still poses: too few to calibrate", still_poses);
+    Some(Diagnosis { verdict: "motion", explained: true, ..unmeasured(table, opts, vec![candidate], reason) })
+}
+
+/// A diagnosis without a measured gap: `candidates` and why no gap was measured (verdict
+/// `unexplained` until the caller names one).
+fn unmeasured(table: &Table, opts: &DiagnoseOptions, candidates: Vec<Candidate>, reason: String) -> Diagnosis {
+    Diagnosis {
         file: table.file.clone(),
         samples: table.samples.len(),
         units: table.units.to_string(),
@@ -270,15 +292,15 @@ fn moving_holds(table: &Table, opts: &DiagnoseOptions, still_poses: usize, rate:
         poses: Vec::new(),
         short_poses: 0,
         allan: Allan { rest_s: 0.0, tau_s: Vec::new(), adev_mg: Vec::new(), white_mg: Vec::new() },
-        candidates: vec![candidate],
+        candidates,
         heldout_ratio_nominal: f64::NAN,
         probes: Vec::new(),
-        verdict: "motion",
+        verdict: "unexplained",
         located: None,
-        explained: true,
+        explained: false,
         shrink: f64::NAN,
-        not_calibrated: Some(format!("{} still poses: too few to calibrate", still_poses)),
-    })
+        not_calibrated: Some(reason),
+    }
 }
 
 #[cfg(test)]
@@ -313,6 +335,22 @@ mod tests {
         assert!(!d.gap.significant && d.verdict == "none", "{}", d.to_text());
         assert_eq!(d.short_poses, full.short_poses);
         assert!(d.to_text().contains("shorter than 0.5 s left out"), "{}", d.to_text());
+    }
+
+    #[test]
+    fn still_poses_that_calibrate_but_determine_no_gap_are_answered() {
+        use crate::blindgen::{Family, generate, random_spec};
+        use crate::csvio::{ReadOptions, read_csv_str};
+        // A Gauss-Markov bias of 13 mg (tau 9 s) at 500 Hz, a held-out log of the first generator: the
+        // detector finds ten fragments of 0.26 s still, calibrate fits them (a FAIL verdict, six
+        // parameters undetermined), and no simulated repeat of that experiment refits.
+        let log = generate(&random_spec(Family::ColoredNoise, 1_008_112));
+        let table = read_csv_str("markov.csv", &log.to_csv_string(), &ReadOptions::default()).unwrap();
+        let opts = DiagnoseOptions::DEFAULT;
+        assert!(matches!(gap::measure_with(&table, &opts, 0.0), Err(gap::Refusal::Undetermined { .. })));
+        let d = diagnose(&table, &opts).unwrap();
+        assert_eq!(d.verdict, "unexplained", "{}", d.to_text());
+        assert!(!d.explained && d.not_calibrated.as_deref().is_some_and(|r| r.contains("no gap measured")));
     }
 
     #[test]
