@@ -212,12 +212,13 @@ pub(super) fn load_and_calibrate(input: &InputArgs, method: Method, seed: u64, w
     let (poses, spans, stale_repeats, left_out) = find_poses(input, &table, streamed)?;
     check_pose_count(&input.file, poses.len(), None)?;
     // Six faces fit biases and scales (the non-orthogonality held); nine directions or more fit all nine.
-    if poses.len() < 6 {
+    if poses.len() < calib::MIN_POSES {
         return Err(format!(
-            "{}: {} static poses found, at least 6 are needed ({PARAM_COUNT} or more in different directions fit \
+            "{}: {} static poses found, at least {} are needed ({PARAM_COUNT} or more in different directions fit \
              all {PARAM_COUNT} parameters; hold the sensor still in more orientations)",
             input.file.display(),
-            poses.len()
+            poses.len(),
+            calib::MIN_POSES
         )
         .into());
     }
