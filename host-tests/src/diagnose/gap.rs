@@ -248,8 +248,6 @@ pub(crate) enum Refusal {
     Undetermined {
         /// Still poses calibrated.
         still_poses: usize,
-        /// The message.
-        error: DiagnoseError,
     },
     /// Any other reason.
     Other(DiagnoseError),
@@ -431,8 +429,7 @@ pub(crate) fn measure_with(table: &Table, opts: &DiagnoseOptions, min_pose_s: f6
     let white_noise = Noise { white, walk: [0.0; 3], floor: quantisation };
     let sims = simulate_gap(&model, &directions, &poses, &white_noise, gravity, opts.repeats, opts.seed);
     if sims.len() < 2 {
-        let error = err(format!("{}: the simulated experiment could not be calibrated", table.file));
-        return Err(Refusal::Undetermined { still_poses: lib_poses.len(), error });
+        return Err(Refusal::Undetermined { still_poses: lib_poses.len() });
     }
     let gap = gap_before(rms(&r) / gravity * 1000.0, &sims);
     Ok(Measured {

@@ -237,9 +237,7 @@ fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Step1, DiagnoseError
     }
     match gap::measure_with(table, opts, 0.0) {
         Ok(m) => Ok(Step1::Measured(m)),
-        Err(gap::Refusal::Undetermined { still_poses, error }) => {
-            Ok(Step1::Answered(undetermined(table, opts, still_poses, &error)))
-        }
+        Err(gap::Refusal::Undetermined { still_poses }) => Ok(Step1::Answered(undetermined(table, opts, still_poses))),
         Err(gap::Refusal::NotCalibrated { error, .. } | gap::Refusal::Other(error)) => Err(error),
     }
 }
@@ -247,10 +245,10 @@ fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Step1, DiagnoseError
 /// The answer for a log whose still poses calibrate (as `calibrate` does) but determine no gap: no
 /// simulated repeat of the experiment refits (fragments of holds, too few directions). `unexplained`
 /// with the reason, no gap measured: the log is answered, and no family is named.
-fn undetermined(table: &Table, opts: &DiagnoseOptions, still_poses: usize, error: &DiagnoseError) -> Diagnosis {
+fn undetermined(table: &Table, opts: &DiagnoseOptions, still_poses: usize) -> Diagnosis {
     let reason = format!(
-        "{still_poses} still poses calibrate but do not determine the model ({}): no gap measured",
-        error.0.rsplit(": ").next().unwrap_or_default()
+        "{still_poses} still poses calibrate but do not determine the model (no simulated repeat of the experiment \
+         refits): no gap measured"
     );
     Diagnosis { verdict: "unexplained", explained: false, ..unmeasured(table, opts, Vec::new(), reason) }
 }
@@ -305,7 +303,6 @@ fn unmeasured(table: &Table, opts: &DiagnoseOptions, candidates: Vec<Candidate>,
 
 #[cfg(test)]
 mod tests {
-
     use super::math::{Model, lstsq};
     use super::*;
     use crate::sim::knocked::knocked_log;
