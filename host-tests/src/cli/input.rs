@@ -137,7 +137,8 @@ fn read_input(input: &InputArgs) -> Result<(csvio::Table, usize, Option<csvio::A
         let rows = table.samples.len();
         return Ok((table, rows, None));
     }
-    let streamed = csvstream::stream_poses(&input.file, &opts, &AccumulateOptions::default(), csvstream::PREFIX_BYTES)
+    let acc_opts = AccumulateOptions::default();
+    let streamed = csvstream::stream_holds(&input.file, &opts, &acc_opts, csvstream::PREFIX_BYTES, calib::MIN_POSES)
         .map_err(|e| e.to_string())?;
     Ok((streamed.table, streamed.rows, Some(streamed.accumulation)))
 }

@@ -68,6 +68,26 @@ pub fn is_large(path: &Path) -> bool {
     std::fs::metadata(path).is_ok_and(|m| m.len() >= STREAM_MIN_BYTES)
 }
 
+/// [`stream_poses`], and again with the library's shortest pose alone (`min_pose_s` 0) when the
+/// poses of at least `acc_opts.min_pose_s` number fewer than `min_poses`, as
+/// [`poses::accumulate_holds`] does in memory.
+///
+/// # Errors
+/// As [`stream_poses`].
+pub fn stream_holds(
+    path: &Path,
+    opts: &ReadOptions,
+    acc_opts: &AccumulateOptions,
+    prefix_bytes: usize,
+    min_poses: usize,
+) -> Result<Streamed, StreamError> {
+    let streamed = stream_poses(path, opts, acc_opts, prefix_bytes)?;
+    if streamed.accumulation.poses.len() >= min_poses || acc_opts.min_pose_s <= 0.0 {
+        return Ok(streamed);
+    }
+    stream_poses(path, opts, &AccumulateOptions { min_pose_s: 0.0, ..*acc_opts }, prefix_bytes)
+}
+
 /// Finds the poses of a raw log without holding its rows (see the [module docs](self)), reading the
 /// first `prefix_bytes` (normally [`PREFIX_BYTES`]) into memory.
 ///
@@ -516,6 +536,28 @@ mod tests {
             }
         }
         text
+    }
+
+    #[test]
+    fn a_streamed_log_of_short_holds_only_falls_back_as_in_memory() {
+        // Every hold knocked from its start: still intervals of 0.4 s only at 800 Hz.
+        let knocked = crate::sim::knocked::knocked_log(1, 0.0, 0.4, 1000);
+        let times = knocked.times_s.as_ref().unwrap();
+        let mut text = String::from("t,ax,ay,az\n");
+        for (t, s) in times.iter().zip(&knocked.samples) {
+            text += &format!("{t:.6},{:.7},{:.7},{:.7}\n", s[0], s[1], s[2]);
+        }
+        let path = temp_file("short-holds.csv", &text);
+        let opts = ReadOptions::default();
+        let table = super::super::read_csv(&path, &opts).unwrap();
+        let min_poses = crate::calib::MIN_POSES;
+        let in_memory = poses::accumulate_holds(&table, &AccumulateOptions::default(), min_poses).unwrap();
+        let held = stream_poses(&path, &opts, &AccumulateOptions::default(), 20_000).unwrap();
+        assert!(held.accumulation.poses.len() < min_poses, "{} poses of 0.5 s", held.accumulation.poses.len());
+        let streamed = stream_holds(&path, &opts, &AccumulateOptions::default(), 20_000, min_poses).unwrap();
+        assert!(in_memory.poses.len() >= min_poses, "{} poses", in_memory.poses.len());
+        assert_eq!(streamed.accumulation.poses, in_memory.poses);
+        assert_eq!(streamed.accumulation.min_pose_samples, in_memory.min_pose_samples);
     }
 
     #[test]
