@@ -12,7 +12,6 @@ use super::report::Gap;
 use super::{DiagnoseError, DiagnoseOptions, SEGMENTS, SIGNIFICANT_RATIO, SIGNIFICANT_Z, err};
 use crate::calib;
 use crate::csvio::{self, AccumulateOptions, Table};
-use crate::poses::PoseSpan;
 use crate::sim::random::standard_normal;
 
 /// One pose's statistics from its own samples (input unit).
@@ -281,18 +280,15 @@ fn read_poses(table: &Table, min_pose_s: f64) -> Result<(Vec<Pose>, Vec<PoseData
     } else {
         0
     };
-    let kept: Vec<(Pose, &PoseSpan)> = acc.poses.iter().copied().zip(&acc.spans).collect();
-    if kept.len() < min_poses {
+    let found = acc.poses.len();
+    if found < min_poses {
         let longer = if min_pose_s > 0.0 { format!(" of at least {min_pose_s} s") } else { String::new() };
-        let error = err(format!(
-            "{}: {} static poses{longer} found, diagnose needs at least {min_poses}",
-            table.file,
-            kept.len()
-        ));
-        return Err(Refusal::NotCalibrated { still_poses: kept.len(), rate, error });
+        let error =
+            err(format!("{}: {found} static poses{longer} found, diagnose needs at least {min_poses}", table.file));
+        return Err(Refusal::NotCalibrated { still_poses: found, rate, error });
     }
-    let poses = kept.iter().map(|(_, s)| pose_data(table, s.first_row, s.last_row + 1, rate)).collect();
-    Ok((kept.into_iter().map(|(p, _)| p).collect(), poses, short, rate))
+    let poses = acc.spans.iter().map(|s| pose_data(table, s.first_row, s.last_row + 1, rate)).collect();
+    Ok((acc.poses, poses, short, rate))
 }
 
 /// White-equivalent variance per axis: the median within-pose variance (quantisation included: a

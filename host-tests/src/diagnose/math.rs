@@ -136,13 +136,8 @@ impl TrainedFit {
     /// The variance of the fit's prediction at `row` in units of one training pose's variance
     /// (`row^T (X^T X)^-1 row`; the leave-one-out `h / (1 - h)` of a pose's own leverage `h`).
     fn variance_factor(&self, row: &[f64]) -> f64 {
-        let p = self.l.len();
-        let mut y = vec![0.0; p];
-        for i in 0..p {
-            let v = row[i] / self.scale[i];
-            y[i] = (v - (0..i).map(|k| self.l[i][k] * y[k]).sum::<f64>()) / self.l[i][i];
-        }
-        y.iter().map(|v| v * v).sum()
+        let scaled: Vec<f64> = row.iter().zip(&self.scale).map(|(v, s)| v / s).collect();
+        forward_substitute(&self.l, &scaled).iter().map(|v| v * v).sum()
     }
 }
 
@@ -188,15 +183,21 @@ pub(crate) fn cholesky_solve_many(a: &[Vec<f64>], rhs: &[&[f64]], ridge: f64) ->
 /// `L L^T x = b` by forward and back substitution (`None` when not finite).
 fn solve_factored(l: &[Vec<f64>], b: &[f64]) -> Option<Vec<f64>> {
     let p = l.len();
-    let mut y = vec![0.0; p];
-    for i in 0..p {
-        y[i] = (b[i] - (0..i).map(|k| l[i][k] * y[k]).sum::<f64>()) / l[i][i];
-    }
+    let y = forward_substitute(l, b);
     let mut x = vec![0.0; p];
     for i in (0..p).rev() {
         x[i] = (y[i] - (i + 1..p).map(|k| l[k][i] * x[k]).sum::<f64>()) / l[i][i];
     }
     x.iter().all(|v| v.is_finite()).then_some(x)
+}
+
+/// `L y = b` for a lower-triangular `L`.
+fn forward_substitute(l: &[Vec<f64>], b: &[f64]) -> Vec<f64> {
+    let mut y = vec![0.0; l.len()];
+    for i in 0..l.len() {
+        y[i] = (b[i] - (0..i).map(|k| l[i][k] * y[k]).sum::<f64>()) / l[i][i];
+    }
+    y
 }
 
 /// The lower Cholesky factor of `a + ridge I` (`None`: not positive definite).

@@ -5,9 +5,10 @@
 //!    cut up by motion, are counted and left out; all are used when too few full holds remain and
 //!    the holds do not move). The library fits the nominal 9-parameter model ([`calib::run`],
 //!    TAGA+LM). The same experiment (the fitted orientations, sample counts, durations and the
-//!    white noise measured within the poses) is simulated `repeats` times and refitted by the library (LM); the gap is
-//!    the real modulus RMSE over the mean simulated RMSE (1 = no gap), significant when the real RMSE
-//!    is at least [`SIGNIFICANT_Z`] simulated standard deviations above the simulated mean.
+//!    white noise measured within the poses) is simulated `repeats` times and refitted by the
+//!    library (LM); the gap is the real modulus RMSE over the mean simulated RMSE (1 = no gap),
+//!    significant when the real RMSE is at least [`SIGNIFICANT_Z`] simulated standard deviations
+//!    above the simulated mean.
 //! 2. **Where it lies.** Residual per pose and per orientation, against time and temperature, within
 //!    each pose (first third against last third), and in the noise (Allan deviation of the longest
 //!    rest against white noise).
@@ -223,8 +224,8 @@ enum Step1 {
 }
 
 /// Step 1 on the still intervals of at least [`MIN_POSE_S`]; when those cannot be calibrated, the
-/// answer of holds that move, else step 1 on every still interval (a log that calibrate accepts is
-/// answered).
+/// answer of holds that move, else step 1 on every still interval; poses that calibrate but determine
+/// no gap are answered [`undetermined`] (a log that calibrate accepts is answered).
 fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Step1, DiagnoseError> {
     match gap::measure(table, opts) {
         Ok(m) => return Ok(Step1::Measured(m)),
@@ -250,7 +251,7 @@ fn undetermined(table: &Table, opts: &DiagnoseOptions, still_poses: usize) -> Di
         "{still_poses} still poses calibrate but do not determine the model (no simulated repeat of the experiment \
          refits): no gap measured"
     );
-    Diagnosis { verdict: "unexplained", explained: false, ..unmeasured(table, opts, Vec::new(), reason) }
+    unmeasured(table, opts, Vec::new(), reason)
 }
 
 /// The answer for a log whose still poses cannot be calibrated but whose holds mostly move

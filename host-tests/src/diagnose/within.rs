@@ -33,7 +33,7 @@ const MIN_RATIO: f64 = 1.15;
 
 /// The share of a random walk's movement within the holds a line per hold explains: about 0.7
 /// for a Brownian path's six segment means pooled over 12 holds ([`Within::line_share`]).
-pub(crate) const BROWNIAN_LINE_SHARE: f64 = 0.7;
+const BROWNIAN_LINE_SHARE: f64 = 0.7;
 
 /// One parametrisation on both channels: whitened within-pose columns (per row) and the pose-level
 /// columns of the same parameters (per pose).
