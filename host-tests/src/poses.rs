@@ -190,22 +190,51 @@ pub fn quantisation_variance(samples: &[[f64; 3]]) -> f32 {
     total
 }
 
-/// The library's detector settings for `samples` fed at `sample_rate_hz`: `opts.config` with its
-/// noise floor raised to the readings' quantisation and its shortest pose to `opts.min_pose_s`.
-pub(crate) fn detector_config(
-    opts: &AccumulateOptions,
-    samples: &[[f64; 3]],
-    sample_rate_hz: Option<f64>,
-) -> AccumulatorConfig {
-    let mut config = opts.config;
-    config.min_noise_variance = config.min_noise_variance.max(quantisation_variance(samples));
-    if let Some(rate) = sample_rate_hz {
-        let samples = (opts.min_pose_s * rate).ceil();
-        if samples.is_finite() && samples > f64::from(config.min_pose_samples) {
-            config.min_pose_samples = samples.min(f64::from(u32::MAX)) as u32;
+/// The detector's settings for a table, as [`accumulate`] derives them (the streaming reader from
+/// its first rows).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Detector {
+    /// The library's settings: the noise floor raised to the readings' quantisation, the shortest
+    /// pose to `min_pose_s` of samples.
+    pub(crate) config: AccumulatorConfig,
+    /// Block length, samples.
+    pub(crate) block: usize,
+    /// Sample rate of the rows fed (after skipping stale repeats), Hz.
+    pub(crate) sample_rate_hz: Option<f64>,
+    /// Rows repeating the previous one are skipped.
+    pub(crate) skip_repeats: bool,
+    /// A time step longer than this interrupts the stream, s.
+    pub(crate) gap_s: Option<f64>,
+}
+
+impl Detector {
+    pub(crate) fn derive(table: &Table, opts: &AccumulateOptions) -> Self {
+        let repeats = repeat_fraction(&table.samples);
+        let skip_repeats = opts.skip_repeats.unwrap_or_else(|| repeats_look_stale(&table.samples));
+        let fed_fraction = if skip_repeats { 1.0 - repeats } else { 1.0 };
+        let sample_rate_hz = opts.sample_rate_hz.or_else(|| table.sample_rate_hz()).map(|r| r * fed_fraction);
+        let block = opts.block_samples.unwrap_or_else(|| choose_block_samples(sample_rate_hz));
+        let mut config = opts.config;
+        config.min_noise_variance = config.min_noise_variance.max(quantisation_variance(&table.samples));
+        if let Some(rate) = sample_rate_hz {
+            let samples = (opts.min_pose_s * rate).ceil();
+            if samples.is_finite() && samples > f64::from(config.min_pose_samples) {
+                config.min_pose_samples = samples.min(f64::from(u32::MAX)) as u32;
+            }
         }
+        let gap_s = table.times_s.as_ref().and_then(|t| {
+            let span = t.last()? - t.first()?;
+            (t.len() >= 2 && span > 0.0).then(|| opts.gap_factor * span / (t.len() - 1) as f64)
+        });
+        Self { config, block, sample_rate_hz, skip_repeats, gap_s }
     }
-    config
+}
+
+/// The options to find the poses again with when `found` poses of at least `opts.min_pose_s` number
+/// fewer than `min_poses`: the library's shortest pose alone (a log of short holds only is still
+/// calibrated from them); `None` otherwise.
+pub(crate) fn fallback(opts: &AccumulateOptions, found: usize, min_poses: usize) -> Option<AccumulateOptions> {
+    (found < min_poses && opts.min_pose_s > 0.0).then_some(AccumulateOptions { min_pose_s: 0.0, ..*opts })
 }
 
 /// [`accumulate`], and again with the library's shortest pose alone (`min_pose_s` 0) when the
@@ -220,10 +249,10 @@ pub fn accumulate_holds(
     min_poses: usize,
 ) -> Result<Accumulation, AccumulatorError> {
     let acc = accumulate(table, opts)?;
-    if acc.poses.len() >= min_poses || opts.min_pose_s <= 0.0 {
-        return Ok(acc);
+    match fallback(opts, acc.poses.len(), min_poses) {
+        Some(library) => accumulate(table, &library),
+        None => Ok(acc),
     }
-    accumulate(table, &AccumulateOptions { min_pose_s: 0.0, ..*opts })
 }
 
 /// Feeds every row of `table` (as `f32`, in the table's units) through the library's
@@ -235,14 +264,9 @@ pub fn accumulate_holds(
 /// [`BLOCK_SIZES`]. A full pose buffer is not an error: the poses beyond [`MAX_POSES`] are counted in
 /// [`Accumulation::dropped_full`].
 pub fn accumulate(table: &Table, opts: &AccumulateOptions) -> Result<Accumulation, AccumulatorError> {
-    let repeats = repeat_fraction(&table.samples);
-    let skip_repeats = opts.skip_repeats.unwrap_or_else(|| repeats_look_stale(&table.samples));
-    let fed_fraction = if skip_repeats { 1.0 - repeats } else { 1.0 };
-    let sample_rate_hz = opts.sample_rate_hz.or_else(|| table.sample_rate_hz()).map(|r| r * fed_fraction);
-    let block = opts.block_samples.unwrap_or_else(|| choose_block_samples(sample_rate_hz));
-    let config = detector_config(opts, &table.samples, sample_rate_hz);
-    let run = Run { table, config, gap_factor: opts.gap_factor, skip_repeats };
-    let mut out = match block {
+    let detector = Detector::derive(table, opts);
+    let run = Run { table, detector };
+    let mut out = match detector.block {
         8 => run.go::<8>()?,
         16 => run.go::<16>()?,
         32 => run.go::<32>()?,
@@ -250,22 +274,20 @@ pub fn accumulate(table: &Table, opts: &AccumulateOptions) -> Result<Accumulatio
         128 => run.go::<128>()?,
         _ => return Err(AccumulatorError::InvalidConfig),
     };
-    out.sample_rate_hz = sample_rate_hz;
-    out.min_noise_variance = config.min_noise_variance;
+    out.sample_rate_hz = detector.sample_rate_hz;
     Ok(out)
 }
 
 struct Run<'a> {
     table: &'a Table,
-    config: AccumulatorConfig,
-    gap_factor: f64,
-    skip_repeats: bool,
+    detector: Detector,
 }
 
 impl Run<'_> {
     fn go<const BLOCK: usize>(&self) -> Result<Accumulation, AccumulatorError> {
         let table = self.table;
-        let mut acc = Accumulator::<f32, MAX_POSES, BLOCK>::new(self.config)?;
+        let Detector { config, skip_repeats, gap_s, .. } = self.detector;
+        let mut acc = Accumulator::<f32, MAX_POSES, BLOCK>::new(config)?;
         let mut dropped_full = 0u32;
         let mut interruptions = 0u32;
         let mut handle = |r: Result<_, AccumulatorError>| match r {
@@ -276,10 +298,6 @@ impl Run<'_> {
             }
             Err(e) => Err(e),
         };
-        let gap_s = table.times_s.as_ref().and_then(|t| {
-            let span = t.last()? - t.first()?;
-            (t.len() >= 2 && span > 0.0).then(|| self.gap_factor * span / (t.len() - 1) as f64)
-        });
         // Table row of each sample pushed (pose indices count pushed samples).
         let mut row_of_pushed: Vec<usize> = Vec::with_capacity(table.samples.len());
         for (i, s) in table.samples.iter().enumerate() {
@@ -290,7 +308,7 @@ impl Run<'_> {
                 interruptions += 1;
                 handle(acc.interrupt())?;
             }
-            if self.skip_repeats && i > 0 && table.samples[i - 1] == *s {
+            if skip_repeats && i > 0 && table.samples[i - 1] == *s {
                 continue;
             }
             row_of_pushed.push(i);
@@ -324,9 +342,9 @@ impl Run<'_> {
             block_samples: BLOCK,
             sample_rate_hz: None,
             skipped_repeats: table.samples.len() - row_of_pushed.len(),
-            min_noise_variance: self.config.min_noise_variance,
+            min_noise_variance: config.min_noise_variance,
             noise_variance: acc.noise_variance(),
-            min_pose_samples: self.config.min_pose_samples,
+            min_pose_samples: config.min_pose_samples,
         })
     }
 }

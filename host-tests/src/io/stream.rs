@@ -11,13 +11,13 @@ use std::fmt;
 use std::io::{BufReader, Read};
 use std::path::Path;
 
-use accelcal::accumulator::{Accumulator, AccumulatorConfig, AccumulatorError, Pose};
+use accelcal::accumulator::{Accumulator, AccumulatorError, Pose};
 use csv::ByteRecord;
 
 use super::records::Records;
 use super::rows::{Outcome, RowReader};
 use super::{Columns, CsvError, MAX_SKIPPED_FRACTION, ReadOptions, Table, all_by_index};
-use crate::poses::{self, AccumulateOptions, Accumulation, MAX_POSES, PoseSpan};
+use crate::poses::{self, AccumulateOptions, Accumulation, Detector, MAX_POSES, PoseSpan};
 
 /// Files at least this large are read by [`stream_poses`] in `calibrate` (smaller ones in memory).
 pub const STREAM_MIN_BYTES: u64 = 64 << 20;
@@ -82,10 +82,10 @@ pub fn stream_holds(
     min_poses: usize,
 ) -> Result<Streamed, StreamError> {
     let streamed = stream_poses(path, opts, acc_opts, prefix_bytes)?;
-    if streamed.accumulation.poses.len() >= min_poses || acc_opts.min_pose_s <= 0.0 {
-        return Ok(streamed);
+    match poses::fallback(acc_opts, streamed.accumulation.poses.len(), min_poses) {
+        Some(library) => stream_poses(path, opts, &library, prefix_bytes),
+        None => Ok(streamed),
     }
-    stream_poses(path, opts, &AccumulateOptions { min_pose_s: 0.0, ..*acc_opts }, prefix_bytes)
 }
 
 /// Finds the poses of a raw log without holding its rows (see the [module docs](self)), reading the
@@ -107,7 +107,7 @@ pub fn stream_poses(
     let (mut table, columns) = super::read_csv_bytes_with_columns(&file, &prefix.bytes, opts)?;
     let (prefix_len, first_line, after_cr) = (prefix.bytes.len(), prefix.lines + 1, prefix.bytes.ends_with(b"\r"));
     drop(prefix);
-    let settings = Settings::from_prefix(&table, acc_opts);
+    let settings = Detector::derive(&table, acc_opts);
     let source = Source { path, file: &file, opts, columns: &columns, prefix_len, first_line, after_cr };
     let run = match settings.block {
         8 => source.detect::<8>(&table, &settings)?,
@@ -158,31 +158,6 @@ fn read_prefix(path: &Path, file: &str, prefix_bytes: usize) -> Result<Prefix, C
     Ok(Prefix { bytes, lines })
 }
 
-/// The detector's settings, as [`poses::accumulate`] derives them, from the prefix.
-struct Settings {
-    config: AccumulatorConfig,
-    block: usize,
-    sample_rate_hz: Option<f64>,
-    skip_repeats: bool,
-    gap_s: Option<f64>,
-}
-
-impl Settings {
-    fn from_prefix(table: &Table, opts: &AccumulateOptions) -> Self {
-        let repeats = poses::repeat_fraction(&table.samples);
-        let skip_repeats = opts.skip_repeats.unwrap_or_else(|| poses::repeats_look_stale(&table.samples));
-        let fed_fraction = if skip_repeats { 1.0 - repeats } else { 1.0 };
-        let sample_rate_hz = opts.sample_rate_hz.or_else(|| table.sample_rate_hz()).map(|r| r * fed_fraction);
-        let block = opts.block_samples.unwrap_or_else(|| poses::choose_block_samples(sample_rate_hz));
-        let config = poses::detector_config(opts, &table.samples, sample_rate_hz);
-        let gap_s = table.times_s.as_ref().and_then(|t| {
-            let span = t.last()? - t.first()?;
-            (t.len() >= 2 && span > 0.0).then(|| opts.gap_factor * span / (t.len() - 1) as f64)
-        });
-        Self { config, block, sample_rate_hz, skip_repeats, gap_s }
-    }
-}
-
 /// Counts over the whole file.
 #[derive(Debug, Clone, Copy, Default)]
 struct Totals {
@@ -205,7 +180,7 @@ struct Feed {
 
 /// The state deciding what to do with each row, as `Run::go` in `poses` does.
 struct Feeder<'a> {
-    settings: &'a Settings,
+    settings: &'a Detector,
     previous: Option<(Option<f64>, [f64; 3])>,
 }
 
@@ -253,7 +228,7 @@ struct Source<'a> {
 
 impl Source<'_> {
     /// Pass 1: every row into the accumulator.
-    fn detect<const BLOCK: usize>(&self, table: &Table, settings: &Settings) -> Result<DetectRun, StreamError> {
+    fn detect<const BLOCK: usize>(&self, table: &Table, settings: &Detector) -> Result<DetectRun, StreamError> {
         let file = self.file.to_string();
         let mut acc = Accumulator::<f32, MAX_POSES, BLOCK>::new(settings.config)
             .map_err(|e| StreamError::Accumulator(file.clone(), e))?;
@@ -284,7 +259,7 @@ impl Source<'_> {
     }
 
     /// Pass 2: the line, time and row of each pose's first and last sample.
-    fn spans(&self, table: &Table, settings: &Settings, poses: &[Pose]) -> Result<Vec<PoseSpan>, StreamError> {
+    fn spans(&self, table: &Table, settings: &Detector, poses: &[Pose]) -> Result<Vec<PoseSpan>, StreamError> {
         let mut wanted: Vec<usize> = poses
             .iter()
             .flat_map(|p| {
