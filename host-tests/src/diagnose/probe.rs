@@ -79,13 +79,83 @@ fn cross_axis(ctx: &Context<'_>) -> Vec<Variant> {
     vec![Variant { extra, params: 3, detail: "cross-axis terms (products of the other two axes)".into() }]
 }
 
-/// A bias per axis following the sign of the change from the previous pose.
+/// Smallest move between poses that sets a hysteresis state: a change of an axis' reading of this
+/// many g, or a rotation of `asin` of it. A pose split in two without a turn keeps its state.
+const HYSTERESIS_MOVE: f64 = 0.002;
+
+/// A hysteresis state per pose from the step from the previous pose: `sign(step(i))` when the step
+/// is at least [`HYSTERESIS_MOVE`] in size; after a smaller step, the previous pose's state if the
+/// state `persists`, else 0 (a mount that only takes an offset while it is moved).
+fn hysteresis_states(n: usize, persists: bool, step: impl Fn(usize) -> f64) -> Vec<f64> {
+    let mut state = 0.0;
+    (0..n)
+        .map(|i| {
+            let s = if i == 0 { 0.0 } else { step(i) };
+            if s.abs() >= HYSTERESIS_MOVE {
+                state = s.signum();
+            } else if !persists {
+                state = 0.0;
+            }
+            state
+        })
+        .collect()
+}
+
+/// Hysteresis per axis: a bias on each axis with the sign of that axis' last change of reading.
 fn rotation_direction(ctx: &Context<'_>) -> Vec<Variant> {
-    let (cal, dirs) = (ctx.calibrated(), ctx.directions());
-    let extra = (0..cal.len())
-        .map(|i| (0..3).map(|a| if i == 0 { 0.0 } else { dirs[i][a] * (cal[i][a] - cal[i - 1][a]).signum() }).collect())
-        .collect();
-    vec![Variant { extra, params: 3, detail: "a bias following the direction of the last rotation".into() }]
+    let (cal, dirs, g) = (ctx.calibrated(), ctx.directions(), ctx.m.gravity);
+    [
+        (true, "a bias per axis following the sign of its last change"),
+        (false, "a bias per axis following the sign of its change from the previous pose"),
+    ]
+    .into_iter()
+    .map(|(persists, detail)| {
+        let states: Vec<Vec<f64>> =
+            (0..3).map(|a| hysteresis_states(cal.len(), persists, |i| (cal[i][a] - cal[i - 1][a]) / g)).collect();
+        let extra = (0..cal.len()).map(|i| (0..3).map(|a| dirs[i][a] * states[a][i]).collect()).collect();
+        Variant { extra, params: 3, detail: detail.into() }
+    })
+    .collect()
+}
+
+/// Turn axes searched by [`rotation_sense`]: points of a Fibonacci half-sphere (a turn axis and its
+/// opposite give the same probe).
+const TURN_AXES: usize = 32;
+
+/// Evidence by which the sense-of-turn probe must exceed a family to veto it: searched over many
+/// turn axes, on a log of 16 poses it explained a drift ramp and a square non-linearity by chance
+/// 0.14-0.23 better than their families did (development sets).
+const TURN_OVER_FAMILY: f64 = 0.25;
+
+/// Hysteresis by the sense of the last turn: a bias vector whose sign follows the sense of the
+/// rotation from the previous pose about one body axis `e` (`sign((u_prev x u) . e)`), for each of
+/// [`TURN_AXES`] axes; the search is charged as the periodic one's.
+fn rotation_sense(ctx: &Context<'_>) -> Vec<Variant> {
+    let dirs = ctx.directions();
+    let params = 3 + (TURN_AXES as f64).ln().ceil() as usize;
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    (0..TURN_AXES)
+        .map(|k| {
+            let z = 1.0 - (k as f64 + 0.5) / TURN_AXES as f64;
+            let (s, c) = (golden * k as f64).sin_cos();
+            let r = (1.0 - z * z).sqrt();
+            let e = [r * c, r * s, z];
+            let states = hysteresis_states(dirs.len(), true, |i| {
+                let (p, u) = (dirs[i - 1], dirs[i]);
+                let cross = [p[1] * u[2] - p[2] * u[1], p[2] * u[0] - p[0] * u[2], p[0] * u[1] - p[1] * u[0]];
+                cross.iter().zip(e).map(|(x, y)| x * y).sum()
+            });
+            let extra = dirs.iter().zip(&states).map(|(u, s)| u.iter().map(|x| x * s).collect()).collect();
+            Variant {
+                extra,
+                params,
+                detail: format!(
+                    "a bias following the sense of the last turn about ({:.2}, {:.2}, {:.2})",
+                    e[0], e[1], e[2]
+                ),
+            }
+        })
+        .collect()
 }
 
 /// A probe's parametrisations for the data. Only those that leave every fold enough training poses
@@ -96,11 +166,12 @@ type MakeVariants = fn(&Context<'_>) -> Vec<Variant>;
 /// Every probe with its held-out gain.
 pub(crate) fn run(ctx: &Context<'_>) -> Vec<Probe> {
     // Each with the evidence by which it must exceed a family to veto it.
-    let probes: [(&'static str, MakeVariants, f64); 4] = [
+    let probes: [(&'static str, MakeVariants, f64); 5] = [
         ("periodic", periodic, 0.0),
         ("bias-step", bias_step, STEP_OVER_DRIFT),
         ("cross-axis", cross_axis, 0.0),
         ("rotation-direction", rotation_direction, 0.0),
+        ("rotation-sense", rotation_sense, TURN_OVER_FAMILY),
     ];
     probes
         .iter()
@@ -110,4 +181,19 @@ pub(crate) fn run(ctx: &Context<'_>) -> Vec<Probe> {
             Some(Probe { shape, heldout_gain: ctx.gain(f.score_ratio), detail: f.detail, veto_margin })
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_hysteresis_state_is_set_by_a_move_and_kept_or_cleared_by_a_still_step() {
+        // A turn, a pose split in two by the pose finder (a step of noise), a turn back, a step
+        // just under the smallest move, a turn.
+        let steps = [f64::NAN, 0.5, 1e-4, -0.3, 0.5 * HYSTERESIS_MOVE, 0.2];
+        let states = |persists| hysteresis_states(steps.len(), persists, |i| steps[i]);
+        assert_eq!(states(true), [0.0, 1.0, 1.0, -1.0, -1.0, 1.0]);
+        assert_eq!(states(false), [0.0, 1.0, 0.0, -1.0, 0.0, 1.0]);
+    }
 }
