@@ -98,16 +98,6 @@ fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation]) -> Option<(usize
     })
 }
 
-/// The holds' wander names colored noise only if the noise model measured in them does not leave
-/// the withheld poses' scatter more than [`NOISE_LEAVES_AT_MOST`] times its prediction: a wander
-/// of the holds that predicts a fraction of the pose means' scatter has not explained the gap.
-fn noise_refuted(effect: &str, evaluations: &[Evaluation]) -> bool {
-    effect == "colored-noise"
-        && evaluations.iter().any(|e| {
-            e.candidate.effect == effect && e.candidate.applicable && e.candidate.heldout_ratio > NOISE_LEAVES_AT_MOST
-        })
-}
-
 /// Picks the verdict among the evaluated families and measures the shrink. `from_holds` is the
 /// holds' own answer ([`super::family::from_holds`]: settling, drift or colored noise, and why): when no family
 /// explains the withheld poses and no probe does either, it names the effect (with no shrink: the
@@ -141,7 +131,6 @@ pub(crate) fn decide(
         }
         None => {
             let unchanged = m.r.iter().map(|v| Some(*v)).collect();
-            let from_holds = from_holds.filter(|(effect, _)| !noise_refuted(effect, evaluations));
             match from_holds.filter(|_| significant && best_probe.is_none()) {
                 Some((effect, why)) => (effect, unchanged, Some(why)),
                 None => (if significant { "unexplained" } else { "none" }, unchanged, None),
