@@ -42,7 +42,7 @@ const CHANNELS_AGREE: f64 = 5.0;
 /// however much it lowered the ratio. Bias random walks and Gauss-Markov noise correctly named on
 /// the development sets left at most 3.6; hysteresis and non-linearities named colored noise left
 /// 5.5-9.5.
-const NOISE_LEAVES_AT_MOST: f64 = 4.0;
+pub(crate) const NOISE_LEAVES_AT_MOST: f64 = 4.0;
 
 /// The evidence a family is ranked by among its kind.
 fn ranking(e: &Evaluation) -> f64 {

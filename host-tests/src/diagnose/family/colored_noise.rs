@@ -8,6 +8,7 @@ use crate::diagnose::gap::PoseData;
 use crate::diagnose::gap::{Noise, expected_cv_ms, quantisation_step, residual_noise_draws, row_time, simulate_gap};
 use crate::diagnose::math::cv_residuals;
 use crate::diagnose::math::{V3, lstsq, mean, predict};
+use crate::diagnose::verdict::NOISE_LEAVES_AT_MOST;
 use crate::diagnose::within::white_from_differences;
 use crate::diagnose::{CV_NOISE_DRAWS, PARAMETER_PENALTY, WALK_EXCESS};
 
@@ -17,11 +18,12 @@ const EVEN_HOLDS: f64 = 0.25;
 /// The holds wander: their movement is significant, every hold moves about alike (a noise, not a
 /// few disturbed holds) and, asked after settling and drift, it neither slows nor follows a line
 /// per hold. A walk or flicker wanders through every hold; the withheld pose means show it only as
-/// spread. The description, or `None`.
+/// spread, and no more than a random walk at the holds' level spreads them
+/// ([`walk_accounts_for_poses`]). The description, or `None`.
 pub(crate) fn wandering_holds(ctx: &Context<'_>) -> Option<String> {
     let within = ctx.within.as_ref().filter(|w| w.significant)?;
     let evenness = within.evenness();
-    (evenness >= EVEN_HOLDS).then(|| {
+    (evenness >= EVEN_HOLDS && walk_accounts_for_poses(ctx)).then(|| {
         format!(
             "the holds wander alike ({:.1}x white, evenness {evenness:.2}), rougher than a line per hold ({:.0} % explained)",
             within.nominal_ratio,
@@ -31,6 +33,32 @@ pub(crate) fn wandering_holds(ctx: &Context<'_>) -> Option<String> {
 }
 
 pub(crate) struct ColoredNoise;
+
+/// A random walk (the same variance per second on every axis) at the level that moves the holds'
+/// segment means as much as they move beyond white noise (the method of moments on the within-pose
+/// channel); `None` when the holds do not move beyond white noise.
+fn walk_from_holds(ctx: &Context<'_>) -> Option<V3> {
+    let within = ctx.within.as_ref()?;
+    let (observed, _) = within.observed_excess();
+    let level = observed / within.predicted_excess(ctx.m, [1.0; 3], [0.0; 3]);
+    (level > 0.0 && level.is_finite()).then_some([level; 3])
+}
+
+/// The holds' wander can account for the withheld pose means' scatter: a random walk at the holds'
+/// level ([`walk_from_holds`]) leaves it at most [`NOISE_LEAVES_AT_MOST`] times its prediction.
+/// Of the noises that wander through the holds (flicker, Gauss-Markov, a walk), a walk spreads
+/// the pose means the most for the same movement within the holds, so a scatter beyond it is not
+/// the holds' noise (a hysteresis 73 times the noise, on holds moving 1.2 times white). Logs too
+/// short to withhold poses are not judged, nor a scatter concentrated in one pose beyond any draw
+/// of the walk (an end pose of a walk's path, extrapolated by its fold's fit, can be).
+fn walk_accounts_for_poses(ctx: &Context<'_>) -> bool {
+    if !ctx.pose_level {
+        return true;
+    }
+    walk_from_holds(ctx).is_some_and(|walk| {
+        ColoredNoise.heldout_ratio(ctx, walk, [0.0; 3]).is_none_or(|ratio| ratio <= NOISE_LEAVES_AT_MOST)
+    })
+}
 
 /// Share of the squared held-out residual in the largest pose (0 without residuals).
 fn largest_share(cv: &[Option<f64>]) -> f64 {
