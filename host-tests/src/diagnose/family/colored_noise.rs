@@ -357,3 +357,53 @@ fn fit_walk_and_floor(points: &[(f64, f64, f64)]) -> (f64, f64) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use rand_core::SeedableRng;
+    use rand_xoshiro::Xoshiro256PlusPlus;
+
+    use super::{Context, walk_accounts_for_poses};
+    use crate::csvio::{self, AccumulateOptions, Table};
+    use crate::diagnose::{DiagnoseOptions, gap};
+    use crate::sim::random::{random_sign, standard_normal};
+    use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
+
+    /// A clean simulated log with a bias random walk of `walk_mg` mg per sqrt(s) on every axis, and
+    /// an offset of its own from each hold on (`offset_mg` along each axis, random signs): the
+    /// holds wander with the walk, the pose means spread with the offsets.
+    fn walk_log(seed: u64, walk_mg: f64, offset_mg: f64) -> Table {
+        let mut table = to_table(&generate(&random_scenario(EffectClass::None, seed)), "walk").unwrap();
+        let acc = csvio::accumulate(&table, &AccumulateOptions::default()).unwrap();
+        let (mg, dt) = (table.median_magnitude / 1000.0, 1.0 / acc.sample_rate_hz.unwrap());
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+        let mut walk = [0.0; 3];
+        for sample in &mut table.samples {
+            walk = walk.map(|w| w + walk_mg * mg * dt.sqrt() * standard_normal(&mut rng));
+            (0..3).for_each(|a| sample[a] += walk[a]);
+        }
+        for (k, span) in acc.spans.iter().enumerate() {
+            let offset: [f64; 3] = std::array::from_fn(|_| random_sign(&mut rng) * offset_mg * mg);
+            let end = acc.spans.get(k + 1).map_or(table.samples.len(), |next| next.first_row);
+            for sample in &mut table.samples[span.first_row..end] {
+                (0..3).for_each(|a| sample[a] += offset[a]);
+            }
+        }
+        table
+    }
+
+    #[test]
+    fn a_walk_at_the_holds_level_accounts_for_the_pose_means_only_if_they_spread_no_more() {
+        let opts = DiagnoseOptions::DEFAULT;
+        for seed in [3, 5] {
+            let accounts = |offset_mg| {
+                let table = walk_log(seed, 0.05, offset_mg);
+                let m = gap::measure(&table, &opts).unwrap();
+                let ctx = Context::new(&table, &m, &opts).unwrap();
+                walk_accounts_for_poses(&ctx)
+            };
+            assert!(accounts(0.0), "seed {seed}: the walk alone");
+            assert!(!accounts(10.0), "seed {seed}: offsets of 10 mg per hold");
+        }
+    }
+}
