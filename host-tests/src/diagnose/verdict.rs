@@ -44,6 +44,10 @@ const CHANNELS_AGREE: f64 = 5.0;
 /// 5.5-9.5.
 pub(crate) const NOISE_LEAVES_AT_MOST: f64 = 4.0;
 
+/// Within-pose gain up to which a drift does not explain the holds' movement (the drift fitted to a
+/// walk's pose means: -0.28 to 0.05 on the development sets; to a smooth wander's, mostly above 0.1).
+const DRIFT_MISSES_HOLDS: f64 = 0.1;
+
 /// The evidence a family is ranked by among its kind.
 fn ranking(e: &Evaluation) -> f64 {
     let cause = if e.candidate.effect == "temperature" { CAUSE_OVER_PROXY } else { 0.0 };
@@ -52,7 +56,7 @@ fn ranking(e: &Evaluation) -> f64 {
 
 /// The strongest family: one that predicts the withheld values if it explains enough, else the
 /// better of those and the noise models.
-fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation]) -> Option<(usize, &'e Evaluation)> {
+fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation], holds_walk: bool) -> Option<(usize, &'e Evaluation)> {
     // The gap is in the pose means: when a family explains the withheld ones, a family with evidence
     // in the holds only (a transient repeated in every hold) does not explain the gap. Among the
     // families with evidence in the holds only, one whose fit to the holds the pose means agree with
@@ -88,6 +92,16 @@ fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation]) -> Option<(usize
         half_left && strongest(true).is_some_and(|(_, n)| n.candidate.evidence() >= e + NOISE_FAR_AHEAD)
     };
     let value = strongest(false).filter(|(_, e)| e.candidate.evidence() >= MIN_GAIN);
+    // A drift fitted to the pose means of a walk: the holds wander as a noise whose walk accounts
+    // for the withheld scatter ([`super::family::colored_noise::walk_accounts_closely`]), and the
+    // drift does not explain the holds' movement.
+    let walk_not_drift =
+        |v: &Evaluation| holds_walk && v.candidate.effect == "drift" && !(v.candidate.within_gain > DRIFT_MISSES_HOLDS);
+    if let (Some((_, v)), Some(noise)) = (value, strongest(true))
+        && walk_not_drift(v)
+    {
+        return Some(noise);
+    }
     value.filter(|(_, e)| !noise_far_ahead(e)).or_else(|| {
         let noise = strongest(true);
         let other = strongest(false);
@@ -107,13 +121,14 @@ pub(crate) fn decide(
     evaluations: &[Evaluation],
     probes: &[Probe],
     from_holds: Option<(&'static str, String)>,
+    holds_walk: bool,
 ) -> Decision {
     let significant = m.gap.significant;
     let best_probe = probes
         .iter()
         .filter(|p| p.heldout_gain.is_finite() && p.heldout_gain >= MIN_GAIN)
         .max_by(|a, b| a.heldout_gain.total_cmp(&b.heldout_gain));
-    let best = best_family(m, evaluations);
+    let best = best_family(m, evaluations, holds_walk);
     // A family wins only if no out-of-catalogue probe explains the withheld poses better.
     let beaten = |gain: f64| probes.iter().any(|p| p.heldout_gain > gain + p.veto_margin);
     let winner = best
@@ -184,7 +199,7 @@ mod tests {
         let table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "sim").unwrap();
         let mut m = gap::measure(&table, &DiagnoseOptions::DEFAULT).unwrap();
         m.gap.significant = true;
-        let verdict = |e: &[Evaluation]| decide(&m, e, &[], None).verdict;
+        let verdict = |e: &[Evaluation]| decide(&m, e, &[], None, false).verdict;
         // A development log with hysteresis: a walk on one axis took the held-out ratio from 55.7 to
         // 8.8 (gain 0.46); no catalogue family explained it.
         let hysteresis = [on_pose_means("colored-noise", 8.8, 0.46, false), on_pose_means("drift", 55.8, 0.0, true)];
@@ -195,10 +210,29 @@ mod tests {
     }
 
     #[test]
+    fn a_drift_of_the_pose_means_is_a_walk_when_the_holds_walk_at_its_level_and_the_drift_misses_them() {
+        let table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "sim").unwrap();
+        let mut m = gap::measure(&table, &DiagnoseOptions::DEFAULT).unwrap();
+        (m.gap.significant, m.gap.ratio_before) = (true, 6.81);
+        let verdict = |within_gain: f64, holds_walk: bool| {
+            // A development log's walk: a drift spline gained 0.34 on the withheld poses, nothing
+            // in the holds (-0.05); the walk at the holds' level left the withheld scatter at 0.82.
+            let mut drift = on_pose_means("drift", 3.4, 0.34, true);
+            (drift.candidate.within_gain, drift.candidate.ratio_after) = (within_gain, 2.45);
+            let walk = on_pose_means("colored-noise", 0.82, 0.79, false);
+            decide(&m, &[drift, walk], &[], None, holds_walk).verdict
+        };
+        assert_eq!(verdict(-0.05, true), "colored-noise");
+        // The holds do not walk at the level of the pose means, or the drift explains them too.
+        assert_eq!(verdict(-0.05, false), "drift");
+        assert_eq!(verdict(0.3, true), "drift");
+    }
+
+    #[test]
     fn of_two_families_seen_in_the_holds_only_the_one_the_pose_means_agree_with_is_named() {
         let table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "sim").unwrap();
         let m = gap::measure(&table, &DiagnoseOptions::DEFAULT).unwrap();
-        let named = |e: &[Evaluation]| best_family(&m, e).map(|(_, e)| e.candidate.effect);
+        let named = |e: &[Evaluation]| best_family(&m, e, false).map(|(_, e)| e.candidate.effect);
         // A hand's warmth leaving the board after each set-down (a development log): a drift line
         // fits the holds a little better, but implies a drift of the pose means 17 chi-square per
         // coefficient away from what they show; the transient from each hold's start agrees (3.1).

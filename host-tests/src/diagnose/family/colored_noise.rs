@@ -44,6 +44,13 @@ fn walk_from_holds(ctx: &Context<'_>) -> Option<V3> {
     (level > 0.0 && level.is_finite()).then_some([level; 3])
 }
 
+/// Held-out ratio of the withheld pose means under a random walk at the holds' level
+/// ([`walk_from_holds`]); `None` when the holds do not move, or the data put far more of their
+/// scatter in one pose than any draw of the walk does.
+fn holds_walk_ratio(ctx: &Context<'_>) -> Option<f64> {
+    walk_from_holds(ctx).and_then(|walk| ColoredNoise.heldout_ratio(ctx, walk, [0.0; 3]))
+}
+
 /// The holds' wander can account for the withheld pose means' scatter: a random walk at the holds'
 /// level ([`walk_from_holds`]) leaves it at most [`NOISE_LEAVES_AT_MOST`] times its prediction.
 /// Of the noises that wander through the holds (flicker, Gauss-Markov, a walk), a walk spreads
@@ -52,12 +59,20 @@ fn walk_from_holds(ctx: &Context<'_>) -> Option<V3> {
 /// short to withhold poses are not judged, nor a scatter concentrated in one pose beyond any draw
 /// of the walk (an end pose of a walk's path, extrapolated by its fold's fit, can be).
 fn walk_accounts_for_poses(ctx: &Context<'_>) -> bool {
-    if !ctx.pose_level {
-        return true;
-    }
-    walk_from_holds(ctx).is_some_and(|walk| {
-        ColoredNoise.heldout_ratio(ctx, walk, [0.0; 3]).is_none_or(|ratio| ratio <= NOISE_LEAVES_AT_MOST)
-    })
+    !ctx.pose_level
+        || walk_from_holds(ctx).is_some() && holds_walk_ratio(ctx).is_none_or(|ratio| ratio <= NOISE_LEAVES_AT_MOST)
+}
+
+/// Held-out ratio up to which a random walk at the holds' level accounts closely for the withheld
+/// poses' scatter: 0.8-1.1 on the development sets' walks; a smooth wander, whose pose means move
+/// more than its holds imply, left 1.4-3.3.
+const WALK_ACCOUNTS: f64 = 1.2;
+
+/// The holds wander as a noise ([`wandering_holds`]) and a random walk at their level spreads the
+/// withheld pose means as much as they are spread, within [`WALK_ACCOUNTS`]: a time-varying fit
+/// of the pose means then follows the walk's path.
+pub(crate) fn walk_accounts_closely(ctx: &Context<'_>) -> bool {
+    wandering_holds(ctx).is_some() && holds_walk_ratio(ctx).is_some_and(|ratio| ratio <= WALK_ACCOUNTS)
 }
 
 /// Share of the squared held-out residual in the largest pose (0 without residuals).
@@ -189,7 +204,11 @@ impl ColoredNoise {
     /// The noise model measured in the holds, judged on the withheld poses' scatter.
     pub(crate) fn noise_model(&self, ctx: &Context<'_>) -> Evaluation {
         let m = ctx.m;
-        let estimates = hold_estimates(ctx);
+        let mut estimates = hold_estimates(ctx);
+        // The walk whose level the holds' wander measures, when it accounts for the pose means.
+        if walk_accounts_closely(ctx) {
+            estimates.extend(walk_from_holds(ctx).map(|walk| (walk, [0.0; 3], true)));
+        }
         let best = self.best_noise(ctx, &estimates);
         let (walk, floor, _) = estimates[0];
         let applicable = best.is_some();

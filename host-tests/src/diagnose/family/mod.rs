@@ -3,7 +3,7 @@
 //! cross-validation) or, for noise, a noise model; the best parametrisation by the penalised
 //! held-out ratio represents the family. Adding a family is adding a file and a line in [`all`].
 
-mod colored_noise;
+pub(crate) mod colored_noise;
 mod drift;
 mod joint;
 mod motion;
