@@ -92,11 +92,13 @@ fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation], holds_walk: bool
         half_left && strongest(true).is_some_and(|(_, n)| n.candidate.evidence() >= e + NOISE_FAR_AHEAD)
     };
     let value = strongest(false).filter(|(_, e)| e.candidate.evidence() >= MIN_GAIN);
-    // A drift fitted to the pose means of a walk: the holds wander as a noise whose walk accounts
-    // for the withheld scatter ([`super::family::colored_noise::walk_accounts_closely`]), and the
-    // drift does not explain the holds' movement.
+    // A slow change (a drift, or a temperature through a lagged thermometer) fitted to the pose
+    // means of a walk: the holds wander as a noise whose walk accounts for the withheld scatter
+    // ([`super::family::colored_noise::walk_accounts_closely`]), and the change does not explain
+    // the holds' movement.
+    let slow = |effect: &str| matches!(effect, "drift" | "temperature");
     let walk_not_drift =
-        |v: &Evaluation| holds_walk && v.candidate.effect == "drift" && !(v.candidate.within_gain > DRIFT_MISSES_HOLDS);
+        |v: &Evaluation| holds_walk && slow(v.candidate.effect) && !(v.candidate.within_gain > DRIFT_MISSES_HOLDS);
     if let (Some((_, v)), Some(noise)) = (value, strongest(true))
         && walk_not_drift(v)
     {
@@ -214,15 +216,18 @@ mod tests {
         let table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "sim").unwrap();
         let mut m = gap::measure(&table, &DiagnoseOptions::DEFAULT).unwrap();
         (m.gap.significant, m.gap.ratio_before) = (true, 6.81);
-        let verdict = |within_gain: f64, holds_walk: bool| {
+        let named = |effect: &'static str, within_gain: f64, holds_walk: bool| {
             // A development log's walk: a drift spline gained 0.34 on the withheld poses, nothing
             // in the holds (-0.05); the walk at the holds' level left the withheld scatter at 0.82.
-            let mut drift = on_pose_means("drift", 3.4, 0.34, true);
+            let mut drift = on_pose_means(effect, 3.4, 0.34, true);
             (drift.candidate.within_gain, drift.candidate.ratio_after) = (within_gain, 2.45);
             let walk = on_pose_means("colored-noise", 0.82, 0.79, false);
             decide(&m, &[drift, walk], &[], None, holds_walk).verdict
         };
+        let verdict = |within_gain: f64, holds_walk: bool| named("drift", within_gain, holds_walk);
         assert_eq!(verdict(-0.05, true), "colored-noise");
+        assert_eq!(named("temperature", -0.05, true), "colored-noise");
+        assert_eq!(named("scale-nonlinearity", -0.05, true), "scale-nonlinearity");
         // The holds do not walk at the level of the pose means, or the drift explains them too.
         assert_eq!(verdict(-0.05, false), "drift");
         assert_eq!(verdict(0.3, true), "drift");
