@@ -132,10 +132,17 @@ pub(crate) fn decide(
         .max_by(|a, b| a.heldout_gain.total_cmp(&b.heldout_gain));
     let best = best_family(m, evaluations, holds_walk);
     // A family wins only if no out-of-catalogue probe explains the withheld poses better.
-    let beaten = |gain: f64| probes.iter().any(|p| p.heldout_gain > gain + p.veto_margin);
-    let winner = best
-        .filter(|(_, e)| significant && e.candidate.evidence() >= MIN_GAIN && !beaten(e.candidate.evidence()))
-        .map(|(i, _)| i);
+    // A noise model, which predicts only the spread of the withheld poses, must be far ahead of a
+    // probe that predicts their values (as of a family that does, [`NOISE_FAR_AHEAD`]).
+    let beaten = |e: &Evaluation| {
+        let gain = e.candidate.evidence();
+        let ahead = if e.predicts_values { 0.0 } else { NOISE_FAR_AHEAD };
+        probes.iter().any(|p| {
+            let explains = !e.predicts_values && p.heldout_gain >= MIN_GAIN;
+            p.heldout_gain > gain + p.veto_margin || explains && p.heldout_gain + ahead > gain + p.veto_margin
+        })
+    };
+    let winner = best.filter(|(_, e)| significant && e.candidate.evidence() >= MIN_GAIN && !beaten(e)).map(|(i, _)| i);
     let mut gap = m.gap.clone();
     let (verdict, after, located) = match winner {
         Some(i) => {
@@ -231,6 +238,30 @@ mod tests {
         // The holds do not walk at the level of the pose means, or the drift explains them too.
         assert_eq!(verdict(-0.05, false), "drift");
         assert_eq!(verdict(0.3, true), "drift");
+    }
+
+    #[test]
+    fn a_noise_model_must_be_far_ahead_of_a_probe_that_predicts_the_withheld_values() {
+        let table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "sim").unwrap();
+        let mut m = gap::measure(&table, &DiagnoseOptions::DEFAULT).unwrap();
+        m.gap.significant = true;
+        let probe = |gain: f64| Probe {
+            shape: "rotation-direction",
+            heldout_gain: gain,
+            detail: String::new(),
+            veto_margin: 0.0,
+        };
+        let verdict = |gain: f64, predicts_values: bool, probe_gain: f64| {
+            let effect = if predicts_values { "drift" } else { "colored-noise" };
+            let e = [on_pose_means(effect, 1.2, gain, predicts_values)];
+            decide(&m, &e, &[probe(probe_gain)], None, false).verdict
+        };
+        // A development log's hysteresis: a noise floor gained 0.88, the hysteresis probe 0.82.
+        assert_eq!(verdict(0.88, false, 0.82), "unexplained");
+        // A walk's noise model far ahead of a periodic probe (a development log: 0.80 and 0.40).
+        assert_eq!(verdict(0.80, false, 0.40), "colored-noise");
+        // A family that predicts the values only needs to be ahead.
+        assert_eq!(verdict(0.88, true, 0.82), "drift");
     }
 
     #[test]
