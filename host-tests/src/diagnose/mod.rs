@@ -26,11 +26,14 @@
 //!    on logs too short to withhold a pose and still fit 9 + k parameters.
 //!    The verdict is the candidate with the largest gain, if the gap is significant and the gain is
 //!    at least [`MIN_GAIN`] (the thermometer named before time when both explain alike; a noise
-//!    model before a value family only when far ahead of one that leaves half the gap). When the
-//!    gap is significant and no family or probe explains it, the holds answer from how each one
-//!    moves (`family::from_holds`: settling if it slows, drift if a line per hold explains it,
-//!    colored noise if every hold wanders alike; no shrink claimed); else `unexplained` (with where
-//!    the gap lies). `none` when there is no significant gap.
+//!    model before a value family only when far ahead of one that leaves half the gap, or before a
+//!    drift or temperature that misses the holds' movement when the holds walk at the level of the
+//!    pose means' spread; a noise model must also be far ahead of a probe that explains the
+//!    withheld values). When the gap is significant and no family or probe explains it, the holds
+//!    answer from how each one moves (`family::from_holds`: settling if it slows, drift if a line per
+//!    hold explains it, colored noise if every hold wanders alike and a walk at their level spreads
+//!    the pose means as much; no shrink claimed); else `unexplained` (with where the gap lies).
+//!    `none` when there is no significant gap.
 //! 4. **How far it shrinks.** The winner is added (to the model, or to the simulator for
 //!    `colored-noise`) and step 1 redone: `shrink = (before - after) / (before - 1)`, clipped to
 //!    `[0, 1]`.
@@ -55,7 +58,9 @@
 //!   rest (detrended quadratically in time and linearly in temperature) and pooled over every hold
 //!   (each cleared of its line), from the overlapping Allan variance in excess of white noise (two
 //!   white levels: successive differences, at least `q^2 / 12`, and the holds' median variance);
-//!   the level the withheld poses' scatter agrees with best is given to the simulator.
+//!   and a random walk at the level the holds move (the method of moments on the within-pose
+//!   segments) when it accounts for the pose means' spread; the level the withheld poses' scatter
+//!   agrees with best is given to the simulator.
 //!
 //! ```
 //! use accelcal_host::diagnose::{diagnose, DiagnoseOptions};
