@@ -92,15 +92,8 @@ fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation], holds_walk: bool
         half_left && strongest(true).is_some_and(|(_, n)| n.candidate.evidence() >= e + NOISE_FAR_AHEAD)
     };
     let value = strongest(false).filter(|(_, e)| e.candidate.evidence() >= MIN_GAIN);
-    // A slow change (a drift, or a temperature through a lagged thermometer) fitted to the pose
-    // means of a walk: the holds wander as a noise whose walk accounts for the withheld scatter
-    // ([`super::family::colored_noise::walk_accounts_closely`]), and the change does not explain
-    // the holds' movement.
-    let slow = |effect: &str| matches!(effect, "drift" | "temperature");
-    let walk_not_drift =
-        |v: &Evaluation| holds_walk && slow(v.candidate.effect) && !(v.candidate.within_gain > DRIFT_MISSES_HOLDS);
     if let (Some((_, v)), Some(noise)) = (value, strongest(true))
-        && walk_not_drift(v)
+        && walk_not_drift(v, holds_walk)
     {
         return Some(noise);
     }
@@ -112,6 +105,26 @@ fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation], holds_walk: bool
             (n, o) => n.or(o),
         }
     })
+}
+
+/// An out-of-catalogue probe explains the withheld poses better than the family: by its veto
+/// margin; a noise model, which predicts only the spread of the withheld poses, must also be
+/// [`NOISE_FAR_AHEAD`] of a probe that explains their values (as of a family that does).
+fn beaten(e: &Evaluation, probes: &[Probe]) -> bool {
+    let gain = e.candidate.evidence();
+    probes.iter().any(|p| {
+        let explains = !e.predicts_values && p.heldout_gain >= MIN_GAIN;
+        p.heldout_gain > gain + p.veto_margin || explains && p.heldout_gain + NOISE_FAR_AHEAD > gain + p.veto_margin
+    })
+}
+
+/// A slow change (a drift, or a temperature through a lagged thermometer) fitted to the pose means
+/// of a walk: the holds wander as a noise whose walk accounts for the withheld scatter (`holds_walk`,
+/// [`super::family::colored_noise::walk_accounts_closely`]), and the change does not explain the
+/// holds' movement.
+fn walk_not_drift(v: &Evaluation, holds_walk: bool) -> bool {
+    let slow = matches!(v.candidate.effect, "drift" | "temperature");
+    holds_walk && slow && !(v.candidate.within_gain > DRIFT_MISSES_HOLDS)
 }
 
 /// Picks the verdict among the evaluated families and measures the shrink. `from_holds` is the
@@ -132,17 +145,8 @@ pub(crate) fn decide(
         .max_by(|a, b| a.heldout_gain.total_cmp(&b.heldout_gain));
     let best = best_family(m, evaluations, holds_walk);
     // A family wins only if no out-of-catalogue probe explains the withheld poses better.
-    // A noise model, which predicts only the spread of the withheld poses, must be far ahead of a
-    // probe that predicts their values (as of a family that does, [`NOISE_FAR_AHEAD`]).
-    let beaten = |e: &Evaluation| {
-        let gain = e.candidate.evidence();
-        let ahead = if e.predicts_values { 0.0 } else { NOISE_FAR_AHEAD };
-        probes.iter().any(|p| {
-            let explains = !e.predicts_values && p.heldout_gain >= MIN_GAIN;
-            p.heldout_gain > gain + p.veto_margin || explains && p.heldout_gain + ahead > gain + p.veto_margin
-        })
-    };
-    let winner = best.filter(|(_, e)| significant && e.candidate.evidence() >= MIN_GAIN && !beaten(e)).map(|(i, _)| i);
+    let winner =
+        best.filter(|(_, e)| significant && e.candidate.evidence() >= MIN_GAIN && !beaten(e, probes)).map(|(i, _)| i);
     let mut gap = m.gap.clone();
     let (verdict, after, located) = match winner {
         Some(i) => {
