@@ -6,7 +6,9 @@
 
 use super::family::{Context, Variant};
 use super::gap::PoseData;
+use super::math::dot;
 use super::report::Probe;
+use crate::blindgen::vec3::cross;
 
 /// Periodic bias `u . (s sin(2 pi t / P) + c cos(2 pi t / P))`, at least three periods in the log.
 /// The period's search is charged as `ln` of the independent periods searched (one per cycle over
@@ -140,11 +142,7 @@ fn rotation_sense(ctx: &Context<'_>) -> Vec<Variant> {
             let (s, c) = (golden * k as f64).sin_cos();
             let r = (1.0 - z * z).sqrt();
             let e = [r * c, r * s, z];
-            let states = hysteresis_states(dirs.len(), true, |i| {
-                let (p, u) = (dirs[i - 1], dirs[i]);
-                let cross = [p[1] * u[2] - p[2] * u[1], p[2] * u[0] - p[0] * u[2], p[0] * u[1] - p[1] * u[0]];
-                cross.iter().zip(e).map(|(x, y)| x * y).sum()
-            });
+            let states = hysteresis_states(dirs.len(), true, |i| dot(cross(dirs[i - 1], dirs[i]), e));
             let extra = dirs.iter().zip(&states).map(|(u, s)| u.iter().map(|x| x * s).collect()).collect();
             Variant {
                 extra,
