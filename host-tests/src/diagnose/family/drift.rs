@@ -139,15 +139,17 @@ impl Family for Drift {
     fn variants(&self, ctx: &Context<'_>) -> Vec<Variant> {
         let t_end = ctx.poses.last().map_or(1.0, PoseData::t_mid).max(1e-9);
         let warm = |tau: f64| move |t: f64| 1.0 - (-t / tau).exp();
+        // A warm-up faster than the first hold is over within it: the pose means see it in the first
+        // pose alone (a one-pose offset); that hold's course is the settling family's evidence.
+        let first_hold_s = ctx.poses.first().map_or(0.0, |p| p.t_end - p.t_start);
+        let taus: Vec<f64> = TAU_FACTORS.iter().map(|f| f * t_end).filter(|tau| *tau >= first_hold_s).collect();
         let mut out = Vec::new();
-        for f in TAU_FACTORS {
-            let tau = f * t_end;
+        for &tau in &taus {
             let extra = columns(ctx, &|t| vec![warm(tau)(t)]);
             out.push(Variant { extra, params: 4, detail: format!("bias (1 - exp(-t / {tau:.0} s))") });
         }
-        for (i, f1) in TAU_FACTORS.iter().enumerate() {
-            for f2 in TAU_FACTORS.iter().skip(i + 2) {
-                let (t1, t2) = (f1 * t_end, f2 * t_end);
+        for (i, &t1) in taus.iter().enumerate() {
+            for &t2 in taus.iter().skip(i + 2) {
                 let extra = columns(ctx, &|t| vec![warm(t1)(t), warm(t2)(t)]);
                 out.push(Variant {
                     extra,
