@@ -4,7 +4,7 @@
 
 use super::MIN_GAIN;
 
-use super::family::Evaluation;
+use super::family::{Evaluation, smooth};
 use super::gap::Measured;
 use super::math::rms;
 use super::report::{Gap, Probe};
@@ -50,6 +50,17 @@ pub(crate) const NOISE_LEAVES_AT_MOST: f64 = 4.0;
 /// 0.1 (6 of 25 below).
 const SLOW_CHANGE_MISSES_HOLDS: f64 = 0.1;
 
+/// A slow change (drift, temperature) whose pose-level gain rests on one pose (gone with the
+/// worst-predicted pose left out) and which the holds do not support: a slow change moves many
+/// poses; one pose alone is a transient of that hold or a bad pose.
+fn rests_on_one_pose(e: &Evaluation) -> bool {
+    let c = &e.candidate;
+    matches!(c.effect, "drift" | "temperature")
+        && c.heldout_gain >= MIN_GAIN
+        && e.gain_without_worst < MIN_GAIN
+        && !(c.within_gain >= MIN_GAIN)
+}
+
 /// The evidence a family is ranked by among its kind.
 fn ranking(e: &Evaluation) -> f64 {
     let cause = if e.candidate.effect == "temperature" { CAUSE_OVER_PROXY } else { 0.0 };
@@ -63,7 +74,8 @@ fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation], holds_walk: bool
     // in the holds only (a transient repeated in every hold) does not explain the gap. Among the
     // families with evidence in the holds only, one whose fit to the holds the pose means agree with
     // is named before one they contradict.
-    let explains_poses = |e: &Evaluation| e.candidate.applicable && e.candidate.heldout_gain >= MIN_GAIN;
+    let explains_poses =
+        |e: &Evaluation| e.candidate.applicable && e.candidate.heldout_gain >= MIN_GAIN && !rests_on_one_pose(e);
     let holds_only = |e: &Evaluation| {
         e.predicts_values && e.candidate.applicable && !explains_poses(e) && e.candidate.within_gain >= MIN_GAIN
     };
@@ -75,6 +87,7 @@ fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation], holds_walk: bool
             && e.candidate.evidence().is_finite()
             && (e.predicts_values || e.candidate.heldout_ratio <= NOISE_LEAVES_AT_MOST)
             && (explains_poses(e) || !some_explains_poses)
+            && !rests_on_one_pose(e)
             && !(holds_only(e) && !agrees(e) && some_agrees)
     };
     let strongest = |noise: bool| {
@@ -89,7 +102,10 @@ fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation], holds_walk: bool
     // when it explains far more on withheld poses while the value family leaves most of the gap in
     // the poses it was fitted on.
     let noise_far_ahead = |v: &Evaluation| {
-        let half_left = v.candidate.ratio_after - 1.0 > 0.5 * (m.gap.ratio_before - 1.0);
+        // A penalised wander (its prior a random walk's steps) follows any path through the poses it
+        // is fitted on: what it leaves there says nothing.
+        let half_left = v.candidate.ratio_after - 1.0 > 0.5 * (m.gap.ratio_before - 1.0)
+            || smooth::is_wander(&v.candidate.detail);
         let e = v.candidate.evidence();
         half_left && strongest(true).is_some_and(|(_, n)| n.candidate.evidence() >= e + NOISE_FAR_AHEAD)
     };
@@ -198,7 +214,7 @@ mod tests {
             within_disagreement,
             variants: Vec::new(),
         };
-        Evaluation { candidate, after: Vec::new(), predicts_values: true }
+        Evaluation { candidate, after: Vec::new(), predicts_values: true, gain_without_worst: f64::NAN }
     }
 
     fn on_pose_means(effect: &'static str, heldout_ratio: f64, heldout_gain: f64, predicts_values: bool) -> Evaluation {

@@ -69,6 +69,7 @@ pub(crate) fn add(ctx: &Context<'_>, e: &mut Evaluation, fit: JointFit) {
     let kept: Vec<f64> = fit.after.iter().flatten().copied().collect();
     c.applicable = true;
     (c.heldout_ratio, c.heldout_gain, c.extra_params) = (fit.ratio, gain, fit.params);
+    e.gain_without_worst = f64::NAN;
     c.ratio_after = ctx.m.to_mg(rms(&kept)) / ctx.m.gap.sim_rmse_mg;
     c.detail = format!("{} (pose means and within-pose course together)", fit.detail);
     e.after = fit.after;

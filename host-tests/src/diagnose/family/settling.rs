@@ -185,6 +185,7 @@ impl Family for Settling {
                     (ratio, ctx.gain(ratio), ratio_after, 1);
                 c.detail = format!("transient: the first {drop}/{SEGMENTS} of every hold left out");
                 e.after = after;
+                e.gain_without_worst = f64::NAN;
             }
         }
         e
