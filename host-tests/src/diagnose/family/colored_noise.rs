@@ -253,7 +253,12 @@ impl ColoredNoise {
             within_disagreement: f64::NAN,
             variants: Vec::new(),
         };
-        Evaluation { candidate, after: m.r.iter().map(|v| Some(*v)).collect(), predicts_values: false, gain_without_worst: f64::NAN }
+        Evaluation {
+            candidate,
+            after: m.r.iter().map(|v| Some(*v)).collect(),
+            predicts_values: false,
+            gain_without_worst: f64::NAN,
+        }
     }
 }
 

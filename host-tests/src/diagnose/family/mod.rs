@@ -221,6 +221,13 @@ pub(crate) struct Context<'a> {
     pub(crate) pose_level: bool,
 }
 
+/// `1 - ln(ratio) / |ln(nominal)|`, a ratio below 1 counting [`OVERSHOOT_WEIGHT`] times.
+fn gain_over(nominal: f64, ratio: f64) -> f64 {
+    let before = nominal.ln().abs();
+    let miss = if ratio >= 1.0 { ratio.ln() } else { OVERSHOOT_WEIGHT * ratio.ln().abs() };
+    if before > 0.0 { 1.0 - miss / before } else { 0.0 }
+}
+
 /// Poses assigned to folds at random (seeded).
 fn assign_folds(n: usize, folds: usize, seed: u64) -> Vec<usize> {
     let mut order: Vec<usize> = (0..n).collect();
@@ -296,16 +303,27 @@ impl<'a> Context<'a> {
     /// A withheld pose the design cannot predict from its fold's training poses keeps the nominal
     /// model's held-out residual: the design says nothing about it.
     pub(crate) fn heldout_ratio(&self, rows: &[Vec<f64>], dropped: &[bool], k: usize) -> Option<f64> {
-        let n = self.m.r.len() as f64;
+        self.heldout_ratio_without(rows, dropped, k, None)
+    }
+
+    /// [`Self::heldout_ratio`] with the pose `left_out` (if any) out of the score.
+    fn heldout_ratio_without(
+        &self,
+        rows: &[Vec<f64>],
+        dropped: &[bool],
+        k: usize,
+        left_out: Option<usize>,
+    ) -> Option<f64> {
         let cv = cv_residuals_predictable(rows, &self.m.r, &self.fold, self.folds, dropped, UNPREDICTABLE)?;
-        let cv: Vec<Option<f64>> = cv
-            .iter()
-            .zip(&self.nominal_cv)
-            .zip(dropped)
-            .map(|((c, nom), &d)| if d { None } else { c.or(*nom) })
-            .collect();
-        let (ss, _) = sum_sq(&cv);
-        let n_dropped = dropped.iter().filter(|d| **d).count() as f64;
+        let (mut ss, mut n_dropped, mut n) = (0.0, 0.0, 0.0);
+        for i in (0..cv.len()).filter(|i| Some(*i) != left_out) {
+            n += 1.0;
+            if dropped[i] {
+                n_dropped += 1.0;
+            } else if let Some(c) = cv[i].or(self.nominal_cv[i]) {
+                ss += c * c;
+            }
+        }
         // Against the nominal model's expectation: a design that merely predicts noisily (and so
         // expects more) must not look better for it; the penalty charges the extra parameters.
         let ms = (ss + (n_dropped + PARAMETER_PENALTY * k as f64) * self.e_white) / n;
@@ -315,38 +333,16 @@ impl<'a> Context<'a> {
     /// The held-out gain of a design with the pose the nominal model predicts worst left out of both
     /// its score and the nominal model's: a gain that rests on one pose (the first hold, longer than
     /// the others, offset by a transient its length averages differently) explains that pose.
-    /// `gain` of 0 when that pose held the whole gap.
+    /// 0 when that pose held the whole gap.
     fn gain_without_worst_pose(&self, rows: &[Vec<f64>], dropped: &[bool], k: usize) -> f64 {
-        let worst = (0..self.nominal_cv.len())
-            .filter(|&i| self.nominal_cv[i].is_some())
-            .max_by(|&a, &b| self.nominal_cv[a].unwrap_or(0.0).abs().total_cmp(&self.nominal_cv[b].unwrap_or(0.0).abs()));
-        let (Some(worst), Some(cv)) =
-            (worst, cv_residuals_predictable(rows, &self.m.r, &self.fold, self.folds, dropped, UNPREDICTABLE))
-        else {
+        let squares: Vec<f64> = self.nominal_cv.iter().map(|c| c.map_or(0.0, |c| c * c)).collect();
+        let Some(worst) = (0..squares.len()).max_by(|&a, &b| squares[a].total_cmp(&squares[b])) else {
             return f64::NAN;
         };
-        let n = (self.m.r.len() - 1) as f64;
-        let mut nominal_ss = 0.0;
-        let mut ss = 0.0;
-        let mut n_dropped = 0.0;
-        for i in (0..cv.len()).filter(|&i| i != worst) {
-            let nominal = self.nominal_cv[i].unwrap_or(0.0);
-            nominal_ss += nominal * nominal;
-            if dropped[i] {
-                n_dropped += 1.0;
-            } else {
-                let c = cv[i].unwrap_or(nominal);
-                ss += c * c;
-            }
-        }
-        let nominal_ratio = (nominal_ss / n / self.e_white).sqrt();
-        let ratio = ((ss + (n_dropped + PARAMETER_PENALTY * k as f64) * self.e_white) / n / self.e_white).sqrt();
-        let before = nominal_ratio.ln();
-        if before <= 0.0 {
-            return 0.0;
-        }
-        let miss = if ratio >= 1.0 { ratio.ln() } else { OVERSHOOT_WEIGHT * ratio.ln().abs() };
-        1.0 - miss / before
+        let Some(ratio) = self.heldout_ratio_without(rows, dropped, k, Some(worst)) else { return f64::NAN };
+        let others = (squares.len() - 1) as f64;
+        let nominal = ((squares.iter().sum::<f64>() - squares[worst]) / others / self.e_white).sqrt();
+        if nominal > 1.0 { gain_over(nominal, ratio) } else { 0.0 }
     }
 
     /// Every fold's training poses outnumber the columns of the design with `extra` by
@@ -406,9 +402,7 @@ impl<'a> Context<'a> {
     /// `1 - ln(ratio) / ln(nominal ratio)`; predicting more scatter than there is counts
     /// [`OVERSHOOT_WEIGHT`] times (it would "explain" any gap).
     pub(crate) fn gain(&self, ratio: f64) -> f64 {
-        let before = self.heldout_ratio_nominal.ln().abs();
-        let miss = if ratio >= 1.0 { ratio.ln() } else { OVERSHOOT_WEIGHT * ratio.ln().abs() };
-        if before > 0.0 { 1.0 - miss / before } else { 0.0 }
+        gain_over(self.heldout_ratio_nominal, ratio)
     }
 
     fn evaluate_fitted(&self, name: &'static str, f: Fitted) -> Evaluation {

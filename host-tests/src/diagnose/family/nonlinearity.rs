@@ -31,3 +31,44 @@ impl Family for ScaleNonlinearity {
         ]
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::diagnose::{DiagnoseOptions, diagnose};
+    use crate::sim::scenario::{SimLog, to_table};
+    use crate::sim::{Plan, SimConfig, simulate_with};
+
+    #[test]
+    fn square_and_cube_terms_per_axis_on_a_cube_are_named() {
+        // A cube's 6 faces, 12 edges and 4 of its 8 vertices (22 poses): on a face k2 acts as a bias
+        // and k3 as a scale; only the other 16 poses tell them from the calibration, so the 6 terms
+        // and the 9 calibration parameters leave few poses to withhold (in 5 folds: named
+        // `unexplained` on seed 2, held-out gain 0.21).
+        let (k2, k3) = ([2.0e-3, -1.5e-3, 2.5e-3], [-2.0e-3, 1.5e-3, 1.8e-3]);
+        for seed in [1, 2, 3] {
+            let cfg = SimConfig { plan: Plan::Cube26, ..SimConfig::paper(seed) };
+            let g = cfg.gravity;
+            let mut recording = simulate_with(
+                &cfg,
+                &mut [&mut |_t: f64, _p: Option<usize>, r: &mut [f64; 3]| {
+                    (0..3).for_each(|a| r[a] += g * (k2[a] * (r[a] / g).powi(2) + k3[a] * (r[a] / g).powi(3)));
+                }],
+            );
+            let vertex_rows: Vec<std::ops::Range<usize>> = recording
+                .poses
+                .iter()
+                .filter(|p| p.direction.iter().all(|c| c.abs() > 0.3))
+                .step_by(2)
+                .map(|p| p.start..p.end)
+                .collect();
+            assert_eq!(vertex_rows.len(), 4);
+            let kept = |i: &usize| !vertex_rows.iter().any(|r| r.contains(i));
+            recording.samples = (0..recording.samples.len()).filter(kept).map(|i| recording.samples[i]).collect();
+            recording.times_s = (0..recording.times_s.len()).filter(kept).map(|i| recording.times_s[i]).collect();
+            let temps_c = vec![25.0; recording.samples.len()];
+            let table = to_table(&SimLog { recording, temps_c }, "cube").unwrap();
+            let d = diagnose(&table, &DiagnoseOptions { seed, ..DiagnoseOptions::DEFAULT }).unwrap();
+            assert_eq!(d.verdict, "scale-nonlinearity", "seed {seed}: {}", d.to_text());
+        }
+    }
+}
