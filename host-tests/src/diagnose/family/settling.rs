@@ -88,20 +88,6 @@ fn toward_previous(ctx: &Context<'_>, tau: f64) -> Vec<Vec<f64>> {
         .collect()
 }
 
-/// A bias transient along one sensor-frame direction from each hold's start, `tau` seconds: its
-/// mean over each hold (a longer hold averages more of its tail) along the pose's direction.
-fn from_hold_start(ctx: &Context<'_>, tau: f64) -> Vec<Vec<f64>> {
-    ctx.poses
-        .iter()
-        .zip(ctx.directions())
-        .map(|(p, u)| {
-            let t = p.duration().max(1e-9);
-            let w = tau / t * (1.0 - (-t / tau).exp());
-            u.iter().map(|c| c * w).collect()
-        })
-        .collect()
-}
-
 /// Each pose's mean minus the mean of its last half, calibrated (output unit).
 fn measured_transients(ctx: &Context<'_>) -> Vec<V3> {
     ctx.poses
@@ -202,11 +188,6 @@ impl Family for Settling {
                 detail: format!("transient toward the previous pose, tau {tau} s"),
             })
             .collect();
-        out.extend(WITHIN_TAUS_S.iter().filter(|tau| **tau <= hold).map(|&tau| Variant {
-            extra: from_hold_start(ctx, tau),
-            params: 4,
-            detail: format!("bias transient along one sensor direction from each hold's start, tau {tau} s"),
-        }));
         if !transient_decays(ctx) {
             return out;
         }
