@@ -15,7 +15,8 @@
 //! 3. **Which effect.** Each candidate is a physical augmentation, fitted in `f64` by linear least
 //!    squares around the library's solution (the modulus residual linearised in the 9 parameters plus
 //!    the effect's parameters), or a noise model fitted on other data than the pose means. Each is
-//!    judged by `folds`-fold cross-validation over the poses: the mean-square residual of the
+//!    judged by cross-validation over the poses (leaving one out up to 40 poses, else in `folds`
+//!    folds): the mean-square residual of the
 //!    withheld poses, plus [`PARAMETER_PENALTY`] expected noise variances per extra parameter, over
 //!    what white noise predicts for the nominal model (the noise model's prediction for
 //!    `colored-noise`). `heldout_gain = 1 - ln(ratio) / ln(nominal ratio)` is the fraction of the
@@ -129,7 +130,7 @@ pub struct DiagnoseOptions {
     pub seed: u64,
     /// Simulated repeats of the experiment. Defaults to 30.
     pub repeats: usize,
-    /// Cross-validation folds. Defaults to 5.
+    /// Cross-validation folds on logs of more than 40 poses (fewer are left one out). Defaults to 5.
     pub folds: usize,
 }
 

@@ -61,6 +61,13 @@ fn rests_on_one_pose(e: &Evaluation) -> bool {
         && !(c.within_gain >= MIN_GAIN)
 }
 
+/// The value family leaves most of the gap in the poses it was fitted on, or is a penalised wander
+/// (its prior a random walk's steps), which follows any path through them: what it leaves there
+/// says nothing.
+fn fit_not_shown(m: &Measured, v: &Evaluation) -> bool {
+    v.candidate.ratio_after - 1.0 > 0.5 * (m.gap.ratio_before - 1.0) || smooth::is_wander(&v.candidate.detail)
+}
+
 /// The evidence a family is ranked by among its kind.
 fn ranking(e: &Evaluation) -> f64 {
     let cause = if e.candidate.effect == "temperature" { CAUSE_OVER_PROXY } else { 0.0 };
@@ -99,15 +106,11 @@ fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation], holds_walk: bool
     };
     // A family that predicts the withheld values is stronger evidence than a noise model, which
     // predicts only their spread: colored noise is named only when no other family explains, or
-    // when it explains far more on withheld poses while the value family leaves most of the gap in
-    // the poses it was fitted on.
+    // when it explains far more on withheld poses while the value family does not show it fits the
+    // poses it was fitted on.
     let noise_far_ahead = |v: &Evaluation| {
-        // A penalised wander (its prior a random walk's steps) follows any path through the poses it
-        // is fitted on: what it leaves there says nothing.
-        let half_left =
-            v.candidate.ratio_after - 1.0 > 0.5 * (m.gap.ratio_before - 1.0) || smooth::is_wander(&v.candidate.detail);
         let e = v.candidate.evidence();
-        half_left && strongest(true).is_some_and(|(_, n)| n.candidate.evidence() >= e + NOISE_FAR_AHEAD)
+        fit_not_shown(m, v) && strongest(true).is_some_and(|(_, n)| n.candidate.evidence() >= e + NOISE_FAR_AHEAD)
     };
     let value = strongest(false).filter(|(_, e)| e.candidate.evidence() >= MIN_GAIN);
     if let (Some((_, v)), Some(noise)) = (value, strongest(true))
