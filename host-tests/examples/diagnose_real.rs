@@ -86,8 +86,11 @@ fn main() {
         }
     }
     println!(
-        "\nseed {}, {} simulated repeats, {}-fold cross-validation over the poses (leave-one-out up to 16 poses)",
-        options.seed, options.repeats, options.folds
+        "\nseed {}, {} simulated repeats, cross-validation over the poses leaving one out up to {} poses, in {} folds beyond",
+        options.seed,
+        options.repeats,
+        accelcal_host::diagnose::LEAVE_ONE_OUT_UP_TO,
+        options.folds
     );
     println!("\ndrift shape on withheld poses (penalised held-out ratio, smaller is better; 1 = explained):\n");
     println!("| recording | best curved (polynomial) | best single exponential |\n|---|---|---|");

@@ -24,7 +24,7 @@ use super::math::{
 };
 use super::report::Candidate;
 use super::within::{Within, WithinFit, WithinVariant};
-use super::{CV_NOISE_DRAWS, DiagnoseOptions, OVERSHOOT_WEIGHT, PARAMETER_PENALTY};
+use super::{CV_NOISE_DRAWS, DiagnoseOptions, LEAVE_ONE_OUT_UP_TO, OVERSHOOT_WEIGHT, PARAMETER_PENALTY};
 use crate::csvio::Table;
 
 /// Fewest training poses beyond a design's columns (9 calibration parameters plus the probe's) for
@@ -55,12 +55,6 @@ const MIN_FIT_DOF: usize = 0;
 const UNPREDICTABLE: f64 = 1e6;
 
 /// Logs of at most this many poses are cross-validated leaving one pose out.
-/// Logs of at most this many poses are cross-validated leaving one pose out; longer ones in
-/// `opts.folds` folds. Withholding a fifth of the poses of a 17-40-pose log left a design of
-/// square and cube terms per axis on a cube jig's 12 edge poses (the only poses that tell them from
-/// bias and scale) barely determined: it predicted its withheld poses at 129 times white noise, 11
-/// leaving one out (the generators' non-linearities on 17-40 poses were named `unexplained`).
-const LEAVE_ONE_OUT_BELOW: usize = 40;
 
 /// Logs of at most this many poses count a probe's residual degrees of freedom leaving one out
 /// ([`Context::leaves_residual_dof`]); longer ones as if a fold of `opts.folds` were withheld. A
@@ -68,7 +62,7 @@ const LEAVE_ONE_OUT_BELOW: usize = 40;
 /// left one out, the best of the periodic probe's aliased sinusoids followed the wander of flicker,
 /// popcorn, Gauss-Markov and random-walk noises (held-out gains 0.36-0.75; 5 residual degrees of
 /// freedom on a 21-pose flicker log) and the verdict was `unexplained`.
-const PROBE_LEAVE_ONE_OUT_BELOW: usize = 16;
+const PROBE_LEAVE_ONE_OUT_UP_TO: usize = 16;
 
 /// One parametrisation of a family: extra design columns per pose (the modulus residual's
 /// derivative in the effect's parameters), the parameters it costs and what it is.
@@ -248,7 +242,7 @@ impl<'a> Context<'a> {
     pub(crate) fn new(table: &'a Table, m: &'a Measured, opts: &'a DiagnoseOptions) -> Option<Self> {
         let n = m.poses.len();
         // Few poses: leave one out (every fold keeps as many poses as it can).
-        let folds = if n <= LEAVE_ONE_OUT_BELOW { n } else { opts.folds.min(n) };
+        let folds = if n <= LEAVE_ONE_OUT_UP_TO { n } else { opts.folds.min(n) };
         let fold = assign_folds(n, folds, opts.seed);
         let base_rows: Vec<Vec<f64>> =
             m.poses.iter().zip(&m.directions).map(|(p, u)| jacobian_row(p.mean, *u).to_vec()).collect();
@@ -355,11 +349,11 @@ impl<'a> Context<'a> {
 
     /// The training poses a probe's residual degrees of freedom are counted on: those of the
     /// smallest fold's complement in a split into `opts.folds` folds (leave one out up to
-    /// [`PROBE_LEAVE_ONE_OUT_BELOW`] poses), fewer than the cross-validation's own on logs it leaves
-    /// one out (see [`PROBE_LEAVE_ONE_OUT_BELOW`]).
+    /// [`PROBE_LEAVE_ONE_OUT_UP_TO`] poses), fewer than the cross-validation's own on logs it leaves
+    /// one out (see [`PROBE_LEAVE_ONE_OUT_UP_TO`]).
     fn probe_training_poses(&self) -> usize {
         let n = self.fold.len();
-        let folds = if n <= PROBE_LEAVE_ONE_OUT_BELOW { n } else { self.opts.folds.clamp(1, n) };
+        let folds = if n <= PROBE_LEAVE_ONE_OUT_UP_TO { n } else { self.opts.folds.clamp(1, n) };
         n - n.div_ceil(folds)
     }
 
@@ -529,7 +523,7 @@ mod tests {
         let fewest_train = (0..ctx.folds).map(|f| (0..n).filter(|&i| ctx.fold[i] != f).count()).min().unwrap();
         let columns = |k: usize| vec![vec![0.0; k]; n];
         // A probe's degrees of freedom as if a fifth of the poses were withheld.
-        assert!(n > PROBE_LEAVE_ONE_OUT_BELOW, "{n} poses");
+        assert!(n > PROBE_LEAVE_ONE_OUT_UP_TO, "{n} poses");
         let most = n - n.div_ceil(opts.folds) - ctx.base_rows[0].len() - MIN_RESIDUAL_DOF;
         assert!(ctx.leaves_residual_dof(&columns(most)), "{most} extra columns on {n} poses");
         assert!(!ctx.leaves_residual_dof(&columns(most + 1)), "{} extra columns on {n} poses", most + 1);
