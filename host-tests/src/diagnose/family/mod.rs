@@ -54,8 +54,6 @@ const MIN_FIT_DOF: usize = 0;
 /// model although it fitted every other pose to white noise.
 const UNPREDICTABLE: f64 = 1e6;
 
-/// Logs of at most this many poses are cross-validated leaving one pose out.
-
 /// Logs of at most this many poses count a probe's residual degrees of freedom leaving one out
 /// ([`Context::leaves_residual_dof`]); longer ones as if a fold of `opts.folds` were withheld. A
 /// probe searches many designs (a period, a step's place, a turn axis) on the same withheld poses:
