@@ -46,19 +46,21 @@ pub(crate) const NOISE_LEAVES_AT_MOST: f64 = 4.0;
 
 /// Within-pose gain up to which a slow change (drift, temperature) does not explain the holds'
 /// movement. On the development sets a drift fitted to a walk's pose means gained -0.28 to -0.05
-/// in the holds (one walk 0.37), to flicker and popcorn noises' -0.14 to 0.23; to a smooth wander's, mostly above
-/// 0.1 (6 of 25 below).
+/// in the holds (one walk 0.37), to flicker and popcorn noises' -0.14 to 0.23; to a smooth
+/// wander's, mostly above 0.1 (6 of 25 below).
 const SLOW_CHANGE_MISSES_HOLDS: f64 = 0.1;
+
+/// The family is a slow change: a drift, or a temperature (through a lagged thermometer).
+fn slow_change(e: &Evaluation) -> bool {
+    matches!(e.candidate.effect, "drift" | "temperature")
+}
 
 /// A slow change (drift, temperature) whose pose-level gain rests on one pose (gone with the
 /// worst-predicted pose left out) and which the holds do not support: a slow change moves many
 /// poses; one pose alone is a transient of that hold or a bad pose.
 fn rests_on_one_pose(e: &Evaluation) -> bool {
     let c = &e.candidate;
-    matches!(c.effect, "drift" | "temperature")
-        && c.heldout_gain >= MIN_GAIN
-        && e.gain_without_worst < MIN_GAIN
-        && !(c.within_gain >= MIN_GAIN)
+    slow_change(e) && c.heldout_gain >= MIN_GAIN && e.gain_without_worst < MIN_GAIN && !(c.within_gain >= MIN_GAIN)
 }
 
 /// The value family leaves most of the gap in the poses it was fitted on, or is a penalised wander
@@ -144,8 +146,7 @@ fn beaten(e: &Evaluation, probes: &[Probe]) -> bool {
 /// [`super::family::colored_noise::walk_accounts_closely`]), and the change does not explain the
 /// holds' movement.
 fn walk_not_slow_change(v: &Evaluation, holds_walk: bool) -> bool {
-    let slow = matches!(v.candidate.effect, "drift" | "temperature");
-    holds_walk && slow && !(v.candidate.within_gain > SLOW_CHANGE_MISSES_HOLDS)
+    holds_walk && slow_change(v) && !(v.candidate.within_gain > SLOW_CHANGE_MISSES_HOLDS)
 }
 
 /// Picks the verdict among the evaluated families and measures the shrink. `from_holds` is the
