@@ -220,6 +220,12 @@ fn gain_over(nominal: f64, ratio: f64) -> f64 {
     if before > 0.0 { 1.0 - miss / before } else { 0.0 }
 }
 
+/// Folds for `n` poses: one per pose up to `leave_one_out_up_to` poses (every fold keeps as many
+/// poses as it can), else `folds` (at least 1, at most `n`).
+fn fold_count(n: usize, leave_one_out_up_to: usize, folds: usize) -> usize {
+    if n <= leave_one_out_up_to { n } else { folds.clamp(1, n) }
+}
+
 /// Poses assigned to folds at random (seeded).
 fn assign_folds(n: usize, folds: usize, seed: u64) -> Vec<usize> {
     let mut order: Vec<usize> = (0..n).collect();
@@ -239,8 +245,7 @@ impl<'a> Context<'a> {
     /// The cross-validation set-up; `None` when a fold leaves too few poses.
     pub(crate) fn new(table: &'a Table, m: &'a Measured, opts: &'a DiagnoseOptions) -> Option<Self> {
         let n = m.poses.len();
-        // Few poses: leave one out (every fold keeps as many poses as it can).
-        let folds = if n <= LEAVE_ONE_OUT_UP_TO { n } else { opts.folds.min(n) };
+        let folds = fold_count(n, LEAVE_ONE_OUT_UP_TO, opts.folds);
         let fold = assign_folds(n, folds, opts.seed);
         let base_rows: Vec<Vec<f64>> =
             m.poses.iter().zip(&m.directions).map(|(p, u)| jacobian_row(p.mean, *u).to_vec()).collect();
@@ -351,8 +356,7 @@ impl<'a> Context<'a> {
     /// one out (see [`PROBE_LEAVE_ONE_OUT_UP_TO`]).
     fn probe_training_poses(&self) -> usize {
         let n = self.fold.len();
-        let folds = if n <= PROBE_LEAVE_ONE_OUT_UP_TO { n } else { self.opts.folds.clamp(1, n) };
-        n - n.div_ceil(folds)
+        n - n.div_ceil(fold_count(n, PROBE_LEAVE_ONE_OUT_UP_TO, self.opts.folds))
     }
 
     /// Every fold's training poses number at least the columns of the design with `extra` plus `dof`.
