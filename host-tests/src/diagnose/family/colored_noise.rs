@@ -258,6 +258,7 @@ impl ColoredNoise {
             after: m.r.iter().map(|v| Some(*v)).collect(),
             predicts_values: false,
             gain_without_worst: f64::NAN,
+            wander: false,
         }
     }
 }

@@ -10,7 +10,7 @@ mod motion;
 mod nonlinearity;
 mod ringing;
 mod settling;
-pub(crate) mod smooth;
+mod smooth;
 mod temperature;
 pub(super) mod tremor;
 
@@ -91,6 +91,8 @@ pub(crate) struct Evaluation {
     /// The pose-level gain with the pose the nominal model predicts worst left out of both scores
     /// (NaN when not measured: a fit of both channels, a noise model).
     pub(crate) gain_without_worst: f64,
+    /// The pose-level fit is a penalised wander (`smooth.rs`: its prior a random walk's steps).
+    pub(crate) wander: bool,
 }
 
 /// An effect family.
@@ -423,7 +425,7 @@ impl<'a> Context<'a> {
             variants: f.tried,
         };
         let gain_without_worst = self.gain_without_worst_pose(&f.rows, &f.dropped, f.params);
-        Evaluation { candidate, after, predicts_values: true, gain_without_worst }
+        Evaluation { candidate, after, predicts_values: true, gain_without_worst, wander: false }
     }
 
     pub(crate) fn not_testable(&self, name: &'static str) -> Evaluation {
@@ -441,7 +443,7 @@ impl<'a> Context<'a> {
             variants: Vec::new(),
         };
         let after = self.m.r.iter().map(|v| Some(*v)).collect();
-        Evaluation { candidate, after, predicts_values: true, gain_without_worst: f64::NAN }
+        Evaluation { candidate, after, predicts_values: true, gain_without_worst: f64::NAN, wander: false }
     }
 
     /// The pose rows with `extra` columns (calibration columns first) and the nominal residuals,

@@ -13,14 +13,6 @@ use super::{Context, Evaluation};
 use crate::diagnose::PARAMETER_PENALTY;
 use crate::diagnose::math::{V3, axis, cholesky_solve_many, dot, rms};
 
-/// The start of a penalised wander's description ([`is_wander`]).
-const WANDER: &str = "bias wandering smoothly in time (cubic spline";
-
-/// The candidate's pose-level fit is a penalised wander.
-pub(crate) fn is_wander(detail: &str) -> bool {
-    detail.starts_with(WANDER)
-}
-
 /// Knot counts tried.
 const KNOTS: [usize; 4] = [4, 6, 10, 18];
 
@@ -41,7 +33,7 @@ impl Shape {
         let h = t_end / (self.knots - 3) as f64;
         let what = if self.order == 1 { "steps" } else { "bends" };
         format!(
-            "{WANDER}, {} basis functions {h:.0} s apart, {what} of {} pose-noise sigmas, {edf:.1} effective params)",
+            "bias wandering smoothly in time (cubic spline, {} basis functions {h:.0} s apart, {what} of {} pose-noise sigmas, {edf:.1} effective params)",
             self.knots, self.step
         )
     }
@@ -239,7 +231,7 @@ pub(crate) fn add(ctx: &Context<'_>, e: &mut Evaluation, fit: SmoothFit) {
     let kept: Vec<f64> = fit.after.iter().flatten().copied().collect();
     c.applicable = true;
     (c.heldout_ratio, c.heldout_gain, c.extra_params) = (fit.ratio, gain, fit.edf.round() as usize);
-    e.gain_without_worst = f64::NAN;
+    (e.gain_without_worst, e.wander) = (f64::NAN, true);
     c.ratio_after = ctx.m.to_mg(rms(&kept)) / ctx.m.gap.sim_rmse_mg;
     c.detail = fit.detail;
     e.after = fit.after;
