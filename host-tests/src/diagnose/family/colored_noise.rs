@@ -50,11 +50,12 @@ fn walk_from_holds(ctx: &Context<'_>) -> Option<V3> {
     (level > 0.0 && level.is_finite()).then_some([level; 3])
 }
 
-/// Held-out ratio of the withheld pose means under a random walk at the holds' level
-/// ([`walk_from_holds`]); `None` when the holds do not move, or the data put far more of their
-/// scatter in one pose than any draw of the walk does.
-fn holds_walk_ratio(ctx: &Context<'_>) -> Option<f64> {
-    walk_from_holds(ctx).and_then(|walk| ColoredNoise.heldout_ratio(ctx, walk, [0.0; 3]))
+/// The random walk at the holds' level ([`walk_from_holds`]) with the held-out ratio of the withheld
+/// pose means under it (`None` when the data put far more of their scatter in one pose than any
+/// draw of the walk does); measured once per log.
+fn holds_walk(ctx: &Context<'_>) -> Option<(V3, Option<f64>)> {
+    *ctx.holds_walk
+        .get_or_init(|| walk_from_holds(ctx).map(|walk| (walk, ColoredNoise.heldout_ratio(ctx, walk, [0.0; 3]))))
 }
 
 /// The holds' wander can account for the withheld pose means' scatter: a random walk at the holds'
@@ -65,10 +66,7 @@ fn holds_walk_ratio(ctx: &Context<'_>) -> Option<f64> {
 /// short to withhold poses are not judged, nor a scatter concentrated in one pose beyond any draw
 /// of the walk (an end pose of a walk's path, extrapolated by its fold's fit, can be).
 fn walk_accounts_for_poses(ctx: &Context<'_>) -> bool {
-    !ctx.pose_level
-        || walk_from_holds(ctx).is_some_and(|walk| {
-            ColoredNoise.heldout_ratio(ctx, walk, [0.0; 3]).is_none_or(|ratio| ratio <= NOISE_LEAVES_AT_MOST)
-        })
+    !ctx.pose_level || holds_walk(ctx).is_some_and(|(_, ratio)| ratio.is_none_or(|ratio| ratio <= NOISE_LEAVES_AT_MOST))
 }
 
 /// Held-out ratio up to which a random walk at the holds' level accounts closely for the withheld
@@ -81,7 +79,7 @@ const WALK_ACCOUNTS: f64 = 1.2;
 /// [`walk_accounts_for_poses`]' limit too): a time-varying fit of the pose means then follows the
 /// walk's path.
 pub(crate) fn walk_accounts_closely(ctx: &Context<'_>) -> bool {
-    wander_alike(ctx) && holds_walk_ratio(ctx).is_some_and(|ratio| ratio <= WALK_ACCOUNTS)
+    wander_alike(ctx) && holds_walk(ctx).and_then(|(_, ratio)| ratio).is_some_and(|ratio| ratio <= WALK_ACCOUNTS)
 }
 
 /// Share of the squared held-out residual in the largest pose (0 without residuals).
@@ -216,7 +214,7 @@ impl ColoredNoise {
         let mut estimates = hold_estimates(ctx);
         // The walk whose level the holds' wander measures, when it accounts for the pose means.
         if walk_accounts_closely(ctx) {
-            estimates.extend(walk_from_holds(ctx).map(|walk| (walk, [0.0; 3], true)));
+            estimates.extend(holds_walk(ctx).map(|(walk, _)| (walk, [0.0; 3], true)));
         }
         let best = self.best_noise(ctx, &estimates);
         let (walk, floor, _) = estimates[0];

@@ -14,6 +14,8 @@ mod smooth;
 mod temperature;
 pub(super) mod tremor;
 
+use std::cell::OnceCell;
+
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
 
@@ -213,6 +215,9 @@ pub(crate) struct Context<'a> {
     pub(crate) within: Option<Within>,
     /// Poses can be withheld at the pose level (enough of them for the folds).
     pub(crate) pose_level: bool,
+    /// The random walk at the holds' level and its held-out ratio, once measured
+    /// (`colored_noise::holds_walk`: asked by the noise model, the holds' answer and the verdict).
+    pub(crate) holds_walk: OnceCell<Option<(V3, Option<f64>)>>,
 }
 
 /// `1 - ln(ratio) / |ln(nominal)|`, a ratio below 1 counting [`OVERSHOOT_WEIGHT`] times.
@@ -283,6 +288,7 @@ impl<'a> Context<'a> {
             base_fit_rmse_mg,
             within,
             pose_level,
+            holds_walk: OnceCell::new(),
         })
     }
 
