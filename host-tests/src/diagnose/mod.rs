@@ -27,10 +27,11 @@
 //!    on logs too short to withhold a pose and still fit 9 + k parameters.
 //!    The verdict is the candidate with the largest gain, if the gap is significant and the gain is
 //!    at least [`MIN_GAIN`] (the thermometer named before time when both explain alike; a noise
-//!    model before a value family only when far ahead of one that leaves half the gap, or before a
-//!    drift or temperature that misses the holds' movement when the holds walk at the level of the
-//!    pose means' spread; a noise model must also be far ahead of a probe that explains the
-//!    withheld values). When the gap is significant and no family or probe explains it, the holds
+//!    model before a value family only when far ahead of one that leaves half the gap or is a
+//!    penalised wander, or before a drift or temperature that misses the holds' movement when the
+//!    holds walk at the level of the pose means' spread; a noise model must also be far ahead of a
+//!    probe that explains the withheld values; a drift or temperature whose gain rests on the
+//!    worst-predicted pose alone, with no support in the holds, is not named). When the gap is significant and no family or probe explains it, the holds
 //!    answer from how each one moves (`family::from_holds`: settling if it slows, drift if a line per
 //!    hold explains it, colored noise if every hold wanders alike and a walk at their level spreads
 //!    the pose means as much; no shrink claimed); else `unexplained` (with where the gap lies).
