@@ -620,26 +620,35 @@ mod tests {
     }
 
     #[test]
-    fn a_scale_sagging_over_the_log_is_drift_on_a_log_without_a_thermometer() {
+    fn a_scale_sagging_over_the_log_is_drift_unless_a_thermometer_moves() {
         // A ratiometric front end on a discharging supply: every axis' scale falls by 0.2 % over the
         // log (2 mg at 1 g), readings between the poses included.
         let mut table = to_table(&generate(&random_scenario(EffectClass::None, 5)), "sim").unwrap();
         let end = gap::row_time(&table, table.samples.len() - 1, 100.0);
-        for row in 0..table.samples.len() {
-            let sag = 1.0 - 0.002 * gap::row_time(&table, row, 100.0) / end;
-            table.samples[row] = table.samples[row].map(|v| v * sag);
+        let fraction: Vec<f64> = (0..table.samples.len()).map(|row| gap::row_time(&table, row, 100.0) / end).collect();
+        for (sample, f) in table.samples.iter_mut().zip(&fraction) {
+            *sample = sample.map(|v| v * (1.0 - 0.002 * f));
         }
-        let with_thermometer = table.clone();
-        table.temps_c = None;
+        let thermometer = |span_k: f64| {
+            let mut t = table.clone();
+            t.temps_c = Some(fraction.iter().map(|f| 25.0 + span_k * f).collect());
+            t
+        };
         let opts = DiagnoseOptions::DEFAULT;
-        let m = gap::measure(&table, &opts).unwrap();
-        let ctx = Context::new(&table, &m, &opts).unwrap();
-        let e = drift::Drift.evaluate(&ctx);
-        assert!(e.candidate.heldout_gain >= MIN_GAIN, "{:?}", e.candidate);
-        assert!(e.candidate.detail.contains("scale"), "{}", e.candidate.detail);
-        // With a thermometer, a scale changing over the log is the temperature family's to test.
-        let m = gap::measure(&with_thermometer, &opts).unwrap();
-        let ctx = Context::new(&with_thermometer, &m, &opts).unwrap();
+        // No thermometer, or a warmed-up part's (0.4 K over the log): the scale drifts with time.
+        let mut without = table.clone();
+        without.temps_c = None;
+        for log in [without, thermometer(0.4)] {
+            let m = gap::measure(&log, &opts).unwrap();
+            let ctx = Context::new(&log, &m, &opts).unwrap();
+            let e = drift::Drift.evaluate(&ctx);
+            assert!(e.candidate.heldout_gain >= MIN_GAIN, "{:?}", e.candidate);
+            assert!(e.candidate.detail.contains("scale"), "{}", e.candidate.detail);
+        }
+        // A thermometer warming by 3 K: a scale changing over the log is the temperature family's.
+        let warming = thermometer(3.0);
+        let m = gap::measure(&warming, &opts).unwrap();
+        let ctx = Context::new(&warming, &m, &opts).unwrap();
         assert!(drift::Drift.variants(&ctx).iter().all(|v| !v.detail.contains("scale")));
     }
 }
