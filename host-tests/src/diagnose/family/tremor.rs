@@ -3,9 +3,10 @@
 //! a digital low-pass filter, a Gauss-Markov noise, flicker and random walk all have a spectrum that
 //! does not rise with frequency. Measured in both halves of every hold (a mount's ringing after
 //! placement decays within the hold: that is settling) as the noise density near 10 Hz over the
-//! density near 2 Hz: `tau * AVAR(tau)` (overlapping Allan variance, which is flat in `tau` for white
-//! noise) at [`SHORT_S`] over the same at [`LONG_S`]. A tremor at 8-12 Hz gives several times more at
-//! the half period than at two and a half periods; a filtered or correlated noise gives 1 or less.
+//! density at and below 5 Hz: `tau * AVAR(tau)` (overlapping Allan variance, which is flat in `tau`
+//! for white noise) at [`SHORT_S`] over the lower of the same at [`LONG_S`]. A tremor at 8-12 Hz
+//! gives several times more at the half period than at one or two and a half periods; a filtered or
+//! correlated noise gives 1 or less.
 
 use crate::csvio::Table;
 use crate::diagnose::gap::PoseData;
@@ -13,31 +14,39 @@ use crate::diagnose::gap::PoseData;
 /// The short time scale, s: half a period of a 10 Hz tremor.
 const SHORT_S: f64 = 0.05;
 
-/// The long time scale, s: two and a half periods of a 10 Hz tremor (its Allan variance nearly
-/// cancels there), the noise floor below the tremor band.
-const LONG_S: f64 = 0.25;
+/// The long time scales, s: one and two and a half periods of a 10 Hz tremor (its Allan variance
+/// cancels or nearly cancels there). The noise floor below the tremor band is the lower of the two:
+/// a hand's slow drift and tilt (0.1-2 Hz) raise the longer one as much as the tremor the short one,
+/// and no noise of a sensor at rest has a lower density at 0.1 s than at 0.05 s.
+const LONG_S: [f64; 2] = [0.1, 0.25];
 
 /// The holds' density ratio above which they move in the tremor band.
 pub(crate) const TREMOR_RATIO: f64 = 1.5;
 
-/// The density ratio (`SHORT_S` over `LONG_S`, pooled over the holds) of the first and of the
+/// The density ratio (`SHORT_S` over the lower of `LONG_S`, pooled over the holds) of the first and of the
 /// second half of every hold: about 1 for white noise, at most about 1 for filtered or correlated
 /// noise; `None` when the sample rate or the holds are too short or no noise is measurable.
 pub(crate) fn band_ratios(table: &Table, poses: &[PoseData], rate: f64) -> Option<(f64, f64)> {
-    let (short, long) = ((SHORT_S * rate).round() as usize, (LONG_S * rate).round() as usize);
-    if short < 2 {
+    let blocks = |s: f64| (s * rate).round() as usize;
+    if blocks(SHORT_S) < 2 {
         return None;
     }
-    let half_ratio = |second: bool| {
-        let (mut num, mut den) = ([0.0; 2], [0.0; 2]);
+    // Pooled `m * AVAR` at `m` samples over one half of every hold.
+    let pooled = |second: bool, m: usize| {
+        let (mut sum, mut terms) = (0.0, 0.0);
         for p in poses {
             let mid = p.rows.start + p.rows.len() / 2;
             let rows = if second { &table.samples[mid..p.rows.end] } else { &table.samples[p.rows.start..mid] };
-            if let (Some(a), Some(b)) = (scaled_allan(rows, short), scaled_allan(rows, long)) {
-                (num, den) = ([num[0] + a.0, num[1] + a.1], [den[0] + b.0, den[1] + b.1]);
+            if let (Some(a), Some(_)) = (scaled_allan(rows, m), scaled_allan(rows, blocks(LONG_S[1]))) {
+                (sum, terms) = (sum + a.0, terms + a.1);
             }
         }
-        (num[1] > 0.0 && den[0] > 0.0).then(|| (num[0] / num[1]) / (den[0] / den[1]))
+        (terms > 0.0).then(|| sum / terms)
+    };
+    let half_ratio = |second: bool| {
+        let short = pooled(second, blocks(SHORT_S))?;
+        let floor = LONG_S.iter().filter_map(|s| pooled(second, blocks(*s))).fold(f64::INFINITY, f64::min);
+        (floor > 0.0 && floor.is_finite()).then(|| short / floor)
     };
     Some((half_ratio(false)?, half_ratio(true)?))
 }
@@ -108,6 +117,17 @@ mod tests {
         let ringing = |t: f64| 0.03 * (-t / 0.4).exp() * (std::f64::consts::TAU * 10.0 * t).sin();
         let (table, poses) = holds(&ringing);
         assert!(in_holds(&table, &poses, 200.0).is_none(), "{:?}", band_ratios(&table, &poses, 200.0));
+    }
+
+    #[test]
+    fn a_tremor_with_the_hand_drifting_slowly_is_motion() {
+        // A hand: a 3 mg tremor at 10 Hz and a 6 mg sway at 0.5 Hz. The sway raises the density at
+        // 0.25 s above the tremor's at 0.05 s (ratio about 0.15); at one tremor period, 0.1 s, neither
+        // moves the Allan variance much.
+        let hand =
+            |t: f64| 0.003 * (std::f64::consts::TAU * 10.0 * t).sin() + 0.006 * (std::f64::consts::TAU * 0.5 * t).sin();
+        let (table, poses) = holds(&hand);
+        assert!(in_holds(&table, &poses, 200.0).is_some(), "{:?}", band_ratios(&table, &poses, 200.0));
     }
 
     #[test]
