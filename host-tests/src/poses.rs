@@ -62,6 +62,13 @@ pub struct AccumulateOptions {
     /// Shortest pose, seconds: with a known sample rate the library's `min_pose_samples` is raised
     /// to this many seconds of samples. Defaults to [`MIN_POSE_S`]; 0 keeps the library's setting.
     pub min_pose_s: f64,
+    /// Widen the library's test of a block's mean change (`drift_enter_factor`, `drift_exit_factor`)
+    /// by the readings' measured correlation ([`block_mean_correlation`]) when it is at least
+    /// [`CORRELATED_AT_LEAST`]: the test assumes independent readings, and a heavily low-passed
+    /// sensor's block means move several times more than its per-sample scatter predicts. Defaults to
+    /// `false`; [`accumulate_holds`] sets it when the other settings find too few poses (widened on
+    /// every log, the test also let the tails of moves into the poses of logs found well without it).
+    pub correlated_readings: bool,
 }
 
 /// Least fraction of rows repeating their predecessor (all three axes) for [`repeats_look_stale`].
@@ -84,6 +91,7 @@ impl Default for AccumulateOptions {
             gap_factor: 10.0,
             skip_repeats: None,
             min_pose_s: MIN_POSE_S,
+            correlated_readings: false,
         }
     }
 }
@@ -190,6 +198,50 @@ pub fn quantisation_variance(samples: &[[f64; 3]]) -> f32 {
     total
 }
 
+/// Where a quarter of the normalised changes between the means of still blocks fall under white
+/// noise: the 25th percentile of chi-square with 3 degrees of freedom, over 3.
+const WHITE_CHANGE_Q25: f64 = 0.404;
+
+/// Least [`block_mean_correlation`] for which [`AccumulateOptions::correlated_readings`] widens the
+/// test (white noise measures about 1.0-1.3).
+pub const CORRELATED_AT_LEAST: f64 = 2.0;
+
+/// Fewest pairs of consecutive blocks from which [`block_mean_correlation`] is measured.
+const MIN_BLOCK_PAIRS: usize = 20;
+
+/// How many times more the means of consecutive blocks of `block` samples differ than the
+/// samples' own scatter predicts (`2 v / block`, `v` the blocks' variance, at least `floor`, summed
+/// over axes), in the log's stillest blocks: its 25th percentile over that of white noise (at least
+/// one; one with fewer than [`MIN_BLOCK_PAIRS`] pairs). A sensor's digital low-pass filter
+/// correlates successive readings (an MPU-6050 at 50 Hz behind its 5 Hz filter: about 25 times),
+/// and the library's test of a block's mean change, which assumes independent readings, then finds
+/// no still block; a moving block changes by far more.
+pub fn block_mean_correlation(samples: impl Iterator<Item = [f64; 3]>, block: usize, floor: f64) -> f64 {
+    let samples: Vec<[f64; 3]> = samples.collect();
+    let blocks: Vec<([f64; 3], f64)> = samples
+        .chunks_exact(block.max(2))
+        .map(|c| {
+            let n = c.len() as f64;
+            let mean: [f64; 3] = std::array::from_fn(|a| c.iter().map(|s| s[a]).sum::<f64>() / n);
+            let var: f64 = (0..3).map(|a| c.iter().map(|s| (s[a] - mean[a]).powi(2)).sum::<f64>() / (n - 1.0)).sum();
+            (mean, var.max(floor))
+        })
+        .collect();
+    let mut changes: Vec<f64> = blocks
+        .windows(2)
+        .map(|w| {
+            let d: f64 = (0..3).map(|a| (w[1].0[a] - w[0].0[a]).powi(2)).sum();
+            d * block as f64 / (w[0].1 + w[1].1)
+        })
+        .filter(|r| r.is_finite())
+        .collect();
+    if changes.len() < MIN_BLOCK_PAIRS {
+        return 1.0;
+    }
+    changes.sort_by(f64::total_cmp);
+    (changes[changes.len() / 4] / WHITE_CHANGE_Q25).max(1.0)
+}
+
 /// The detector's settings for a table, as [`accumulate`] derives them (the streaming reader from
 /// its first rows).
 #[derive(Debug, Clone, Copy)]
@@ -216,6 +268,18 @@ impl Detector {
         let block = opts.block_samples.unwrap_or_else(|| choose_block_samples(sample_rate_hz));
         let mut config = opts.config;
         config.min_noise_variance = config.min_noise_variance.max(quantisation_variance(&table.samples));
+        if opts.correlated_readings {
+            let fed = table
+                .samples
+                .iter()
+                .enumerate()
+                .filter(|(i, s)| !(skip_repeats && *i > 0 && table.samples[i - 1] == **s));
+            let correlation = block_mean_correlation(fed.map(|(_, s)| *s), block, f64::from(config.min_noise_variance));
+            if correlation >= CORRELATED_AT_LEAST {
+                config.drift_enter_factor *= correlation as f32;
+                config.drift_exit_factor *= correlation as f32;
+            }
+        }
         if let Some(rate) = sample_rate_hz {
             let samples = (opts.min_pose_s * rate).ceil();
             if samples.is_finite() && samples > f64::from(config.min_pose_samples) {
@@ -230,16 +294,25 @@ impl Detector {
     }
 }
 
-/// The options to find the poses again with when `found` poses of at least `opts.min_pose_s` number
-/// fewer than `min_poses`: the library's shortest pose alone (a log of short holds only is still
-/// calibrated from them); `None` otherwise.
-pub(crate) fn fallback(opts: &AccumulateOptions, found: usize, min_poses: usize) -> Option<AccumulateOptions> {
-    (found < min_poses && opts.min_pose_s > 0.0).then_some(AccumulateOptions { min_pose_s: 0.0, ..*opts })
+/// The options to find the poses with, in order, while too few are found: `opts`; the library's
+/// shortest pose alone (a log of short holds only is still calibrated from them); then both with the
+/// test of a block's mean change widened for correlated readings
+/// ([`AccumulateOptions::correlated_readings`]: a heavily low-passed sensor's holds). A log found
+/// with the first two is found as before the widened test existed. Repeats left out.
+pub(crate) fn attempts(opts: &AccumulateOptions) -> Vec<AccumulateOptions> {
+    let library = AccumulateOptions { min_pose_s: 0.0, ..*opts };
+    let widened = |o: AccumulateOptions| AccumulateOptions { correlated_readings: true, ..o };
+    let mut out: Vec<AccumulateOptions> = Vec::new();
+    for o in [*opts, library, widened(*opts), widened(library)] {
+        if !out.contains(&o) {
+            out.push(o);
+        }
+    }
+    out
 }
 
-/// [`accumulate`], and again with the library's shortest pose alone (`min_pose_s` 0) when the
-/// poses of at least `opts.min_pose_s` number fewer than `min_poses`: a log of short holds only is
-/// still calibrated from them.
+/// [`accumulate`] with each of [`attempts`] until the poses number at least `min_poses` (the last
+/// attempt's poses when none finds that many).
 ///
 /// # Errors
 /// As [`accumulate`].
@@ -248,11 +321,14 @@ pub fn accumulate_holds(
     opts: &AccumulateOptions,
     min_poses: usize,
 ) -> Result<Accumulation, AccumulatorError> {
-    let acc = accumulate(table, opts)?;
-    match fallback(opts, acc.poses.len(), min_poses) {
-        Some(library) => accumulate(table, &library),
-        None => Ok(acc),
+    let mut acc = accumulate(table, opts)?;
+    for next in attempts(opts).iter().skip(1) {
+        if acc.poses.len() >= min_poses {
+            break;
+        }
+        acc = accumulate(table, next)?;
     }
+    Ok(acc)
 }
 
 /// Feeds every row of `table` (as `f32`, in the table's units) through the library's
@@ -371,6 +447,47 @@ mod tests {
         assert!(left_out >= 3, "{left_out} of {} still intervals", library.poses.len());
         assert_eq!(holds.rejections.too_short, library.rejections.too_short + left_out as u32);
         assert!(holds.spans.iter().all(|s| (s.last_row + 1 - s.first_row) as f64 >= MIN_POSE_S * rate));
+    }
+
+    /// A clean simulated log through a first-order low-pass of time constant `tau_samples` (a
+    /// sensor's digital filter; 0: unfiltered).
+    fn low_passed(tau_samples: f64, seed: u64) -> Table {
+        use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
+        let mut table = to_table(&generate(&random_scenario(EffectClass::None, seed)), "sim").unwrap();
+        let alpha = 1.0 / (1.0 + tau_samples);
+        let mut state = table.samples[0];
+        for s in &mut table.samples {
+            state = std::array::from_fn(|a| state[a] + alpha * (s[a] - state[a]));
+            *s = state;
+        }
+        table
+    }
+
+    #[test]
+    fn a_heavily_low_passed_log_is_found_with_the_mean_change_test_widened() {
+        for seed in [1, 3, 4] {
+            // Unfiltered: white noise measures no correlation, and the first settings find the poses.
+            let white = low_passed(0.0, seed);
+            let c = block_mean_correlation(white.samples.iter().copied(), 16, 0.0);
+            assert!(c < CORRELATED_AT_LEAST, "seed {seed}: {c}");
+            let unfiltered = accumulate(&white, &AccumulateOptions::default()).unwrap();
+            let holds = accumulate_holds(&white, &AccumulateOptions::default(), crate::calib::MIN_POSES).unwrap();
+            assert_eq!(holds, unfiltered);
+            // A 12-sample time constant (1.3 Hz at 100 Hz): block means move about 20 times more than
+            // the per-sample scatter says; the library's test, which assumes independent readings,
+            // finds 2 poses. Widened, at least three quarters of the unfiltered log's.
+            let filtered = low_passed(12.0, seed);
+            let c = block_mean_correlation(filtered.samples.iter().copied(), 16, 0.0);
+            assert!(c >= CORRELATED_AT_LEAST, "seed {seed}: {c}");
+            let refused = accumulate(&filtered, &AccumulateOptions::default()).unwrap().poses.len();
+            let found = accumulate_holds(&filtered, &AccumulateOptions::default(), crate::calib::MIN_POSES).unwrap();
+            assert!(
+                refused < crate::calib::MIN_POSES && 4 * found.poses.len() >= 3 * unfiltered.poses.len(),
+                "seed {seed}: {refused} poses by default, {} widened ({c:.1}x), {} unfiltered",
+                found.poses.len(),
+                unfiltered.poses.len()
+            );
+        }
     }
 
     #[test]

@@ -260,14 +260,18 @@ impl From<DiagnoseError> for Refusal {
 
 pub use crate::poses::MIN_POSE_S;
 
-/// The still intervals of the table of at least `min_pose_s` (the CSV reader's accumulation, the
-/// library rejecting shorter ones), the number of those the library alone would have kept, and the
-/// sample rate.
-fn read_poses(table: &Table, min_pose_s: f64) -> Result<(Vec<Pose>, Vec<PoseData>, usize, f64), Refusal> {
+/// The still intervals of the table found with `found_with` (the CSV reader's accumulation, the
+/// library rejecting those shorter than its `min_pose_s`), the number of those the library alone
+/// would have kept, and the sample rate.
+fn read_poses(
+    table: &Table,
+    found_with: &AccumulateOptions,
+) -> Result<(Vec<Pose>, Vec<PoseData>, usize, f64), Refusal> {
     let accumulate = |min_pose_s: f64| {
-        csvio::accumulate(table, &AccumulateOptions { min_pose_s, ..AccumulateOptions::default() })
+        csvio::accumulate(table, &AccumulateOptions { min_pose_s, ..*found_with })
             .map_err(|e| err(format!("{}: {e}", table.file)))
     };
+    let min_pose_s = found_with.min_pose_s;
     let acc = accumulate(min_pose_s)?;
     let rate = acc.sample_rate_hz.or_else(|| table.sample_rate_hz()).filter(|r| *r > 0.0).unwrap_or(1.0);
     // The fewest `calibrate` accepts: six faces fit six parameters (with no degree of freedom left, the
@@ -403,13 +407,17 @@ pub(crate) fn quantisation_step(table: &Table) -> V3 {
 ///
 /// Poses shorter than [`MIN_POSE_S`] are left out (counted in [`Measured::short_poses`]).
 pub(crate) fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Measured, Refusal> {
-    measure_with(table, opts, MIN_POSE_S)
+    measure_with(table, opts, &AccumulateOptions::default())
 }
 
-/// [`measure`] leaving out the poses shorter than `min_pose_s` seconds.
-pub(crate) fn measure_with(table: &Table, opts: &DiagnoseOptions, min_pose_s: f64) -> Result<Measured, Refusal> {
+/// [`measure`] on the poses found with `found_with`.
+pub(crate) fn measure_with(
+    table: &Table,
+    opts: &DiagnoseOptions,
+    found_with: &AccumulateOptions,
+) -> Result<Measured, Refusal> {
     let gravity = opts.gravity;
-    let (lib_poses, poses, short_poses, rate) = read_poses(table, min_pose_s)?;
+    let (lib_poses, poses, short_poses, rate) = read_poses(table, found_with)?;
     let config = CalibrationConfig { gravity: gravity as f32, ..CalibrationConfig::DEFAULT };
     let cal = calib::run(&lib_poses, &config, opts.seed).map_err(|e| Refusal::NotCalibrated {
         still_poses: lib_poses.len(),
@@ -484,7 +492,7 @@ mod tests {
     #[test]
     fn the_correlation_factor_is_one_for_white_noise_and_the_averaging_width_for_averaged_noise() {
         // The poses as found in the raw log (the pose detection is not under test here).
-        let (_, poses, _, rate) = read_poses(&clean_log_averaged(1), MIN_POSE_S).unwrap();
+        let (_, poses, _, rate) = read_poses(&clean_log_averaged(1), &AccumulateOptions::default()).unwrap();
         // Width 8 with 20-sample blocks: 8 (1 - 8 / 60) = 6.9 expected, a little less with the
         // most varying tenth of the poses left out.
         for (width, low, high) in [(1, 1.0, 1.2), (8, 5.5, 8.5)] {

@@ -89,7 +89,7 @@ pub use gap::MIN_POSE_S;
 pub(crate) use locate::orientation_label;
 pub use report::{Allan, Candidate, Diagnosis, DiagnosisDocument, Gap, PoseReport, Probe};
 
-use crate::csvio::Table;
+use crate::csvio::{AccumulateOptions, Table};
 
 /// The candidate effects, in report order.
 pub const EFFECT_NAMES: [&str; 6] =
@@ -241,8 +241,10 @@ enum Step1 {
 }
 
 /// Step 1 on the still intervals of at least [`MIN_POSE_S`]; when those cannot be calibrated, the
-/// answer of holds that move, else step 1 on every still interval; poses that calibrate but determine
-/// no gap are answered [`undetermined`] (a log that calibrate accepts is answered).
+/// answer of holds that move, else step 1 on the poses found as `calibrate` would retry
+/// ([`crate::poses::attempts`]: every still interval, then the test of a block's mean change widened
+/// for correlated readings); poses that calibrate but determine no gap are answered [`undetermined`]
+/// (a log that calibrate accepts is answered).
 fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Step1, DiagnoseError> {
     match gap::measure(table, opts) {
         Ok(m) => return Ok(Step1::Measured(m)),
@@ -253,11 +255,17 @@ fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Step1, DiagnoseError
         }
         Err(gap::Refusal::Undetermined { .. } | gap::Refusal::Other(_)) => {}
     }
-    match gap::measure_with(table, opts, 0.0) {
-        Ok(m) => Ok(Step1::Measured(m)),
-        Err(gap::Refusal::Undetermined { still_poses }) => Ok(Step1::Answered(undetermined(table, opts, still_poses))),
-        Err(gap::Refusal::NotCalibrated { error, .. } | gap::Refusal::Other(error)) => Err(error),
+    let mut refused = None;
+    for found_with in crate::poses::attempts(&AccumulateOptions::default()).iter().skip(1) {
+        match gap::measure_with(table, opts, found_with) {
+            Ok(m) => return Ok(Step1::Measured(m)),
+            Err(gap::Refusal::Undetermined { still_poses }) => {
+                return Ok(Step1::Answered(undetermined(table, opts, still_poses)));
+            }
+            Err(gap::Refusal::NotCalibrated { error, .. } | gap::Refusal::Other(error)) => refused = Some(error),
+        }
     }
+    Err(refused.unwrap_or_else(|| err(format!("{}: no still poses", table.file))))
 }
 
 /// The answer for a log whose still poses calibrate (as `calibrate` does) but determine no gap: no
@@ -340,7 +348,9 @@ mod tests {
         // One knock in every fourth hold, mid-hold: a 0.45 s fragment pressed, then the hold resumes.
         let table = knocked_log(4, 0.5, 0.45, 1);
         let opts = DiagnoseOptions::DEFAULT;
-        let all = gap::measure_with(&table, &opts, 0.0).unwrap();
+        let all =
+            gap::measure_with(&table, &opts, &AccumulateOptions { min_pose_s: 0.0, ..AccumulateOptions::default() })
+                .unwrap();
         let full = gap::measure(&table, &opts).unwrap();
         assert!(full.short_poses >= 3, "{} short of {} still intervals", full.short_poses, all.poses.len());
         assert_eq!(all.poses.len(), full.poses.len() + full.short_poses);
@@ -362,7 +372,10 @@ mod tests {
         let log = generate(&random_spec(Family::ColoredNoise, 1_008_112));
         let table = read_csv_str("markov.csv", &log.to_csv_string(), &ReadOptions::default()).unwrap();
         let opts = DiagnoseOptions::DEFAULT;
-        assert!(matches!(gap::measure_with(&table, &opts, 0.0), Err(gap::Refusal::Undetermined { .. })));
+        assert!(matches!(
+            gap::measure_with(&table, &opts, &AccumulateOptions { min_pose_s: 0.0, ..AccumulateOptions::default() }),
+            Err(gap::Refusal::Undetermined { .. })
+        ));
         let d = diagnose(&table, &opts).unwrap();
         assert_eq!(d.verdict, "unexplained", "{}", d.to_text());
         assert!(!d.explained && d.not_calibrated.as_deref().is_some_and(|r| r.contains("no gap measured")));
@@ -374,7 +387,10 @@ mod tests {
         let table = knocked_log(1, 0.0, 0.4, 1000);
         let opts = DiagnoseOptions::DEFAULT;
         assert!(matches!(gap::measure(&table, &opts), Err(gap::Refusal::NotCalibrated { .. })));
-        assert!(gap::measure_with(&table, &opts, 0.0).is_ok());
+        assert!(
+            gap::measure_with(&table, &opts, &AccumulateOptions { min_pose_s: 0.0, ..AccumulateOptions::default() })
+                .is_ok()
+        );
         let d = diagnose(&table, &opts).unwrap();
         assert!(!d.verdict.is_empty(), "{}", d.to_text());
     }

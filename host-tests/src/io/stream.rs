@@ -68,8 +68,7 @@ pub fn is_large(path: &Path) -> bool {
     std::fs::metadata(path).is_ok_and(|m| m.len() >= STREAM_MIN_BYTES)
 }
 
-/// [`stream_poses`], and again with the library's shortest pose alone (`min_pose_s` 0) when the
-/// poses of at least `acc_opts.min_pose_s` number fewer than `min_poses`, as
+/// [`stream_poses`] with each of [`poses::attempts`] until the poses number at least `min_poses`, as
 /// [`poses::accumulate_holds`] does in memory.
 ///
 /// # Errors
@@ -81,11 +80,14 @@ pub fn stream_holds(
     prefix_bytes: usize,
     min_poses: usize,
 ) -> Result<Streamed, StreamError> {
-    let streamed = stream_poses(path, opts, acc_opts, prefix_bytes)?;
-    match poses::fallback(acc_opts, streamed.accumulation.poses.len(), min_poses) {
-        Some(library) => stream_poses(path, opts, &library, prefix_bytes),
-        None => Ok(streamed),
+    let mut streamed = stream_poses(path, opts, acc_opts, prefix_bytes)?;
+    for next in poses::attempts(acc_opts).iter().skip(1) {
+        if streamed.accumulation.poses.len() >= min_poses {
+            break;
+        }
+        streamed = stream_poses(path, opts, next, prefix_bytes)?;
     }
+    Ok(streamed)
 }
 
 /// Finds the poses of a raw log without holding its rows (see the [module docs](self)), reading the
