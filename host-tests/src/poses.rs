@@ -165,6 +165,9 @@ pub struct Accumulation {
     pub noise_variance: f32,
     /// Shortest pose kept, samples (shorter still intervals are in `rejections.too_short`).
     pub min_pose_samples: u32,
+    /// The factor the test of a block's mean change was widened by for correlated readings
+    /// ([`AccumulateOptions::correlated_readings`]); `None` when it was not.
+    pub mean_change_widened: Option<f64>,
 }
 
 /// The block length [`accumulate`] picks for a sample rate: the one of [`BLOCK_SIZES`] nearest (in
@@ -257,6 +260,8 @@ pub(crate) struct Detector {
     pub(crate) skip_repeats: bool,
     /// A time step longer than this interrupts the stream, s.
     pub(crate) gap_s: Option<f64>,
+    /// The factor the test of a block's mean change is widened by, if it is.
+    pub(crate) mean_change_widened: Option<f64>,
 }
 
 impl Detector {
@@ -268,6 +273,7 @@ impl Detector {
         let block = opts.block_samples.unwrap_or_else(|| choose_block_samples(sample_rate_hz));
         let mut config = opts.config;
         config.min_noise_variance = config.min_noise_variance.max(quantisation_variance(&table.samples));
+        let mut mean_change_widened = None;
         if opts.correlated_readings {
             let fed = table
                 .samples
@@ -278,6 +284,7 @@ impl Detector {
             if correlation >= CORRELATED_AT_LEAST {
                 config.drift_enter_factor *= correlation as f32;
                 config.drift_exit_factor *= correlation as f32;
+                mean_change_widened = Some(correlation);
             }
         }
         if let Some(rate) = sample_rate_hz {
@@ -290,7 +297,7 @@ impl Detector {
             let span = t.last()? - t.first()?;
             (t.len() >= 2 && span > 0.0).then(|| opts.gap_factor * span / (t.len() - 1) as f64)
         });
-        Self { config, block, sample_rate_hz, skip_repeats, gap_s }
+        Self { config, block, sample_rate_hz, skip_repeats, gap_s, mean_change_widened }
     }
 }
 
@@ -421,6 +428,7 @@ impl Run<'_> {
             min_noise_variance: config.min_noise_variance,
             noise_variance: acc.noise_variance(),
             min_pose_samples: config.min_pose_samples,
+            mean_change_widened: self.detector.mean_change_widened,
         })
     }
 }
@@ -473,6 +481,7 @@ mod tests {
             let unfiltered = accumulate(&white, &AccumulateOptions::default()).unwrap();
             let holds = accumulate_holds(&white, &AccumulateOptions::default(), crate::calib::MIN_POSES).unwrap();
             assert_eq!(holds, unfiltered);
+            assert_eq!(holds.mean_change_widened, None);
             // A 12-sample time constant (1.3 Hz at 100 Hz): block means move about 20 times more than
             // the per-sample scatter says; the library's test, which assumes independent readings,
             // finds 2 poses. Widened, at least three quarters of the unfiltered log's.
@@ -487,6 +496,7 @@ mod tests {
                 found.poses.len(),
                 unfiltered.poses.len()
             );
+            assert_eq!(found.mean_change_widened, Some(c), "seed {seed}: the widening is reported");
         }
     }
 

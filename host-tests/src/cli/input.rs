@@ -157,21 +157,37 @@ pub(super) struct StillLeftOut {
     pub(super) saturated: u32,
     /// The shortest pose kept, seconds (with a known sample rate).
     pub(super) shortest_pose_s: Option<f64>,
+    /// The factor the still test's limit on a block's mean change was widened by for correlated
+    /// (low-passed) readings, when fewer than six poses were found without it.
+    pub(super) mean_change_widened: Option<f64>,
 }
 
 impl StillLeftOut {
     fn of(acc: &csvio::Accumulation) -> Self {
         let r = acc.rejections;
         let shortest_pose_s = acc.sample_rate_hz.map(|rate| f64::from(acc.min_pose_samples) / rate);
-        Self { too_short: r.too_short, moving: r.moving, saturated: r.saturated, shortest_pose_s }
+        let widened = acc.mean_change_widened;
+        Self {
+            too_short: r.too_short,
+            moving: r.moving,
+            saturated: r.saturated,
+            shortest_pose_s,
+            mean_change_widened: widened,
+        }
     }
 
     /// The text line, when any interval was left out.
     pub(super) fn line(&self) -> Option<String> {
         let shortest = self.shortest_pose_s.map_or(String::new(), |s| format!(" (shorter than {s:.2} s)"));
-        (self.too_short + self.moving + self.saturated > 0).then(|| {
+        let widened = self.mean_change_widened.map_or(String::new(), |c| {
             format!(
-                "still intervals left out: {} too short{shortest}, {} moving, {} saturated",
+                "; readings correlated (a low-pass filter): the limit on a block's mean change widened {c:.1}x, as too few \
+                 poses were found without it"
+            )
+        });
+        (self.too_short + self.moving + self.saturated > 0 || !widened.is_empty()).then(|| {
+            format!(
+                "still intervals left out: {} too short{shortest}, {} moving, {} saturated{widened}",
                 self.too_short, self.moving, self.saturated
             )
         })

@@ -207,6 +207,8 @@ pub(crate) struct Measured {
     pub(crate) poses: Vec<PoseData>,
     /// Still intervals left out as shorter than the least pose duration.
     pub(crate) short_poses: usize,
+    /// The factor the pose finder widened its test of a block's mean change by (correlated readings).
+    pub(crate) mean_change_widened: Option<f64>,
     pub(crate) params: Params,
     pub(crate) model: Model,
     pub(crate) calibrated: Vec<V3>,
@@ -260,13 +262,23 @@ impl From<DiagnoseError> for Refusal {
 
 pub use crate::poses::MIN_POSE_S;
 
+/// The still poses of a table as the pose finder found them.
+struct Found {
+    /// The library's poses.
+    lib_poses: Vec<Pose>,
+    /// Their statistics from the rows.
+    poses: Vec<PoseData>,
+    /// Still intervals the library alone would have kept, left out as shorter than the least pose.
+    short: usize,
+    /// Sample rate, Hz.
+    rate: f64,
+    /// The factor the test of a block's mean change was widened by (correlated readings).
+    mean_change_widened: Option<f64>,
+}
+
 /// The still intervals of the table found with `found_with` (the CSV reader's accumulation, the
-/// library rejecting those shorter than its `min_pose_s`), the number of those the library alone
-/// would have kept, and the sample rate.
-fn read_poses(
-    table: &Table,
-    found_with: &AccumulateOptions,
-) -> Result<(Vec<Pose>, Vec<PoseData>, usize, f64), Refusal> {
+/// library rejecting those shorter than its `min_pose_s`).
+fn read_poses(table: &Table, found_with: &AccumulateOptions) -> Result<Found, Refusal> {
     let accumulate = |min_pose_s: f64| {
         csvio::accumulate(table, &AccumulateOptions { min_pose_s, ..*found_with })
             .map_err(|e| err(format!("{}: {e}", table.file)))
@@ -292,7 +304,7 @@ fn read_poses(
         return Err(Refusal::NotCalibrated { still_poses: found, rate, error });
     }
     let poses = acc.spans.iter().map(|s| pose_data(table, s.first_row, s.last_row + 1, rate)).collect();
-    Ok((acc.poses, poses, short, rate))
+    Ok(Found { lib_poses: acc.poses, poses, short, rate, mean_change_widened: acc.mean_change_widened })
 }
 
 /// White-equivalent variance per axis: the median within-pose variance (quantisation included: a
@@ -417,7 +429,7 @@ pub(crate) fn measure_with(
     found_with: &AccumulateOptions,
 ) -> Result<Measured, Refusal> {
     let gravity = opts.gravity;
-    let (lib_poses, poses, short_poses, rate) = read_poses(table, found_with)?;
+    let Found { lib_poses, poses, short: short_poses, rate, mean_change_widened } = read_poses(table, found_with)?;
     let config = CalibrationConfig { gravity: gravity as f32, ..CalibrationConfig::DEFAULT };
     let cal = calib::run(&lib_poses, &config, opts.seed).map_err(|e| Refusal::NotCalibrated {
         still_poses: lib_poses.len(),
@@ -440,6 +452,7 @@ pub(crate) fn measure_with(
         rate,
         poses,
         short_poses,
+        mean_change_widened,
         params: cal.params,
         model,
         calibrated,
@@ -492,7 +505,7 @@ mod tests {
     #[test]
     fn the_correlation_factor_is_one_for_white_noise_and_the_averaging_width_for_averaged_noise() {
         // The poses as found in the raw log (the pose detection is not under test here).
-        let (_, poses, _, rate) = read_poses(&clean_log_averaged(1), &AccumulateOptions::default()).unwrap();
+        let Found { poses, rate, .. } = read_poses(&clean_log_averaged(1), &AccumulateOptions::default()).unwrap();
         // Width 8 with 20-sample blocks: 8 (1 - 8 / 60) = 6.9 expected, a little less with the
         // most varying tenth of the poses left out.
         for (width, low, high) in [(1, 1.0, 1.2), (8, 5.5, 8.5)] {

@@ -137,6 +137,7 @@ pub fn stream_poses(
         min_noise_variance: settings.config.min_noise_variance,
         noise_variance: run.noise_variance,
         min_pose_samples: settings.config.min_pose_samples,
+        mean_change_widened: settings.mean_change_widened,
     };
     Ok(Streamed { table, rows: run.totals.rows, accumulation })
 }

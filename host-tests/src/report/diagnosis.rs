@@ -70,9 +70,12 @@ impl Diagnosis {
             0 => String::new(),
             n => format!(" ({n} still intervals shorter than {} s left out)", crate::diagnose::MIN_POSE_S),
         };
+        let widened = self.mean_change_widened.map_or(String::new(), |c| {
+            format!(" (readings correlated: the still test's limit on a block's mean change widened {c:.1}x)")
+        });
         let _ = writeln!(
             s,
-            "{}: {} rows ({}), {} poses{short}, seed {}",
+            "{}: {} rows ({}), {} poses{short}{widened}, seed {}",
             self.file,
             self.samples,
             self.units,
