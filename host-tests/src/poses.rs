@@ -210,7 +210,7 @@ const WHITE_CHANGE_Q25: f64 = 0.404;
 pub const CORRELATED_AT_LEAST: f64 = 2.0;
 
 /// Fewest pairs of consecutive blocks from which [`block_mean_correlation`] is measured.
-const MIN_BLOCK_PAIRS: usize = 20;
+pub const MIN_BLOCK_PAIRS: usize = 20;
 
 /// How many times more the means of consecutive blocks of `block` samples differ than the
 /// samples' own scatter predicts (`2 v / block`, `v` the blocks' variance, at least `floor`, summed
@@ -318,8 +318,10 @@ pub(crate) fn attempts(opts: &AccumulateOptions) -> Vec<AccumulateOptions> {
     out
 }
 
-/// [`accumulate`] with each of [`attempts`] until the poses number at least `min_poses` (the last
-/// attempt's poses when none finds that many).
+/// [`accumulate`] with `opts`, then while the poses number fewer than `min_poses`: with the library's
+/// shortest pose alone (a log of short holds only), then both with the test of a block's mean change
+/// widened for correlated readings ([`AccumulateOptions::correlated_readings`]); the last attempt's
+/// poses when none finds that many.
 ///
 /// # Errors
 /// As [`accumulate`].

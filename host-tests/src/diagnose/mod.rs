@@ -3,7 +3,7 @@
 //!
 //! 1. **The gap.** The poses are the still intervals of at least [`MIN_POSE_S`] (shorter ones, a hold
 //!    cut up by motion, are counted and left out; all are used when too few full holds remain and
-//!    the holds do not move). The library fits the nominal 9-parameter model ([`calib::run`],
+//!    the holds do not move). The library fits the nominal 9-parameter model ([`calib::run`](crate::calib::run),
 //!    TAGA+LM). The same experiment (the fitted orientations, sample counts, durations and the
 //!    white noise measured within the poses) is simulated `repeats` times and refitted by the
 //!    library (LM); the gap is the real modulus RMSE over the mean simulated RMSE (1 = no gap),

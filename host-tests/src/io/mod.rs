@@ -1,7 +1,7 @@
 //! Reading for the host tools, through the `csv` crate: reads accelerometer recordings (raw samples or per-pose means) from
 //! delimited text, finds the columns by name, resolves the units, and turns the rows into
-//! [`Pose`]s, either directly (means files) or through the library's static detector
-//! ([`Accumulator`]).
+//! [`Pose`](accelcal::accumulator::Pose)s, either directly (means files) or through the library's static detector
+//! ([`Accumulator`](accelcal::accumulator::Accumulator)).
 //!
 //! Every error names the file, the line where one applies, and what is wrong, quoting at most
 //! [`MAX_QUOTED_CHARS`] characters of input; nothing here panics on input. Tolerated defects get a

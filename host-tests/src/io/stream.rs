@@ -68,7 +68,7 @@ pub fn is_large(path: &Path) -> bool {
     std::fs::metadata(path).is_ok_and(|m| m.len() >= STREAM_MIN_BYTES)
 }
 
-/// [`stream_poses`] with each of [`poses::attempts`] until the poses number at least `min_poses`, as
+/// [`stream_poses`] with each of `poses::attempts` until the poses number at least `min_poses`, as
 /// [`poses::accumulate_holds`] does in memory.
 ///
 /// # Errors

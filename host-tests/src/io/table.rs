@@ -41,7 +41,7 @@ pub struct Table {
     pub dropped: DroppedRows,
 }
 
-/// Data rows [`read_csv`] dropped, by reason (each row counted once).
+/// Data rows [`read_csv`](super::read_csv) dropped, by reason (each row counted once).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct DroppedRows {
     /// A needed cell empty, NaN or infinite.
