@@ -96,6 +96,12 @@ impl Default for AccumulateOptions {
     }
 }
 
+/// Row `i` repeats the previous row exactly (all three axes): a stale read when
+/// [`AccumulateOptions::skip_repeats`] applies.
+fn repeats_previous(samples: &[[f64; 3]], i: usize) -> bool {
+    i > 0 && samples[i - 1] == samples[i]
+}
+
 /// Fraction of rows that repeat the previous row exactly (all three axes).
 pub fn repeat_fraction(samples: &[[f64; 3]]) -> f64 {
     if samples.len() < 2 {
@@ -275,12 +281,9 @@ impl Detector {
         config.min_noise_variance = config.min_noise_variance.max(quantisation_variance(&table.samples));
         let mut mean_change_widened = None;
         if opts.correlated_readings {
-            let fed = table
-                .samples
-                .iter()
-                .enumerate()
-                .filter(|(i, s)| !(skip_repeats && *i > 0 && table.samples[i - 1] == **s));
-            let correlation = block_mean_correlation(fed.map(|(_, s)| *s), block, f64::from(config.min_noise_variance));
+            let fed = (0..table.samples.len()).filter(|&i| !(skip_repeats && repeats_previous(&table.samples, i)));
+            let correlation =
+                block_mean_correlation(fed.map(|i| table.samples[i]), block, f64::from(config.min_noise_variance));
             if correlation >= CORRELATED_AT_LEAST {
                 config.drift_enter_factor *= correlation as f32;
                 config.drift_exit_factor *= correlation as f32;
@@ -393,7 +396,7 @@ impl Run<'_> {
                 interruptions += 1;
                 handle(acc.interrupt())?;
             }
-            if skip_repeats && i > 0 && table.samples[i - 1] == *s {
+            if skip_repeats && repeats_previous(&table.samples, i) {
                 continue;
             }
             row_of_pushed.push(i);

@@ -37,7 +37,10 @@ pub(crate) fn band_ratios(table: &Table, poses: &[PoseData], rate: f64) -> Optio
         for p in poses {
             let mid = p.rows.start + p.rows.len() / 2;
             let rows = if second { &table.samples[mid..p.rows.end] } else { &table.samples[p.rows.start..mid] };
-            if let (Some(a), Some(_)) = (scaled_allan(rows, m), scaled_allan(rows, blocks(LONG_S[1]))) {
+            // Only halves long enough for the longest scale take part.
+            if rows.len() >= 2 * blocks(LONG_S[1])
+                && let Some(a) = scaled_allan(rows, m)
+            {
                 (sum, terms) = (sum + a.0, terms + a.1);
             }
         }
