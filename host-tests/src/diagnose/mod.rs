@@ -281,9 +281,17 @@ fn undetermined(table: &Table, opts: &DiagnoseOptions, still_poses: usize) -> Di
 }
 
 /// The answer for a log whose still poses cannot be calibrated but whose holds mostly move
-/// (`holds.rs`): `motion`, with the evidence, no gap measured; `None` when the holds do not move.
+/// (`holds.rs`), or which moves in the tremor band throughout (a hand that keeps the orientation
+/// moving too much for holds to be found, `family/tremor.rs`): `motion`, with the evidence, no gap
+/// measured; `None` when neither moves.
 fn moving_holds(table: &Table, opts: &DiagnoseOptions, still_poses: usize, rate: f64) -> Option<Diagnosis> {
-    let motion = holds::scan(table, rate).filter(holds::HoldMotion::explains_few_poses)?;
+    let detail = match holds::scan(table, rate).filter(holds::HoldMotion::explains_few_poses) {
+        Some(motion) => motion.describe(still_poses),
+        None => format!(
+            "the still-pose detector kept {still_poses} poses, too few to calibrate; the log moves at 2-20 Hz ({})",
+            family::tremor::in_log(table, rate)?.describe()
+        ),
+    };
     let candidate = Candidate {
         effect: "motion",
         applicable: true,
@@ -291,7 +299,7 @@ fn moving_holds(table: &Table, opts: &DiagnoseOptions, still_poses: usize, rate:
         heldout_gain: f64::NAN,
         ratio_after: f64::NAN,
         extra_params: 0,
-        detail: motion.describe(still_poses),
+        detail,
         within_gain: f64::NAN,
         within_detail: String::new(),
         within_disagreement: f64::NAN,
@@ -443,6 +451,21 @@ mod tests {
         // Three still holds: too few, and nothing moves: the detector's error stays.
         let e = diagnose(&holds::tests::log(3, |_, _| 0.0), &DiagnoseOptions::DEFAULT).unwrap_err();
         assert!(e.to_string().contains("static poses"), "{e}");
+    }
+
+    #[test]
+    fn a_log_held_by_a_swaying_trembling_hand_is_answered_motion() {
+        // Every hold sways by 60 mg at 0.7 Hz (too much for the holds scan to find holds) with a
+        // 10 mg tremor at 9 Hz: no still poses, no holds, but the log's spectrum rises to 8-12 Hz.
+        let hand = |_: usize, t: f64| 0.060 * (4.4 * t).sin() + 0.010 * (56.5 * t).sin();
+        let table = holds::tests::log(10, hand);
+        assert!(holds::scan(&table, 100.0).is_none_or(|m| !m.explains_few_poses()));
+        let d = diagnose(&table, &DiagnoseOptions::DEFAULT).unwrap();
+        assert_eq!(d.verdict, "motion", "{}", d.to_text());
+        assert!(d.candidates[0].detail.contains("8-12 Hz"), "{}", d.to_text());
+        // The same sway without the tremor: the detector's error stays.
+        let e = diagnose(&holds::tests::log(10, |_, t| 0.060 * (4.4 * t).sin()), &DiagnoseOptions::DEFAULT);
+        assert!(e.is_err(), "{:?}", e.map(|d| d.to_text()));
     }
 
     #[test]

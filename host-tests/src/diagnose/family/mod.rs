@@ -175,12 +175,19 @@ pub(crate) fn bias_scale_effect(f: V3, x: f64, power: usize, bias: bool, scale: 
 
 /// A verdict from the holds' movement alone, for when no family explains the withheld poses:
 /// settling when the movement slows within each hold, else drift when a line per hold explains it,
-/// else colored noise when every hold wanders alike; with what supports it.
+/// else colored noise when every hold wanders alike (motion when they move in the tremor band); with
+/// what supports it.
 pub(crate) fn from_holds(ctx: &Context<'_>) -> Option<(&'static str, String)> {
     settling::settling_holds(ctx)
         .map(|d| ("settling", d))
         .or_else(|| drift::drifting_holds(ctx).map(|d| ("drift", d)))
-        .or_else(|| colored_noise::wandering_holds(ctx).map(|d| ("colored-noise", d)))
+        .or_else(|| {
+            let wander = colored_noise::wandering_holds(ctx)?;
+            Some(match tremor::in_holds(ctx.table, ctx.poses, ctx.m.rate) {
+                Some(t) => ("motion", format!("{wander}; they move at 2-20 Hz ({})", t.describe())),
+                None => ("colored-noise", wander),
+            })
+        })
 }
 
 /// Every family, in report order.

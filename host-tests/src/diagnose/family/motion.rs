@@ -30,17 +30,14 @@ impl Family for Motion {
     /// noise: the better on withheld poses.
     fn evaluate(&self, ctx: &Context<'_>) -> Evaluation {
         let dropped = standard_evaluation(self, ctx);
-        let Some(ratio) = tremor::in_holds(ctx.table, ctx.poses, ctx.m.rate) else { return dropped };
+        let Some(tremor) = tremor::in_holds(ctx.table, ctx.poses, ctx.m.rate) else { return dropped };
         let mut shaken = colored_noise::ColoredNoise.noise_model(ctx);
         let c = &mut shaken.candidate;
         if !c.applicable || (dropped.candidate.applicable && dropped.candidate.evidence() >= c.evidence()) {
             return dropped;
         }
         c.effect = self.name();
-        c.detail = format!(
-            "the holds move at 2-20 Hz (noise density near 10 Hz {ratio:.1}x that near 2 Hz): their means scatter as {}",
-            c.detail
-        );
+        c.detail = format!("the holds move at 2-20 Hz ({}): their means scatter as {}", tremor.describe(), c.detail);
         shaken
     }
 
