@@ -247,12 +247,14 @@ enum Step1 {
 /// for correlated readings); poses that calibrate but determine no gap are answered [`undetermined`]
 /// (a log that calibrate accepts is answered).
 fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Step1, DiagnoseError> {
+    let mut not_calibrated = None;
     match gap::measure(table, opts) {
         Ok(m) => return Ok(Step1::Measured(m)),
         Err(gap::Refusal::NotCalibrated { still_poses, rate, .. }) => {
             if let Some(d) = moving_holds(table, opts, still_poses, rate) {
                 return Ok(Step1::Answered(d));
             }
+            not_calibrated = Some((still_poses, rate));
         }
         Err(gap::Refusal::Undetermined { .. } | gap::Refusal::Other(_)) => {}
     }
@@ -265,6 +267,11 @@ fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Step1, DiagnoseError
             }
             Err(gap::Refusal::NotCalibrated { error, .. } | gap::Refusal::Other(error)) => refused = Some(error),
         }
+    }
+    if let Some((still_poses, rate)) = not_calibrated
+        && let Some(d) = trembling_log(table, opts, still_poses, rate)
+    {
+        return Ok(Step1::Answered(d));
     }
     Err(refused.unwrap_or_else(|| err(format!("{}: no still poses", table.file))))
 }
@@ -281,17 +288,26 @@ fn undetermined(table: &Table, opts: &DiagnoseOptions, still_poses: usize) -> Di
 }
 
 /// The answer for a log whose still poses cannot be calibrated but whose holds mostly move
-/// (`holds.rs`), or which moves in the tremor band throughout (a hand that keeps the orientation
-/// moving too much for holds to be found, `family/tremor.rs`): `motion`, with the evidence, no gap
-/// measured; `None` when neither moves.
+/// (`holds.rs`): `motion`, with the evidence, no gap measured; `None` when the holds do not move.
 fn moving_holds(table: &Table, opts: &DiagnoseOptions, still_poses: usize, rate: f64) -> Option<Diagnosis> {
-    let detail = match holds::scan(table, rate).filter(holds::HoldMotion::explains_few_poses) {
-        Some(motion) => motion.describe(still_poses),
-        None => format!(
-            "the still-pose detector kept {still_poses} poses, too few to calibrate; the log moves at 2-20 Hz ({})",
-            family::tremor::in_log(table, rate)?.describe()
-        ),
-    };
+    let motion = holds::scan(table, rate).filter(holds::HoldMotion::explains_few_poses)?;
+    Some(motion_answer(table, opts, still_poses, motion.describe(still_poses)))
+}
+
+/// The answer for a log that no retry of the pose finder calibrates and which moves in the tremor
+/// band throughout (a hand that keeps the orientation moving too much for the holds scan to find
+/// holds, `family/tremor.rs`): `motion`, no gap measured; `None` when it does not.
+fn trembling_log(table: &Table, opts: &DiagnoseOptions, still_poses: usize, rate: f64) -> Option<Diagnosis> {
+    let tremor = family::tremor::in_log(table, rate)?;
+    let detail = format!(
+        "the still-pose detector kept {still_poses} poses, too few to calibrate; the log moves at 2-20 Hz ({})",
+        tremor.describe()
+    );
+    Some(motion_answer(table, opts, still_poses, detail))
+}
+
+/// `motion` without a measured gap, with the evidence.
+fn motion_answer(table: &Table, opts: &DiagnoseOptions, still_poses: usize, detail: String) -> Diagnosis {
     let candidate = Candidate {
         effect: "motion",
         applicable: true,
@@ -306,7 +322,7 @@ fn moving_holds(table: &Table, opts: &DiagnoseOptions, still_poses: usize, rate:
         variants: Vec::new(),
     };
     let reason = format!("{} still poses: too few to calibrate", still_poses);
-    Some(Diagnosis { verdict: "motion", explained: true, ..unmeasured(table, opts, vec![candidate], reason) })
+    Diagnosis { verdict: "motion", explained: true, ..unmeasured(table, opts, vec![candidate], reason) }
 }
 
 /// A diagnosis without a measured gap: `candidates` and why no gap was measured (verdict
