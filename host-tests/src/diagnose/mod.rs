@@ -245,7 +245,8 @@ enum Step1 {
 /// answer of holds that move, else step 1 on the poses found as `calibrate` would retry
 /// ([`crate::poses::attempts`]: every still interval, then the test of a block's mean change widened
 /// for correlated readings); poses that calibrate but determine no gap are answered [`undetermined`]
-/// (a log that calibrate accepts is answered).
+/// (a log that calibrate accepts is answered); when no retry calibrates, a log moving in the tremor
+/// band is answered [`trembling_log`].
 fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Step1, DiagnoseError> {
     let mut not_calibrated = None;
     match gap::measure(table, opts) {
