@@ -155,6 +155,9 @@ pub(crate) fn log_band_ratio(table: &Table, rate: f64) -> Option<f64> {
             })
             .collect()
     };
+    // A window whose power below the band is within rounding of nothing (a constant or stuck log) has
+    // no spectrum to compare: a nano-g at the bin.
+    let negligible = (1e-9 * table.median_magnitude * width as f64).powi(2);
     let below: Vec<Vec<(f64, f64)>> = BELOW_BAND_HZ.map(phasor).collect();
     let band: Vec<Vec<(f64, f64)>> = TREMOR_BAND_HZ.map(phasor).collect();
     let ratios: Vec<f64> = table
@@ -164,7 +167,7 @@ pub(crate) fn log_band_ratio(table: &Table, rate: f64) -> Option<f64> {
             let density =
                 |bins: &[Vec<(f64, f64)>]| bins.iter().map(|p| power(window, p)).sum::<f64>() / bins.len() as f64;
             let floor = density(&below);
-            (floor > 0.0).then(|| density(&band) / floor)
+            (floor > negligible).then(|| density(&band) / floor)
         })
         .collect();
     (ratios.len() >= MIN_WINDOWS).then(|| median(&ratios))
@@ -286,6 +289,10 @@ mod tests {
             let window = &white.samples[i.saturating_sub(7)..=i];
             *s = std::array::from_fn(|a| window.iter().map(|r| r[a]).sum::<f64>() / window.len() as f64);
         }
+        // A constant log (a stuck sensor): no spectrum, not a ratio of rounding errors.
+        let mut constant = white.clone();
+        constant.samples.iter_mut().for_each(|s| *s = [0.01, 0.02, 0.99]);
+        assert_eq!(log_band_ratio(&constant, 200.0), None);
         for (name, table) in [("white", &white), ("walk", &walk), ("filtered", &filtered)] {
             let ratio = log_band_ratio(table, 200.0).unwrap();
             assert!(ratio < 1.5, "{name}: {ratio}");
