@@ -2,7 +2,7 @@
 //! rest and pooled over every hold (time segments, not the pose means it is judged on) and given to
 //! the simulator; judged by how well the noise model predicts the nominal model's held-out scatter.
 
-use super::{Candidate, Context, Evaluation, Family, Variant, tremor};
+use super::{Candidate, Context, Evaluation, Family, Variant};
 use crate::csvio::Table;
 use crate::diagnose::gap::PoseData;
 use crate::diagnose::gap::{Noise, expected_cv_ms, quantisation_step, residual_noise_draws, row_time, simulate_gap};
@@ -198,7 +198,7 @@ impl Family for ColoredNoise {
 
     fn evaluate(&self, ctx: &Context<'_>) -> Evaluation {
         // Motion in the tremor band is no sensor noise: the motion family measures it.
-        if tremor::in_holds(ctx.table, ctx.poses, ctx.m.rate).is_some() {
+        if ctx.tremor().is_some() {
             let mut e = ctx.not_testable(self.name());
             e.candidate.detail = "the holds move at 2-20 Hz: motion, not sensor noise".into();
             return e;

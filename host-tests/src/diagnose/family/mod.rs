@@ -183,7 +183,7 @@ pub(crate) fn from_holds(ctx: &Context<'_>) -> Option<(&'static str, String)> {
         .or_else(|| drift::drifting_holds(ctx).map(|d| ("drift", d)))
         .or_else(|| {
             let wander = colored_noise::wandering_holds(ctx)?;
-            Some(match tremor::in_holds(ctx.table, ctx.poses, ctx.m.rate) {
+            Some(match ctx.tremor() {
                 Some(t) => ("motion", format!("{wander}; they move at 2-20 Hz ({})", t.describe())),
                 None => ("colored-noise", wander),
             })
@@ -225,6 +225,8 @@ pub(crate) struct Context<'a> {
     /// The random walk at the holds' level and its held-out ratio, once measured
     /// (`colored_noise::holds_walk`: asked by the noise model, the holds' answer and the verdict).
     pub(crate) holds_walk: OnceCell<Option<(V3, Option<f64>)>>,
+    /// Motion in the tremor band, once measured ([`Context::tremor`]).
+    tremor: OnceCell<Option<tremor::Tremor>>,
 }
 
 /// `1 - ln(ratio) / |ln(nominal)|`, a ratio below 1 counting [`OVERSHOOT_WEIGHT`] times.
@@ -296,7 +298,14 @@ impl<'a> Context<'a> {
             within,
             pose_level,
             holds_walk: OnceCell::new(),
+            tremor: OnceCell::new(),
         })
+    }
+
+    /// The holds (or the log, when the holds are too short) move in the tremor band
+    /// ([`tremor::in_holds`]; asked by the motion and colored-noise families and the holds' answer).
+    pub(crate) fn tremor(&self) -> Option<tremor::Tremor> {
+        *self.tremor.get_or_init(|| tremor::in_holds(self.table, self.poses, self.m.rate))
     }
 
     pub(crate) fn directions(&self) -> &[V3] {

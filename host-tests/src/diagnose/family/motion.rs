@@ -6,7 +6,7 @@
 
 use accelcal::model::PARAM_COUNT;
 
-use super::{Context, Evaluation, Family, Fitted, Variant, colored_noise, ringing, standard_evaluation, tremor};
+use super::{Context, Evaluation, Family, Fitted, Variant, colored_noise, ringing, standard_evaluation};
 use crate::diagnose::SEGMENTS;
 use crate::diagnose::locate::{within_chi2_from, within_chi2_of};
 
@@ -30,7 +30,7 @@ impl Family for Motion {
     /// noise: the better on withheld poses.
     fn evaluate(&self, ctx: &Context<'_>) -> Evaluation {
         let dropped = standard_evaluation(self, ctx);
-        let Some(tremor) = tremor::in_holds(ctx.table, ctx.poses, ctx.m.rate) else { return dropped };
+        let Some(tremor) = ctx.tremor() else { return dropped };
         let mut shaken = colored_noise::ColoredNoise.noise_model(ctx);
         let c = &mut shaken.candidate;
         if !c.applicable || (dropped.candidate.applicable && dropped.candidate.evidence() >= c.evidence()) {

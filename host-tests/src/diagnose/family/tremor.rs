@@ -164,8 +164,11 @@ pub(crate) fn log_band_ratio(table: &Table, rate: f64) -> Option<f64> {
         .samples
         .chunks_exact(width)
         .filter_map(|window| {
+            let n = window.len() as f64;
+            let mean: [f64; 3] = std::array::from_fn(|a| window.iter().map(|s| s[a]).sum::<f64>() / n);
+            let centred: Vec<[f64; 3]> = window.iter().map(|s| std::array::from_fn(|a| s[a] - mean[a])).collect();
             let density =
-                |bins: &[Vec<(f64, f64)>]| bins.iter().map(|p| power(window, p)).sum::<f64>() / bins.len() as f64;
+                |bins: &[Vec<(f64, f64)>]| bins.iter().map(|p| power(&centred, p)).sum::<f64>() / bins.len() as f64;
             let floor = density(&below);
             (floor > negligible).then(|| density(&band) / floor)
         })
@@ -173,16 +176,12 @@ pub(crate) fn log_band_ratio(table: &Table, rate: f64) -> Option<f64> {
     (ratios.len() >= MIN_WINDOWS).then(|| median(&ratios))
 }
 
-/// The window's power at the bin of `phasor` (its mean removed), axes summed.
-fn power(window: &[[f64; 3]], phasor: &[(f64, f64)]) -> f64 {
-    let n = window.len() as f64;
+/// The power of a window (its mean removed) at the bin of `phasor`, axes summed.
+fn power(centred: &[[f64; 3]], phasor: &[(f64, f64)]) -> f64 {
     (0..3)
         .map(|a| {
-            let mean = window.iter().map(|s| s[a]).sum::<f64>() / n;
-            let (re, im) = window
-                .iter()
-                .zip(phasor)
-                .fold((0.0, 0.0), |(re, im), (s, (c, si))| (re + (s[a] - mean) * c, im + (s[a] - mean) * si));
+            let (re, im) =
+                centred.iter().zip(phasor).fold((0.0, 0.0), |(re, im), (s, (c, si))| (re + s[a] * c, im + s[a] * si));
             re * re + im * im
         })
         .sum()
