@@ -333,14 +333,25 @@ pub fn accumulate_holds(
     opts: &AccumulateOptions,
     min_poses: usize,
 ) -> Result<Accumulation, AccumulatorError> {
-    let mut acc = accumulate(table, opts)?;
+    until_enough(opts, min_poses, |a: &Accumulation| a.poses.len(), |o| accumulate(table, o))
+}
+
+/// `find` with each of [`attempts`] in order until what it finds holds at least `min_poses` poses
+/// (`count`); the last attempt's result when none does.
+pub(crate) fn until_enough<T, E>(
+    opts: &AccumulateOptions,
+    min_poses: usize,
+    count: impl Fn(&T) -> usize,
+    mut find: impl FnMut(&AccumulateOptions) -> Result<T, E>,
+) -> Result<T, E> {
+    let mut found = find(opts)?;
     for next in attempts(opts).iter().skip(1) {
-        if acc.poses.len() >= min_poses {
+        if count(&found) >= min_poses {
             break;
         }
-        acc = accumulate(table, next)?;
+        found = find(next)?;
     }
-    Ok(acc)
+    Ok(found)
 }
 
 /// Feeds every row of `table` (as `f32`, in the table's units) through the library's

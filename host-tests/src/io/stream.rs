@@ -68,7 +68,7 @@ pub fn is_large(path: &Path) -> bool {
     std::fs::metadata(path).is_ok_and(|m| m.len() >= STREAM_MIN_BYTES)
 }
 
-/// [`stream_poses`] with each of `poses::attempts` until the poses number at least `min_poses`, as
+/// [`stream_poses`] with each of `poses::attempts` until the poses number at least `min_poses` (`poses::until_enough`), as
 /// [`poses::accumulate_holds`] does in memory.
 ///
 /// # Errors
@@ -80,14 +80,12 @@ pub fn stream_holds(
     prefix_bytes: usize,
     min_poses: usize,
 ) -> Result<Streamed, StreamError> {
-    let mut streamed = stream_poses(path, opts, acc_opts, prefix_bytes)?;
-    for next in poses::attempts(acc_opts).iter().skip(1) {
-        if streamed.accumulation.poses.len() >= min_poses {
-            break;
-        }
-        streamed = stream_poses(path, opts, next, prefix_bytes)?;
-    }
-    Ok(streamed)
+    poses::until_enough(
+        acc_opts,
+        min_poses,
+        |s: &Streamed| s.accumulation.poses.len(),
+        |o| stream_poses(path, opts, o, prefix_bytes),
+    )
 }
 
 /// Finds the poses of a raw log without holding its rows (see the [module docs](self)), reading the
