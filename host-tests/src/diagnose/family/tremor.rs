@@ -130,8 +130,8 @@ const BELOW_BAND_HZ: RangeInclusive<usize> = 3..=6;
 /// The log-wide ratio above which the log moves in the tremor band. A sensor at rest gives about 1
 /// or less (white noise flat, filtered or correlated noise falling with frequency); on the Python
 /// development sets the logs without motion reached 2.4 (a ringing mount after each placement; mains
-/// and motor lines in the band aside), 80 of the 86 hand-held ones exceeded 3, most of them 5 (three
-/// were below 1: parts whose own low-pass filter cuts below 8 Hz).
+/// and motor lines in the band aside), 80 of the 86 hand-held ones exceeded 3, 73 of them 5 (three
+/// were below 1: two parts whose own low-pass filter cuts at 2.5 and 6.25 Hz, one not examined).
 const LOG_BAND_RATIO: f64 = 3.0;
 
 /// Fewest 1 s windows for the log-wide ratio.
