@@ -69,6 +69,13 @@ pub struct AccumulateOptions {
     /// `false`; [`accumulate_holds`] sets it when the other settings find too few poses (widened on
     /// every log, the test also let the tails of moves into the poses of logs found well without it).
     pub correlated_readings: bool,
+    /// With [`correlated_readings`](Self::correlated_readings), and the readings measured correlated: the
+    /// block this many times longer (at most the longest of [`BLOCK_SIZES`]), the widening measured at
+    /// that length. A block of a heavily low-passed sensor holds few independent readings, so its
+    /// variance scatters far about the noise level and the variance test closes poses at random (an
+    /// MPU-6050 at 50 Hz behind a 2.5 Hz filter: 1-2 of 23-30 holds found in 8-sample blocks, 20-27 in
+    /// 16-sample blocks). Defaults to 1; [`accumulate_holds`] tries 2 last.
+    pub correlated_block_multiple: usize,
 }
 
 /// Least fraction of rows repeating their predecessor (all three axes) for [`repeats_look_stale`].
@@ -92,6 +99,7 @@ impl Default for AccumulateOptions {
             skip_repeats: None,
             min_pose_s: MIN_POSE_S,
             correlated_readings: false,
+            correlated_block_multiple: 1,
         }
     }
 }
@@ -190,6 +198,12 @@ pub fn choose_block_samples(sample_rate_hz: Option<f64>) -> usize {
         .unwrap_or(DEFAULT_BLOCK_SAMPLES)
 }
 
+/// `block` times `multiple`, at most the longest of [`BLOCK_SIZES`] (a block length the detector has).
+fn longer_block(block: usize, multiple: usize) -> usize {
+    let longest = BLOCK_SIZES[BLOCK_SIZES.len() - 1];
+    BLOCK_SIZES.iter().copied().find(|&b| b >= block.saturating_mul(multiple)).unwrap_or(longest)
+}
+
 /// The quantisation floor of the readings: `sum over axes of q^2 / 12` with `q` the smallest non-zero
 /// step between consecutive readings of that axis (input unit squared).
 pub fn quantisation_variance(samples: &[[f64; 3]]) -> f32 {
@@ -276,14 +290,22 @@ impl Detector {
         let skip_repeats = opts.skip_repeats.unwrap_or_else(|| repeats_look_stale(&table.samples));
         let fed_fraction = if skip_repeats { 1.0 - repeats } else { 1.0 };
         let sample_rate_hz = opts.sample_rate_hz.or_else(|| table.sample_rate_hz()).map(|r| r * fed_fraction);
-        let block = opts.block_samples.unwrap_or_else(|| choose_block_samples(sample_rate_hz));
+        let mut block = opts.block_samples.unwrap_or_else(|| choose_block_samples(sample_rate_hz));
         let mut config = opts.config;
         config.min_noise_variance = config.min_noise_variance.max(quantisation_variance(&table.samples));
         let mut mean_change_widened = None;
         if opts.correlated_readings {
-            let fed = (0..table.samples.len()).filter(|&i| !(skip_repeats && repeats_previous(&table.samples, i)));
-            let correlation =
-                block_mean_correlation(fed.map(|i| table.samples[i]), block, f64::from(config.min_noise_variance));
+            let fed = || {
+                (0..table.samples.len())
+                    .filter(move |&i| !(skip_repeats && repeats_previous(&table.samples, i)))
+                    .map(|i| table.samples[i])
+            };
+            let floor = f64::from(config.min_noise_variance);
+            let mut correlation = block_mean_correlation(fed(), block, floor);
+            if correlation >= CORRELATED_AT_LEAST && opts.correlated_block_multiple > 1 {
+                block = longer_block(block, opts.correlated_block_multiple);
+                correlation = block_mean_correlation(fed(), block, floor);
+            }
             if correlation >= CORRELATED_AT_LEAST {
                 config.drift_enter_factor *= correlation as f32;
                 config.drift_exit_factor *= correlation as f32;
@@ -307,13 +329,16 @@ impl Detector {
 /// The options to find the poses with, in order, while too few are found: `opts`; the library's
 /// shortest pose alone (a log of short holds only is still calibrated from them); then both with the
 /// test of a block's mean change widened for correlated readings
-/// ([`AccumulateOptions::correlated_readings`]: a heavily low-passed sensor's holds). A log found
-/// with the first two is found as before the widened test existed. Repeats left out.
+/// ([`AccumulateOptions::correlated_readings`]: a heavily low-passed sensor's holds); then both with
+/// blocks twice as long as well ([`AccumulateOptions::correlated_block_multiple`]). A log found with
+/// the first two is found as before the widened test existed, one found with the first four as
+/// before the longer blocks. Repeats left out.
 pub(crate) fn attempts(opts: &AccumulateOptions) -> Vec<AccumulateOptions> {
     let library = AccumulateOptions { min_pose_s: 0.0, ..*opts };
     let widened = |o: AccumulateOptions| AccumulateOptions { correlated_readings: true, ..o };
+    let longer = |o: AccumulateOptions| AccumulateOptions { correlated_block_multiple: 2, ..widened(o) };
     let mut out: Vec<AccumulateOptions> = Vec::new();
-    for o in [*opts, library, widened(*opts), widened(library)] {
+    for o in [*opts, library, widened(*opts), widened(library), longer(*opts), longer(library)] {
         if !out.contains(&o) {
             out.push(o);
         }
@@ -323,8 +348,9 @@ pub(crate) fn attempts(opts: &AccumulateOptions) -> Vec<AccumulateOptions> {
 
 /// [`accumulate`] with `opts`, then while the poses number fewer than `min_poses`: with the library's
 /// shortest pose alone (a log of short holds only), then both with the test of a block's mean change
-/// widened for correlated readings ([`AccumulateOptions::correlated_readings`]); the last attempt's
-/// poses when none finds that many.
+/// widened for correlated readings ([`AccumulateOptions::correlated_readings`]), then with longer
+/// blocks as well ([`AccumulateOptions::correlated_block_multiple`]); the last attempt's poses when
+/// none finds that many.
 ///
 /// # Errors
 /// As [`accumulate`].
@@ -476,15 +502,48 @@ mod tests {
     /// A clean simulated log through a first-order low-pass of time constant `tau_samples` (a
     /// sensor's digital filter; 0: unfiltered).
     fn low_passed(tau_samples: f64, seed: u64) -> Table {
+        low_passed_stages(tau_samples, 1, seed)
+    }
+
+    /// A clean simulated log through `stages` first-order low-passes of `tau_samples` each.
+    fn low_passed_stages(tau_samples: f64, stages: usize, seed: u64) -> Table {
         use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
         let mut table = to_table(&generate(&random_scenario(EffectClass::None, seed)), "sim").unwrap();
         let alpha = 1.0 / (1.0 + tau_samples);
-        let mut state = table.samples[0];
-        for s in &mut table.samples {
-            state = std::array::from_fn(|a| state[a] + alpha * (s[a] - state[a]));
-            *s = state;
+        for _ in 0..stages {
+            let mut state = table.samples[0];
+            for s in &mut table.samples {
+                state = std::array::from_fn(|a| state[a] + alpha * (s[a] - state[a]));
+                *s = state;
+            }
         }
         table
+    }
+
+    #[test]
+    fn a_log_whose_blocks_hold_few_independent_readings_is_found_in_longer_blocks() {
+        // Two low-pass stages of 3.2 samples (a second-order filter at a twentieth of the rate, as an
+        // MPU-6050 at 50 Hz behind its 2.5 Hz filter) read in blocks of 8: the block variances scatter
+        // so far that even the widened test finds too few poses; blocks of 16 find most.
+        let eight = AccumulateOptions { block_samples: Some(8), ..AccumulateOptions::default() };
+        for seed in [1, 2, 3] {
+            let unfiltered = accumulate(&low_passed(0.0, seed), &eight).unwrap().poses.len();
+            let filtered = low_passed_stages(3.2, 2, seed);
+            let widened: Vec<usize> = attempts(&eight)
+                .iter()
+                .filter(|o| o.correlated_block_multiple == 1)
+                .map(|o| accumulate(&filtered, o).unwrap().poses.len())
+                .collect();
+            let found = accumulate_holds(&filtered, &eight, crate::calib::MIN_POSES).unwrap();
+            assert!(
+                widened.iter().all(|&n| n < crate::calib::MIN_POSES) && 4 * found.poses.len() >= 3 * unfiltered,
+                "seed {seed}: {widened:?} in blocks of 8, {} in blocks of {}, {unfiltered} unfiltered",
+                found.poses.len(),
+                found.block_samples
+            );
+            assert_eq!(found.block_samples, 16, "seed {seed}");
+            assert!(found.mean_change_widened.is_some(), "seed {seed}: the widening is reported");
+        }
     }
 
     #[test]
