@@ -125,9 +125,10 @@ pub fn evaluate(spec: &LogSpec) -> Outcome {
 /// `calibrate`'s path (the reader's poses, the library's calibration) succeeds on `table`.
 fn calibrate_accepts(table: &crate::csvio::Table, seed: u64) -> bool {
     let opts = crate::csvio::AccumulateOptions::default();
-    let Ok(acc) = crate::csvio::accumulate_holds(table, &opts, crate::calib::MIN_POSES) else { return false };
-    acc.poses.len() >= crate::calib::MIN_POSES
-        && crate::calib::run(&acc.poses, &accelcal::calibrate::CalibrationConfig::DEFAULT, seed).is_ok()
+    let config = accelcal::calibrate::CalibrationConfig::DEFAULT;
+    let enough = |poses: &[accelcal::accumulator::Pose]| crate::calib::enough_poses(poses, &config);
+    let Ok(acc) = crate::csvio::accumulate_until(table, &opts, enough) else { return false };
+    acc.poses.len() >= crate::calib::MIN_POSES && crate::calib::run(&acc.poses, &config, seed).is_ok()
 }
 
 /// `verdict` is the answer `expected` asks for.

@@ -23,6 +23,17 @@ pub const MAX_POSES: usize = 512;
 /// start); with fewer the pose finder falls back to shorter holds ([`crate::poses::accumulate_holds`]).
 pub const MIN_POSES: usize = 6;
 
+/// The poses are enough to calibrate with `config`: at least [`MIN_POSES`], and the initial estimate
+/// `config.init` asks for fits them (the ellipsoid needs nine directions, the six faces poses along
+/// the faces). More than [`MAX_POSES`] count as enough: what to do with them is the caller's error.
+/// The pose finder tries its later settings while the poses are not enough
+/// ([`crate::poses::accumulate_until`]).
+pub fn enough_poses(poses: &[Pose], config: &CalibrationConfig) -> bool {
+    poses.len() > MAX_POSES
+        || poses.len() >= MIN_POSES
+            && NormalizedPoses::<MAX_POSES>::prepare(poses, config.init, config.gravity, &config.outliers).is_ok()
+}
+
 /// Range of ratios of `--gravity` to the gravity the readings measure that [`check_gravity`] accepts.
 pub const GRAVITY_RATIO_RANGE: (f64, f64) = (0.5, 2.0);
 
@@ -275,6 +286,27 @@ mod tests {
     fn paper_poses() -> (Vec<Pose>, f32) {
         let cfg = SimConfig::paper(3);
         (simulate_pose_means(&cfg), cfg.gravity as f32)
+    }
+
+    #[test]
+    fn poses_are_enough_when_the_initial_estimate_fits_them() {
+        let g = 9.80665_f32;
+        let at = |d: [f32; 3]| {
+            let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            Pose::from_mean(d.map(|v| g * v / n), 1000)
+        };
+        let faces: Vec<Pose> =
+            [[1., 0., 0.], [-1., 0., 0.], [0., 1., 0.], [0., -1., 0.], [0., 0., 1.], [0., 0., -1.]].map(at).to_vec();
+        // Eight directions between the faces (the corners of a cube): too few for the ellipsoid, not
+        // along the faces.
+        let sign = |i: usize, bit: usize| if i >> bit & 1 == 1 { 1.0 } else { -1.0 };
+        let corners: Vec<Pose> = (0..8).map(|i| at([sign(i, 0), sign(i, 1), sign(i, 2)])).collect();
+        let config = CalibrationConfig { gravity: g, ..CalibrationConfig::DEFAULT };
+        assert!(enough_poses(&faces, &config), "the six faces");
+        assert!(!enough_poses(&faces[..5], &config), "five faces");
+        assert!(!enough_poses(&corners, &config), "eight corners");
+        let both: Vec<Pose> = faces.iter().chain(&corners).copied().collect();
+        assert!(enough_poses(&both, &config), "fourteen directions");
     }
 
     #[test]

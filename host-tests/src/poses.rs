@@ -74,7 +74,8 @@ pub struct AccumulateOptions {
     /// that length. A block of a heavily low-passed sensor holds few independent readings, so its
     /// variance scatters far about the noise level and the variance test closes poses at random (an
     /// MPU-6050 at 50 Hz behind a 2.5 Hz filter: 1-2 of 23-30 holds found in 8-sample blocks, 20-27 in
-    /// 16-sample blocks). Defaults to 1; [`accumulate_holds`] tries 2 last.
+    /// 16-sample blocks; a flicker noise on top of it: 6 in 16-sample blocks, 30 in 32). Defaults to 1;
+/// [`accumulate_holds`] tries 2, then 4 last.
     pub correlated_block_multiple: usize,
 }
 
@@ -330,15 +331,17 @@ impl Detector {
 /// shortest pose alone (a log of short holds only is still calibrated from them); then both with the
 /// test of a block's mean change widened for correlated readings
 /// ([`AccumulateOptions::correlated_readings`]: a heavily low-passed sensor's holds); then both with
-/// blocks twice as long as well ([`AccumulateOptions::correlated_block_multiple`]). A log found with
-/// the first two is found as before the widened test existed, one found with the first four as
-/// before the longer blocks. Repeats left out.
+/// blocks twice, then four times as long as well ([`AccumulateOptions::correlated_block_multiple`]).
+/// A log found with the first two is found as before the widened test existed, one found with the
+/// first four as before the longer blocks. Repeats left out.
 pub(crate) fn attempts(opts: &AccumulateOptions) -> Vec<AccumulateOptions> {
     let library = AccumulateOptions { min_pose_s: 0.0, ..*opts };
     let widened = |o: AccumulateOptions| AccumulateOptions { correlated_readings: true, ..o };
-    let longer = |o: AccumulateOptions| AccumulateOptions { correlated_block_multiple: 2, ..widened(o) };
+    let longer = |o: AccumulateOptions, multiple| AccumulateOptions { correlated_block_multiple: multiple, ..widened(o) };
     let mut out: Vec<AccumulateOptions> = Vec::new();
-    for o in [*opts, library, widened(*opts), widened(library), longer(*opts), longer(library)] {
+    let first = [*opts, library, widened(*opts), widened(library)];
+    let longer_blocks = [2, 4].into_iter().flat_map(|m| [longer(*opts, m), longer(library, m)]);
+    for o in first.into_iter().chain(longer_blocks) {
         if !out.contains(&o) {
             out.push(o);
         }
@@ -349,8 +352,8 @@ pub(crate) fn attempts(opts: &AccumulateOptions) -> Vec<AccumulateOptions> {
 /// [`accumulate`] with `opts`, then while the poses number fewer than `min_poses`: with the library's
 /// shortest pose alone (a log of short holds only), then both with the test of a block's mean change
 /// widened for correlated readings ([`AccumulateOptions::correlated_readings`]), then with longer
-/// blocks as well ([`AccumulateOptions::correlated_block_multiple`]); the last attempt's poses when
-/// none finds that many.
+/// blocks as well ([`AccumulateOptions::correlated_block_multiple`]); the first of the most poses
+/// found when none finds that many.
 ///
 /// # Errors
 /// As [`accumulate`].
@@ -359,25 +362,42 @@ pub fn accumulate_holds(
     opts: &AccumulateOptions,
     min_poses: usize,
 ) -> Result<Accumulation, AccumulatorError> {
-    until_enough(opts, min_poses, |a: &Accumulation| a.poses.len(), |o| accumulate(table, o))
+    accumulate_until(table, opts, |poses| poses.len() >= min_poses)
 }
 
-/// `find` with each of [`attempts`] in order until what it finds holds at least `min_poses` poses
-/// (`count`); the last attempt's result when none does.
+/// [`accumulate_holds`] until the poses found are `enough` (e.g. what a calibration's initial
+/// estimate fits, [`crate::calib::enough_poses`]): a log whose first settings find seven poses in a
+/// few directions may be found whole with the later ones.
+///
+/// # Errors
+/// As [`accumulate`].
+pub fn accumulate_until(
+    table: &Table,
+    opts: &AccumulateOptions,
+    enough: impl Fn(&[Pose]) -> bool,
+) -> Result<Accumulation, AccumulatorError> {
+    until_enough(opts, |a: &Accumulation| enough(&a.poses), |a| a.poses.len(), |o| accumulate(table, o))
+}
+
+/// `find` with each of [`attempts`] in order until what it finds is `enough`; when none is, the first
+/// of those that found the most poses (`count`).
 pub(crate) fn until_enough<T, E>(
     opts: &AccumulateOptions,
-    min_poses: usize,
+    enough: impl Fn(&T) -> bool,
     count: impl Fn(&T) -> usize,
     mut find: impl FnMut(&AccumulateOptions) -> Result<T, E>,
 ) -> Result<T, E> {
-    let mut found = find(opts)?;
+    let mut best = find(opts)?;
     for next in attempts(opts).iter().skip(1) {
-        if count(&found) >= min_poses {
+        if enough(&best) {
             break;
         }
-        found = find(next)?;
+        let found = find(next)?;
+        if enough(&found) || count(&found) > count(&best) {
+            best = found;
+        }
     }
-    Ok(found)
+    Ok(best)
 }
 
 /// Feeds every row of `table` (as `f32`, in the table's units) through the library's
@@ -573,6 +593,32 @@ mod tests {
             );
             assert_eq!(found.mean_change_widened, Some(c), "seed {seed}: the widening is reported");
         }
+    }
+
+    #[test]
+    fn the_attempts_stop_at_the_first_enough_and_otherwise_keep_the_most_poses() {
+        let opts = AccumulateOptions::default();
+        let tried = attempts(&opts).len();
+        assert_eq!(tried, 8, "defaults, library minimum, widened, blocks 2x and 4x, each with both");
+        // Poses found by each attempt in turn; "enough" is at least 9.
+        let run = |found: &[usize]| {
+            let mut next = found.iter().copied();
+            let mut calls = 0;
+            let got = until_enough(
+                &opts,
+                |n: &usize| *n >= 9,
+                |n: &usize| *n,
+                |_| -> Result<usize, ()> {
+                    calls += 1;
+                    Ok(next.next().unwrap_or(0))
+                },
+            )
+            .unwrap();
+            (got, calls)
+        };
+        assert_eq!(run(&[12, 30]), (12, 1), "the first enough is kept: later settings are not tried");
+        assert_eq!(run(&[7, 3, 10, 40]), (10, 3), "seven poses that do not fit: the later settings are tried");
+        assert_eq!(run(&[7, 3, 8, 8, 2, 0, 1, 0]), (8, tried), "none enough: the first of the most poses");
     }
 
     #[test]

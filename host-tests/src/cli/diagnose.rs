@@ -50,7 +50,7 @@ pub(super) fn run(args: &DiagnoseArgs) -> Result<(), Failure> {
     calib::check_gravity(input.gravity, table.units, table.median_magnitude)
         .map_err(|e| format!("{}: {e}", input.file.display()))?;
     // The diagnosis calibrates the same poses: refuse a log with more than one calibration takes.
-    let stale_repeats = accumulate_all(&table, &input.file)?.skipped_repeats;
+    let stale_repeats = accumulate_all(&table, input)?.skipped_repeats;
     let options =
         diagnose::DiagnoseOptions { gravity: input.gravity, seed: args.seed, ..diagnose::DiagnoseOptions::DEFAULT };
     let report = diagnose::diagnose(&table, &options).map_err(|e| e.to_string())?;

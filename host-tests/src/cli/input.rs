@@ -138,7 +138,8 @@ fn read_input(input: &InputArgs) -> Result<(csvio::Table, usize, Option<csvio::A
         return Ok((table, rows, None));
     }
     let acc_opts = AccumulateOptions::default();
-    let streamed = csvstream::stream_holds(&input.file, &opts, &acc_opts, csvstream::PREFIX_BYTES, calib::MIN_POSES)
+    let enough = enough_to_calibrate(input);
+    let streamed = csvstream::stream_holds(&input.file, &opts, &acc_opts, csvstream::PREFIX_BYTES, enough)
         .map_err(|e| e.to_string())?;
     Ok((streamed.table, streamed.rows, Some(streamed.accumulation)))
 }
@@ -209,7 +210,7 @@ fn find_poses(
     }
     let acc = match streamed {
         Some(acc) => check_accumulation(acc, &input.file)?,
-        None => accumulate_all(table, &input.file)?,
+        None => accumulate_all(table, input)?,
     };
     let left_out = StillLeftOut::of(&acc);
     Ok((acc.poses, Some(acc.spans), acc.skipped_repeats, Some(left_out)))
@@ -272,9 +273,18 @@ fn check_pose_count(file: &Path, found: usize, last_fitting_line: Option<usize>)
     .into())
 }
 
+/// The pose finder's test of the poses it found ([`calib::enough_poses`] with the input's initial
+/// estimate and gravity): while they are not enough it tries its later settings.
+fn enough_to_calibrate(input: &InputArgs) -> impl Fn(&[Pose]) -> bool {
+    let config =
+        CalibrationConfig { gravity: input.gravity as f32, init: input.init.into(), ..CalibrationConfig::DEFAULT };
+    move |poses: &[Pose]| calib::enough_poses(poses, &config)
+}
+
 /// The poses of a raw log; more than one calibration takes is an error (never a silent drop).
-pub(super) fn accumulate_all(table: &csvio::Table, file: &Path) -> Result<csvio::Accumulation, Failure> {
-    let acc = csvio::accumulate_holds(table, &AccumulateOptions::default(), calib::MIN_POSES)
+pub(super) fn accumulate_all(table: &csvio::Table, input: &InputArgs) -> Result<csvio::Accumulation, Failure> {
+    let file = &input.file;
+    let acc = csvio::accumulate_until(table, &AccumulateOptions::default(), enough_to_calibrate(input))
         .map_err(|e| format!("{}: {e}", file.display()))?;
     check_accumulation(acc, file)
 }

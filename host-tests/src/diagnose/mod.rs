@@ -245,8 +245,8 @@ enum Step1 {
 /// answer of holds that move, else step 1 on the poses found as `calibrate` would retry
 /// ([`crate::poses::attempts`]: every still interval, then the test of a block's mean change widened
 /// for correlated readings); poses that calibrate but determine no gap are answered [`undetermined`]
-/// (a log that calibrate accepts is answered); when no retry calibrates, a log moving in the tremor
-/// band is answered [`trembling_log`].
+/// (a log that calibrate accepts is answered); when none of those retries calibrates, a log moving in
+/// the tremor band is answered [`trembling_log`], and the others are tried in longer blocks.
 fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Step1, DiagnoseError> {
     let mut not_calibrated = None;
     match gap::measure(table, opts) {
@@ -259,22 +259,45 @@ fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Step1, DiagnoseError
         }
         Err(gap::Refusal::Undetermined { .. } | gap::Refusal::Other(_)) => {}
     }
+    // A hand's tremor moves block means as a low-pass filter does: the log's spectrum is asked before
+    // the longer blocks, which would find the trembling holds and average the tremor out.
+    let (usual, longer): (Vec<_>, Vec<_>) = crate::poses::attempts(&AccumulateOptions::default())
+        .into_iter()
+        .skip(1)
+        .partition(|o| o.correlated_block_multiple == 1);
     let mut refused = None;
-    for found_with in crate::poses::attempts(&AccumulateOptions::default()).iter().skip(1) {
-        match gap::measure_with(table, opts, found_with) {
-            Ok(m) => return Ok(Step1::Measured(m)),
-            Err(gap::Refusal::Undetermined { still_poses }) => {
-                return Ok(Step1::Answered(undetermined(table, opts, still_poses)));
-            }
-            Err(gap::Refusal::NotCalibrated { error, .. } | gap::Refusal::Other(error)) => refused = Some(error),
-        }
+    if let Some(step) = first_measured(table, opts, &usual, &mut refused) {
+        return Ok(step);
     }
     if let Some((still_poses, rate)) = not_calibrated
         && let Some(d) = trembling_log(table, opts, still_poses, rate)
     {
         return Ok(Step1::Answered(d));
     }
+    if let Some(step) = first_measured(table, opts, &longer, &mut refused) {
+        return Ok(step);
+    }
     Err(refused.unwrap_or_else(|| err(format!("{}: no still poses", table.file))))
+}
+
+/// Step 1 on the poses found with the first of `attempts` that calibrates them (or answers them
+/// [`undetermined`]); `None`, with the last refusal in `refused`, when none does.
+fn first_measured(
+    table: &Table,
+    opts: &DiagnoseOptions,
+    attempts: &[AccumulateOptions],
+    refused: &mut Option<DiagnoseError>,
+) -> Option<Step1> {
+    for found_with in attempts {
+        match gap::measure_with(table, opts, found_with) {
+            Ok(m) => return Some(Step1::Measured(m)),
+            Err(gap::Refusal::Undetermined { still_poses }) => {
+                return Some(Step1::Answered(undetermined(table, opts, still_poses)));
+            }
+            Err(gap::Refusal::NotCalibrated { error, .. } | gap::Refusal::Other(error)) => *refused = Some(error),
+        }
+    }
+    None
 }
 
 /// The answer for a log whose still poses calibrate (as `calibrate` does) but determine no gap: no

@@ -68,8 +68,8 @@ pub fn is_large(path: &Path) -> bool {
     std::fs::metadata(path).is_ok_and(|m| m.len() >= STREAM_MIN_BYTES)
 }
 
-/// [`stream_poses`] with each of `poses::attempts` until the poses number at least `min_poses` (`poses::until_enough`), as
-/// [`poses::accumulate_holds`] does in memory.
+/// [`stream_poses`] with each of `poses::attempts` until the poses found are `enough`
+/// (`poses::until_enough`), as [`poses::accumulate_until`] does in memory.
 ///
 /// # Errors
 /// As [`stream_poses`].
@@ -78,11 +78,11 @@ pub fn stream_holds(
     opts: &ReadOptions,
     acc_opts: &AccumulateOptions,
     prefix_bytes: usize,
-    min_poses: usize,
+    enough: impl Fn(&[Pose]) -> bool,
 ) -> Result<Streamed, StreamError> {
     poses::until_enough(
         acc_opts,
-        min_poses,
+        |s: &Streamed| enough(&s.accumulation.poses),
         |s: &Streamed| s.accumulation.poses.len(),
         |o| stream_poses(path, opts, o, prefix_bytes),
     )
@@ -530,7 +530,8 @@ mod tests {
         let in_memory = poses::accumulate_holds(&table, &AccumulateOptions::default(), min_poses).unwrap();
         let held = stream_poses(&path, &opts, &AccumulateOptions::default(), 20_000).unwrap();
         assert!(held.accumulation.poses.len() < min_poses, "{} poses of 0.5 s", held.accumulation.poses.len());
-        let streamed = stream_holds(&path, &opts, &AccumulateOptions::default(), 20_000, min_poses).unwrap();
+        let enough = |p: &[Pose]| p.len() >= min_poses;
+        let streamed = stream_holds(&path, &opts, &AccumulateOptions::default(), 20_000, enough).unwrap();
         assert!(in_memory.poses.len() >= min_poses, "{} poses", in_memory.poses.len());
         assert_eq!(streamed.accumulation.poses, in_memory.poses);
         assert_eq!(streamed.accumulation.min_pose_samples, in_memory.min_pose_samples);
