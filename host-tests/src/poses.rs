@@ -79,6 +79,14 @@ pub struct AccumulateOptions {
     pub correlated_block_multiple: usize,
 }
 
+/// Per-axis RMS scatter of a pose's readings, in units of the log's median |a| (gravity), above which
+/// a pose found in longer blocks ([`AccumulateOptions::correlated_block_multiple`]) is a move, not a
+/// hold. A MEMS accelerometer at rest scatters by about 0.01 g at most (the noisiest parts' white noise,
+/// a coarse step, a hand's tremor of 0.01-0.04 g); in blocks as long as half a slow periodic move, a log
+/// in continuous motion has block means that barely change, uniform block variances, and 0.5 g of
+/// scatter. The longer blocks, with the widened test, have no other guard against it.
+pub const STILL_SCATTER_MAX_G: f64 = 0.1;
+
 /// Least fraction of rows repeating their predecessor (all three axes) for [`repeats_look_stale`].
 pub const STALE_REPEAT_FRACTION: f64 = 0.2;
 
@@ -283,6 +291,9 @@ pub(crate) struct Detector {
     pub(crate) gap_s: Option<f64>,
     /// The factor the test of a block's mean change is widened by, if it is.
     pub(crate) mean_change_widened: Option<f64>,
+    /// The block was lengthened for correlated readings: poses scattering by more than
+    /// [`STILL_SCATTER_MAX_G`] are moves ([`Detector::drop_scattered`]).
+    pub(crate) block_lengthened: bool,
 }
 
 impl Detector {
@@ -294,7 +305,7 @@ impl Detector {
         let mut block = opts.block_samples.unwrap_or_else(|| choose_block_samples(sample_rate_hz));
         let mut config = opts.config;
         config.min_noise_variance = config.min_noise_variance.max(quantisation_variance(&table.samples));
-        let mut mean_change_widened = None;
+        let (mut mean_change_widened, mut block_lengthened) = (None, false);
         if opts.correlated_readings {
             let fed = || {
                 (0..table.samples.len())
@@ -305,6 +316,7 @@ impl Detector {
             let mut correlation = block_mean_correlation(fed(), block, floor);
             if correlation >= CORRELATED_AT_LEAST && opts.correlated_block_multiple > 1 {
                 block = longer_block(block, opts.correlated_block_multiple);
+                block_lengthened = true;
                 correlation = block_mean_correlation(fed(), block, floor);
             }
             if correlation >= CORRELATED_AT_LEAST {
@@ -323,7 +335,23 @@ impl Detector {
             let span = t.last()? - t.first()?;
             (t.len() >= 2 && span > 0.0).then(|| opts.gap_factor * span / (t.len() - 1) as f64)
         });
-        Self { config, block, sample_rate_hz, skip_repeats, gap_s, mean_change_widened }
+        Self { config, block, sample_rate_hz, skip_repeats, gap_s, mean_change_widened, block_lengthened }
+    }
+
+    /// With the block lengthened, the poses (and their spans) whose readings scatter by more than
+    /// [`STILL_SCATTER_MAX_G`] of `gravity` (input unit) on an axis are removed and counted as moving.
+    pub(crate) fn drop_scattered(&self, acc: &mut Accumulation, gravity: f64) {
+        if !self.block_lengthened {
+            return;
+        }
+        let limit = (STILL_SCATTER_MAX_G * gravity).powi(2);
+        let still: Vec<bool> = acc.poses.iter().map(|p| p.variance.iter().all(|v| f64::from(*v) <= limit)).collect();
+        let mut keep = still.iter().copied();
+        acc.poses.retain(|_| keep.next().unwrap_or(true));
+        let mut keep = still.iter().copied();
+        acc.spans.retain(|_| keep.next().unwrap_or(true));
+        let moved = still.iter().filter(|s| !**s).count();
+        acc.rejections.moving = acc.rejections.moving.saturating_add(u32::try_from(moved).unwrap_or(u32::MAX));
     }
 }
 
@@ -420,6 +448,7 @@ pub fn accumulate(table: &Table, opts: &AccumulateOptions) -> Result<Accumulatio
         _ => return Err(AccumulatorError::InvalidConfig),
     };
     out.sample_rate_hz = detector.sample_rate_hz;
+    detector.drop_scattered(&mut out, table.median_magnitude);
     Ok(out)
 }
 
@@ -593,6 +622,31 @@ mod tests {
             );
             assert_eq!(found.mean_change_widened, Some(c), "seed {seed}: the widening is reported");
         }
+    }
+
+    #[test]
+    fn a_log_in_continuous_motion_has_no_pose_in_longer_blocks() {
+        // Slow periodic motion (0.8 Hz at 100 Hz, +-1 g): in blocks of half its period the block means
+        // barely change and the widened test alone would keep a pose.
+        let mut text = String::from("t,ax,ay,az\n");
+        for i in 0..3000 {
+            let w = f64::from(i) * 0.05;
+            text.push_str(&format!("{:.2},{:.4},{:.4},{:.4}\n", f64::from(i) * 0.01, w.sin(), w.cos(), (2.0 * w).sin()));
+        }
+        let moving = crate::io::read_csv_str("moving.csv", &text, &crate::io::ReadOptions::default()).unwrap();
+        for o in attempts(&AccumulateOptions::default()) {
+            let found = accumulate(&moving, &o).unwrap();
+            assert!(found.poses.is_empty(), "{} poses with {o:?}", found.poses.len());
+        }
+        let longest = attempts(&AccumulateOptions::default()).pop().unwrap();
+        let found = accumulate(&moving, &longest).unwrap();
+        assert!(found.rejections.moving >= 1 && found.spans.is_empty(), "{:?}", found.rejections);
+        // A low-passed still log keeps every pose its longer blocks find.
+        let filtered = low_passed_stages(3.2, 2, 1);
+        let kept = accumulate(&filtered, &longest).unwrap();
+        let scatter_limit = 0.02 * filtered.median_magnitude;
+        assert!(kept.poses.len() >= crate::calib::MIN_POSES && kept.rejections.moving == 0, "{:?}", kept.rejections);
+        assert!(kept.poses.iter().all(|p| p.variance.iter().all(|v| f64::from(*v).sqrt() < scatter_limit)));
     }
 
     #[test]

@@ -123,7 +123,7 @@ pub fn stream_poses(
     table.warnings.push(format!(
         "{file}: large file read as a stream: units, sample rate and noise floor from its first {prefix_rows} rows"
     ));
-    let accumulation = Accumulation {
+    let mut accumulation = Accumulation {
         poses: run.poses,
         spans,
         rejections: run.rejections,
@@ -137,6 +137,7 @@ pub fn stream_poses(
         min_pose_samples: settings.config.min_pose_samples,
         mean_change_widened: settings.mean_change_widened,
     };
+    settings.drop_scattered(&mut accumulation, table.median_magnitude);
     Ok(Streamed { table, rows: run.totals.rows, accumulation })
 }
 
