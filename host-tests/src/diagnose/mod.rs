@@ -277,24 +277,29 @@ fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Step1, DiagnoseError
     if let Some(step) = first_measured(table, opts, &longer, &mut refused) {
         return Ok(step);
     }
-    Err(refused.unwrap_or_else(|| err(format!("{}: no still poses", table.file))))
+    Err(refused.map_or_else(|| err(format!("{}: no still poses", table.file)), |(_, error)| error))
 }
 
 /// Step 1 on the poses found with the first of `attempts` that calibrates them (or answers them
-/// [`undetermined`]); `None`, with the last refusal in `refused`, when none does.
+/// [`undetermined`]); `None` when none does, with `refused` holding the refusal of the attempt that
+/// found the most still poses (the first of them; as `calibrate` reports).
 fn first_measured(
     table: &Table,
     opts: &DiagnoseOptions,
     attempts: &[AccumulateOptions],
-    refused: &mut Option<DiagnoseError>,
+    refused: &mut Option<(usize, DiagnoseError)>,
 ) -> Option<Step1> {
     for found_with in attempts {
-        match gap::measure_with(table, opts, found_with) {
+        let (poses, error) = match gap::measure_with(table, opts, found_with) {
             Ok(m) => return Some(Step1::Measured(m)),
             Err(gap::Refusal::Undetermined { still_poses }) => {
                 return Some(Step1::Answered(undetermined(table, opts, still_poses)));
             }
-            Err(gap::Refusal::NotCalibrated { error, .. } | gap::Refusal::Other(error)) => *refused = Some(error),
+            Err(gap::Refusal::NotCalibrated { still_poses, error, .. }) => (still_poses, error),
+            Err(gap::Refusal::Other(error)) => (0, error),
+        };
+        if refused.as_ref().is_none_or(|(most, _)| poses > *most) {
+            *refused = Some((poses, error));
         }
     }
     None
