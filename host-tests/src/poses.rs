@@ -75,7 +75,7 @@ pub struct AccumulateOptions {
     /// variance scatters far about the noise level and the variance test closes poses at random (an
     /// MPU-6050 at 50 Hz behind a 2.5 Hz filter: 1-2 of 23-30 holds found in 8-sample blocks, 20-27 in
     /// 16-sample blocks; a flicker noise on top of it: 6 in 16-sample blocks, 30 in 32). Defaults to 1;
-/// [`accumulate_holds`] tries 2, then 4 last.
+    /// [`accumulate_holds`] tries 2, then 4 last.
     pub correlated_block_multiple: usize,
 }
 
@@ -365,7 +365,8 @@ impl Detector {
 pub(crate) fn attempts(opts: &AccumulateOptions) -> Vec<AccumulateOptions> {
     let library = AccumulateOptions { min_pose_s: 0.0, ..*opts };
     let widened = |o: AccumulateOptions| AccumulateOptions { correlated_readings: true, ..o };
-    let longer = |o: AccumulateOptions, multiple| AccumulateOptions { correlated_block_multiple: multiple, ..widened(o) };
+    let longer =
+        |o: AccumulateOptions, multiple| AccumulateOptions { correlated_block_multiple: multiple, ..widened(o) };
     let mut out: Vec<AccumulateOptions> = Vec::new();
     let first = [*opts, library, widened(*opts), widened(library)];
     let longer_blocks = [2, 4].into_iter().flat_map(|m| [longer(*opts, m), longer(library, m)]);
@@ -631,7 +632,13 @@ mod tests {
         let mut text = String::from("t,ax,ay,az\n");
         for i in 0..3000 {
             let w = f64::from(i) * 0.05;
-            text.push_str(&format!("{:.2},{:.4},{:.4},{:.4}\n", f64::from(i) * 0.01, w.sin(), w.cos(), (2.0 * w).sin()));
+            text.push_str(&format!(
+                "{:.2},{:.4},{:.4},{:.4}\n",
+                f64::from(i) * 0.01,
+                w.sin(),
+                w.cos(),
+                (2.0 * w).sin()
+            ));
         }
         let moving = crate::io::read_csv_str("moving.csv", &text, &crate::io::ReadOptions::default()).unwrap();
         for o in attempts(&AccumulateOptions::default()) {

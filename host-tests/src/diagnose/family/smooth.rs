@@ -160,6 +160,10 @@ fn solve_scaled(a: &[Vec<f64>], rhs: &[&[f64]]) -> Option<Vec<Vec<f64>>> {
     Some(solved.into_iter().map(|x| x.iter().zip(&d).map(|(v, s)| v / s).collect()).collect())
 }
 
+/// A shape's penalised held-out ratio, in-sample pose residuals (output unit) and effective
+/// parameters ([`score`]).
+type ShapeScore = (f64, Vec<Option<f64>>, f64);
+
 /// Penalised held-out ratio, in-sample pose residuals (output unit) and effective parameters of
 /// one shape, from the design's fold normals.
 fn score(
@@ -167,7 +171,7 @@ fn score(
     design: &(Vec<Vec<f64>>, Vec<f64>, Vec<usize>),
     normals: &FoldNormals,
     shape: Shape,
-) -> Option<(f64, Vec<Option<f64>>, f64)> {
+) -> Option<ShapeScore> {
     let (rows, r, fold) = design;
     let (n, base) = (ctx.poses.len(), ctx.base_rows.first()?.len());
     let w = 1.0 / ctx.e_white.sqrt();
@@ -203,7 +207,7 @@ pub(crate) fn best(ctx: &Context<'_>) -> Option<SmoothFit> {
         return None;
     }
     let t_end = ctx.poses.last()?.t_end.max(1e-9);
-    let mut scored: Vec<(Shape, Option<(f64, Vec<Option<f64>>, f64)>)> = Vec::new();
+    let mut scored: Vec<(Shape, Option<ShapeScore>)> = Vec::new();
     for knots in KNOTS {
         let d = design(ctx, knots, t_end);
         let normals = FoldNormals::new(&d.0, &d.1, &d.2, ctx.folds);
