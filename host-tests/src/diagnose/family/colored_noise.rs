@@ -203,6 +203,15 @@ impl Family for ColoredNoise {
             e.candidate.detail = "the holds move at 2-20 Hz: motion, not sensor noise".into();
             return e;
         }
+        // A noise of the bias that spreads the pose means moves it within the holds too: holds that
+        // move no more than white noise (not even by chance) refute it. On the development sets
+        // no colored noise named right had such holds; 4 logs named colored noise wrongly did (two
+        // hysteresis, a clean log, a temperature scale).
+        if ctx.within.as_ref().is_some_and(|w| w.observed_excess().0 <= 0.0) {
+            let mut e = ctx.not_testable(self.name());
+            e.candidate.detail = "the holds move no more than white noise: no bias noise spreads the pose means".into();
+            return e;
+        }
         self.noise_model(ctx)
     }
 }
@@ -395,7 +404,7 @@ mod tests {
     use rand_core::SeedableRng;
     use rand_xoshiro::Xoshiro256PlusPlus;
 
-    use super::{Context, walk_accounts_for_poses};
+    use super::{ColoredNoise, Context, Family, walk_accounts_for_poses};
     use crate::csvio::{self, AccumulateOptions, Table};
     use crate::diagnose::{DiagnoseOptions, gap};
     use crate::sim::random::{random_sign, standard_normal};
@@ -437,5 +446,32 @@ mod tests {
             assert!(accounts(0.0), "seed {seed}: the walk alone");
             assert!(!accounts(10.0), "seed {seed}: offsets of 10 mg per hold");
         }
+    }
+
+    #[test]
+    fn holds_that_move_no_more_than_white_noise_refute_a_bias_noise() {
+        let opts = DiagnoseOptions::DEFAULT;
+        let mut refuted = 0;
+        for seed in 1..=6 {
+            // Offsets of 1 mg per hold (a hysteresis, a bad pose): the pose means spread, the holds
+            // are white. The holds' excess is zero up to chance: where chance leaves it at or below
+            // zero, colored noise is not a candidate.
+            let table = walk_log(seed, 0.0, 1.0);
+            let m = gap::measure(&table, &opts).unwrap();
+            let ctx = Context::new(&table, &m, &opts).unwrap();
+            let excess = ctx.within.as_ref().unwrap().observed_excess().0;
+            let e = ColoredNoise.evaluate(&ctx);
+            if excess <= 0.0 {
+                refuted += 1;
+                assert!(!e.candidate.applicable && e.candidate.detail.contains("no more than white"), "seed {seed}");
+            }
+        }
+        assert!(refuted >= 1, "no seed whose holds' excess is at most zero");
+        // Holds that walk are not refuted.
+        let table = walk_log(3, 0.05, 0.0);
+        let m = gap::measure(&table, &opts).unwrap();
+        let ctx = Context::new(&table, &m, &opts).unwrap();
+        assert!(ctx.within.as_ref().unwrap().observed_excess().0 > 0.0);
+        assert!(!ColoredNoise.evaluate(&ctx).candidate.detail.contains("no more than white"));
     }
 }
