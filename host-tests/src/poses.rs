@@ -77,6 +77,12 @@ pub struct AccumulateOptions {
     /// 16-sample blocks; a flicker noise on top of it: 6 in 16-sample blocks, 30 in 32). Defaults to 1;
     /// [`accumulate_holds`] tries 2, then 4 last.
     pub correlated_block_multiple: usize,
+    /// Without a sample rate (no time column, none given): the shortest pose, in blocks, instead of
+    /// the library's `min_pose_samples` (100), when it is shorter. A log of holds of 100 readings
+    /// each (logging paused while the sensor is turned) keeps at most 80-90 of each after the
+    /// still test's first block. `None` (default) keeps the library's; [`accumulate_holds`] tries
+    /// 4 last. Ignored with a sample rate ([`Self::min_pose_s`] applies).
+    pub untimed_min_pose_blocks: Option<u32>,
 }
 
 /// Per-axis RMS scatter of a pose's readings, in units of the log's median |a| (gravity), above which
@@ -109,6 +115,7 @@ impl Default for AccumulateOptions {
             min_pose_s: MIN_POSE_S,
             correlated_readings: false,
             correlated_block_multiple: 1,
+            untimed_min_pose_blocks: None,
         }
     }
 }
@@ -206,6 +213,10 @@ pub fn choose_block_samples(sample_rate_hz: Option<f64>) -> usize {
         .min_by(|a, b| ((*a as f64).log2() - target).abs().total_cmp(&((*b as f64).log2() - target).abs()))
         .unwrap_or(DEFAULT_BLOCK_SAMPLES)
 }
+
+/// Shortest pose, in blocks, of the last attempts for a log without a sample rate
+/// ([`AccumulateOptions::untimed_min_pose_blocks`]).
+pub const UNTIMED_MIN_POSE_BLOCKS: u32 = 4;
 
 /// `block` times `multiple`, at most the longest of [`BLOCK_SIZES`] (a block length the detector has).
 fn longer_block(block: usize, multiple: usize) -> usize {
@@ -330,6 +341,9 @@ impl Detector {
             if samples.is_finite() && samples > f64::from(config.min_pose_samples) {
                 config.min_pose_samples = samples.min(f64::from(u32::MAX)) as u32;
             }
+        } else if let Some(blocks) = opts.untimed_min_pose_blocks {
+            let samples = blocks.saturating_mul(u32::try_from(block).unwrap_or(u32::MAX));
+            config.min_pose_samples = config.min_pose_samples.min(samples.max(1));
         }
         let gap_s = table.times_s.as_ref().and_then(|t| {
             let span = t.last()? - t.first()?;
@@ -359,9 +373,10 @@ impl Detector {
 /// shortest pose alone (a log of short holds only is still calibrated from them); then both with the
 /// test of a block's mean change widened for correlated readings
 /// ([`AccumulateOptions::correlated_readings`]: a heavily low-passed sensor's holds); then both with
-/// blocks twice, then four times as long as well ([`AccumulateOptions::correlated_block_multiple`]).
-/// A log found with the first two is found as before the widened test existed, one found with the
-/// first four as before the longer blocks. Repeats left out.
+/// blocks twice, then four times as long as well ([`AccumulateOptions::correlated_block_multiple`]);
+/// last, for a log without a sample rate, poses of [`UNTIMED_MIN_POSE_BLOCKS`] blocks, then with the
+/// widened test as well. A log found with the first two is found as before the widened test
+/// existed, one found with the first four as before the longer blocks. Repeats left out.
 pub(crate) fn attempts(opts: &AccumulateOptions) -> Vec<AccumulateOptions> {
     let library = AccumulateOptions { min_pose_s: 0.0, ..*opts };
     let widened = |o: AccumulateOptions| AccumulateOptions { correlated_readings: true, ..o };
@@ -370,7 +385,8 @@ pub(crate) fn attempts(opts: &AccumulateOptions) -> Vec<AccumulateOptions> {
     let mut out: Vec<AccumulateOptions> = Vec::new();
     let first = [*opts, library, widened(*opts), widened(library)];
     let longer_blocks = [2, 4].into_iter().flat_map(|m| [longer(*opts, m), longer(library, m)]);
-    for o in first.into_iter().chain(longer_blocks) {
+    let untimed = AccumulateOptions { untimed_min_pose_blocks: Some(UNTIMED_MIN_POSE_BLOCKS), ..library };
+    for o in first.into_iter().chain(longer_blocks).chain([untimed, widened(untimed)]) {
         if !out.contains(&o) {
             out.push(o);
         }
@@ -645,7 +661,11 @@ mod tests {
             let found = accumulate(&moving, &o).unwrap();
             assert!(found.poses.is_empty(), "{} poses with {o:?}", found.poses.len());
         }
-        let longest = attempts(&AccumulateOptions::default()).pop().unwrap();
+        let longest = attempts(&AccumulateOptions::default())
+            .into_iter()
+            .filter(|o| o.correlated_block_multiple == 4)
+            .last()
+            .unwrap();
         let found = accumulate(&moving, &longest).unwrap();
         assert!(found.rejections.moving >= 1 && found.spans.is_empty(), "{:?}", found.rejections);
         // A low-passed still log keeps every pose its longer blocks find.
@@ -657,10 +677,32 @@ mod tests {
     }
 
     #[test]
+    fn an_untimed_log_of_holds_of_100_readings_is_found_with_shorter_poses() {
+        // No time column; logging paused while the sensor was turned: 12 holds of 100 readings,
+        // each a jump from the last (as a public example log of 160 such holds).
+        let mut text = String::from("ax,ay,az\n");
+        for hold in 0..12u32 {
+            let a = f64::from(hold) * 0.9;
+            let d = [a.cos() * (0.3 * a).cos(), a.sin() * (0.3 * a).cos(), (0.3 * a).sin()];
+            for i in 0..100u32 {
+                let e = f64::from((i * 7919 + hold * 31) % 17) * 1e-4 - 8e-4;
+                text.push_str(&format!("{:.5},{:.5},{:.5}\n", d[0] + e, d[1] - e, d[2] + 0.5 * e));
+            }
+        }
+        let table = crate::io::read_csv_str("blocks.csv", &text, &crate::io::ReadOptions::default()).unwrap();
+        assert_eq!(accumulate(&table, &AccumulateOptions::default()).unwrap().poses.len(), 0);
+        let found = accumulate_holds(&table, &AccumulateOptions::default(), crate::calib::MIN_POSES).unwrap();
+        let shortest = UNTIMED_MIN_POSE_BLOCKS * DEFAULT_BLOCK_SAMPLES as u32;
+        assert_eq!(found.min_pose_samples, shortest);
+        assert!(found.poses.len() >= 10, "{} poses", found.poses.len());
+        assert!(found.poses.iter().all(|p| p.n >= shortest && p.n <= 100));
+    }
+
+    #[test]
     fn the_attempts_stop_at_the_first_enough_and_otherwise_keep_the_most_poses() {
         let opts = AccumulateOptions::default();
         let tried = attempts(&opts).len();
-        assert_eq!(tried, 8, "defaults, library minimum, widened, blocks 2x and 4x, each with both");
+        assert_eq!(tried, 10, "defaults, library minimum, widened, blocks 2x and 4x, each with both; untimed");
         // Poses found by each attempt in turn; "enough" is at least 9.
         let run = |found: &[usize]| {
             let mut next = found.iter().copied();

@@ -158,6 +158,8 @@ pub(super) struct StillLeftOut {
     pub(super) saturated: u32,
     /// The shortest pose kept, seconds (with a known sample rate).
     pub(super) shortest_pose_s: Option<f64>,
+    /// The shortest pose kept, readings.
+    pub(super) shortest_pose_samples: u32,
     /// The factor the still test's limit on a block's mean change was widened by for correlated
     /// (low-passed) readings, when fewer than six poses were found without it.
     pub(super) mean_change_widened: Option<f64>,
@@ -173,13 +175,17 @@ impl StillLeftOut {
             moving: r.moving,
             saturated: r.saturated,
             shortest_pose_s,
+            shortest_pose_samples: acc.min_pose_samples,
             mean_change_widened: widened,
         }
     }
 
     /// The text line, when any interval was left out.
     pub(super) fn line(&self) -> Option<String> {
-        let shortest = self.shortest_pose_s.map_or(String::new(), |s| format!(" (shorter than {s:.2} s)"));
+        let shortest = match self.shortest_pose_s {
+            Some(s) => format!(" (shorter than {s:.2} s)"),
+            None => format!(" (shorter than {} readings)", self.shortest_pose_samples),
+        };
         let widened = self.mean_change_widened.map_or(String::new(), |c| {
             format!(
                 "; readings correlated (a low-pass filter): the limit on a block's mean change widened {c:.1}x, as too few \
