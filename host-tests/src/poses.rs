@@ -661,11 +661,8 @@ mod tests {
             let found = accumulate(&moving, &o).unwrap();
             assert!(found.poses.is_empty(), "{} poses with {o:?}", found.poses.len());
         }
-        let longest = attempts(&AccumulateOptions::default())
-            .into_iter()
-            .filter(|o| o.correlated_block_multiple == 4)
-            .last()
-            .unwrap();
+        let longest =
+            attempts(&AccumulateOptions::default()).into_iter().rfind(|o| o.correlated_block_multiple == 4).unwrap();
         let found = accumulate(&moving, &longest).unwrap();
         assert!(found.rejections.moving >= 1 && found.spans.is_empty(), "{:?}", found.rejections);
         // A low-passed still log keeps every pose its longer blocks find.
