@@ -307,6 +307,54 @@ pub(crate) struct Detector {
     pub(crate) block_lengthened: bool,
 }
 
+/// The readings' correlation as [`Detector::derive`] widens the test of a block's mean change by it.
+struct Correlated {
+    /// The block length, lengthened by the multiple when the readings are correlated.
+    block: usize,
+    /// It was lengthened.
+    lengthened: bool,
+    /// [`block_mean_correlation`] at that length, when at least [`CORRELATED_AT_LEAST`].
+    factor: Option<f64>,
+}
+
+impl Correlated {
+    /// [`block_mean_correlation`] of the rows fed (stale repeats skipped) in blocks of `block`; when
+    /// correlated and `multiple` > 1, again in blocks `multiple` times as long
+    /// ([`AccumulateOptions::correlated_block_multiple`]).
+    fn measure(table: &Table, skip_repeats: bool, block: usize, floor: f64, multiple: usize) -> Self {
+        let fed = || {
+            (0..table.samples.len())
+                .filter(move |&i| !(skip_repeats && repeats_previous(&table.samples, i)))
+                .map(|i| table.samples[i])
+        };
+        let mut out = Self { block, lengthened: false, factor: None };
+        let mut correlation = block_mean_correlation(fed(), block, floor);
+        if correlation >= CORRELATED_AT_LEAST && multiple > 1 {
+            (out.block, out.lengthened) = (longer_block(block, multiple), true);
+            correlation = block_mean_correlation(fed(), out.block, floor);
+        }
+        out.factor = (correlation >= CORRELATED_AT_LEAST).then_some(correlation);
+        out
+    }
+}
+
+/// The shortest pose, samples: `library` (the library's setting) raised to `opts.min_pose_s` of
+/// samples with a sample rate; without one, lowered to `opts.untimed_min_pose_blocks` blocks.
+fn shortest_pose(opts: &AccumulateOptions, sample_rate_hz: Option<f64>, block: usize, library: u32) -> u32 {
+    match (sample_rate_hz, opts.untimed_min_pose_blocks) {
+        (Some(rate), _) => {
+            let samples = (opts.min_pose_s * rate).ceil();
+            if samples.is_finite() && samples > f64::from(library) {
+                samples.min(f64::from(u32::MAX)) as u32
+            } else {
+                library
+            }
+        }
+        (None, Some(blocks)) => library.min(blocks.saturating_mul(u32::try_from(block).unwrap_or(u32::MAX)).max(1)),
+        (None, None) => library,
+    }
+}
+
 impl Detector {
     pub(crate) fn derive(table: &Table, opts: &AccumulateOptions) -> Self {
         let repeats = repeat_fraction(&table.samples);
@@ -318,33 +366,16 @@ impl Detector {
         config.min_noise_variance = config.min_noise_variance.max(quantisation_variance(&table.samples));
         let (mut mean_change_widened, mut block_lengthened) = (None, false);
         if opts.correlated_readings {
-            let fed = || {
-                (0..table.samples.len())
-                    .filter(move |&i| !(skip_repeats && repeats_previous(&table.samples, i)))
-                    .map(|i| table.samples[i])
-            };
             let floor = f64::from(config.min_noise_variance);
-            let mut correlation = block_mean_correlation(fed(), block, floor);
-            if correlation >= CORRELATED_AT_LEAST && opts.correlated_block_multiple > 1 {
-                block = longer_block(block, opts.correlated_block_multiple);
-                block_lengthened = true;
-                correlation = block_mean_correlation(fed(), block, floor);
-            }
-            if correlation >= CORRELATED_AT_LEAST {
+            let correlated = Correlated::measure(table, skip_repeats, block, floor, opts.correlated_block_multiple);
+            (block, block_lengthened) = (correlated.block, correlated.lengthened);
+            if let Some(correlation) = correlated.factor {
                 config.drift_enter_factor *= correlation as f32;
                 config.drift_exit_factor *= correlation as f32;
                 mean_change_widened = Some(correlation);
             }
         }
-        if let Some(rate) = sample_rate_hz {
-            let samples = (opts.min_pose_s * rate).ceil();
-            if samples.is_finite() && samples > f64::from(config.min_pose_samples) {
-                config.min_pose_samples = samples.min(f64::from(u32::MAX)) as u32;
-            }
-        } else if let Some(blocks) = opts.untimed_min_pose_blocks {
-            let samples = blocks.saturating_mul(u32::try_from(block).unwrap_or(u32::MAX));
-            config.min_pose_samples = config.min_pose_samples.min(samples.max(1));
-        }
+        config.min_pose_samples = shortest_pose(opts, sample_rate_hz, block, config.min_pose_samples);
         let gap_s = table.times_s.as_ref().and_then(|t| {
             let span = t.last()? - t.first()?;
             (t.len() >= 2 && span > 0.0).then(|| opts.gap_factor * span / (t.len() - 1) as f64)
