@@ -13,6 +13,7 @@ sets=(
   "hassan_lis3dh_30pos/CalibrationOfLowCostTriaxialInertialSensors50.csv|--means"
   "fastahrs_fxos8700/data_sample.clean.csv|"
   "fastahrs_fxos8700/data_sample2.clean.csv|"
+  "ck_explorer_acc_sphere/acc_log.csv|"
   "ck_explorer_acc_sphere/derived_block_means.csv|--means"
   "michaelwro_178pos/acceldata-example.csv|--means"
   "imutk_windows_20pos/imu.csv|"

@@ -485,6 +485,27 @@ fn fastahrs_fxos8700_data_sample2() {
 }
 
 #[test]
+fn ck_explorer_acc_sphere_raw() {
+    // No time column; holds of 100 readings: found with the pose finder's last attempt for untimed
+    // logs (poses of 4 blocks, 64 readings; `calibrate` reaches it through its retries).
+    let untimed = AccumulateOptions {
+        min_pose_s: 0.0,
+        untimed_min_pose_blocks: Some(accelcal_host::poses::UNTIMED_MIN_POSE_BLOCKS),
+        ..AccumulateOptions::default()
+    };
+    check(&Case {
+        name: "ck_explorer_acc_sphere (raw)",
+        file: "ck_explorer_acc_sphere/acc_log.csv",
+        cli: "(none)",
+        read: ReadOptions::default(),
+        source: raw(untimed),
+        expected_units: Units::G,
+        readme_positions: 160,
+        poses: (50, 160),
+    });
+}
+
+#[test]
 fn ck_explorer_acc_sphere_block_means() {
     check(&Case {
         name: "ck_explorer_acc_sphere (block means)",
