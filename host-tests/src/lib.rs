@@ -13,3 +13,4 @@ pub mod poses;
 pub mod report;
 pub mod sim;
 pub mod stats;
+pub mod vec3;

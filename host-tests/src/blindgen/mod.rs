@@ -34,7 +34,7 @@ pub mod sensor;
 pub mod session;
 pub mod settling;
 pub mod temperature;
-pub mod vec3;
+pub use crate::vec3;
 
 use serde_json::Value;
 

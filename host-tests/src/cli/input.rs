@@ -17,7 +17,7 @@ use super::Failure;
 pub(super) struct InputArgs {
     /// The CSV file (header row required).
     pub(super) file: PathBuf,
-    /// Columns to use: t,ax,ay,az[,temp] as header names or 0-based indices.
+    /// Columns to use: t,ax,ay,az or t,ax,ay,az,temp, as header names or 0-based indices.
     #[arg(long)]
     pub(super) columns: Option<ColumnSpec>,
     /// Units of the acceleration columns (auto: from the header's unit label or the readings' size).

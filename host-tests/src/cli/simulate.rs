@@ -25,7 +25,7 @@ pub(super) struct SimulateArgs {
     /// Static seconds per pose.
     #[arg(long, default_value_t = 5.0)]
     seconds: f64,
-    /// Output units: counts (16384 LSB/g), counts:LSB_PER_G[:OFFSET], g or mps2.
+    /// Output units: counts (16384 LSB/g), counts:LSB_PER_G or counts:LSB_PER_G:OFFSET, g or mps2.
     #[arg(long, default_value = "mps2")]
     units: OutputUnits,
     /// Random sensor errors instead of the paper's Table 1 truth.

@@ -9,13 +9,7 @@ pub(crate) fn axis(a: usize, v: f64) -> V3 {
     std::array::from_fn(|i| if i == a { v } else { 0.0 })
 }
 
-pub(crate) fn dot(a: V3, b: V3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-pub(crate) fn norm(a: V3) -> f64 {
-    dot(a, a).sqrt()
-}
+pub(crate) use crate::vec3::{dot, norm};
 
 pub(crate) fn mean(v: &[f64]) -> f64 {
     if v.is_empty() { f64::NAN } else { v.iter().sum::<f64>() / v.len() as f64 }

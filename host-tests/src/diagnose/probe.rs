@@ -8,7 +8,7 @@ use super::family::{Context, Variant};
 use super::gap::PoseData;
 use super::math::dot;
 use super::report::Probe;
-use crate::blindgen::vec3::cross;
+use crate::vec3::cross;
 
 /// Periodic bias `u . (s sin(2 pi t / P) + c cos(2 pi t / P))`, at least three periods in the log.
 /// The period's search is charged as `ln` of the independent periods searched (one per cycle over

@@ -1,4 +1,4 @@
-//! Three-vectors as `[f64; 3]` and the few operations the generator needs.
+//! Three-vectors as `[f64; 3]` and the few operations the generator and the diagnosis need.
 
 /// A three-vector.
 pub type V3 = [f64; 3];
