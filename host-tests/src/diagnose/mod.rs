@@ -261,10 +261,10 @@ fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Step1, DiagnoseError
     }
     // A hand's tremor moves block means as a low-pass filter does: the log's spectrum is asked before
     // the longer blocks, which would find the trembling holds and average the tremor out.
-    let (usual, longer): (Vec<_>, Vec<_>) = crate::poses::attempts(&AccumulateOptions::default())
-        .into_iter()
-        .skip(1)
-        .partition(|o| o.correlated_block_multiple == 1);
+    let mut usual: Vec<AccumulateOptions> =
+        crate::poses::attempts(&AccumulateOptions::default()).into_iter().skip(1).collect();
+    let first_longer = usual.iter().position(|o| o.correlated_block_multiple > 1).unwrap_or(usual.len());
+    let longer = usual.split_off(first_longer);
     let mut refused = None;
     if let Some(step) = first_measured(table, opts, &usual, &mut refused) {
         return Ok(step);

@@ -198,9 +198,9 @@ fn score(
 }
 
 /// The knot count and prior step that predict the withheld pose means best, each scored by the
-/// worst of its own held-out ratio and those of its neighbouring prior steps (same knots and order):
-/// the ratios of 48 shapes scatter, and one alone among neighbours that predict far worse is luck,
-/// not a wander (a 16-pose log fitted with its holds' course: withheld sums of squares 87, 16 and 63
+/// median of its own held-out ratio and those of its neighbouring prior steps (same knots and order,
+/// [`median_of_neighbours`]): the ratios of 48 shapes scatter, and one alone among neighbours that
+/// predict far worse is luck, not a wander (a 16-pose log fitted with its holds' course: withheld sums of squares 87, 16 and 63
 /// at steps of 0.3, 1 and 3 sigmas, against the nominal model's 212).
 pub(crate) fn best(ctx: &Context<'_>) -> Option<SmoothFit> {
     if !ctx.pose_level || !(ctx.e_white > 0.0) {
