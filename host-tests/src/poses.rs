@@ -464,12 +464,15 @@ pub(crate) fn until_enough<T, E>(
     mut find: impl FnMut(&AccumulateOptions) -> Result<T, E>,
 ) -> Result<T, E> {
     let mut best = find(opts)?;
+    if enough(&best) {
+        return Ok(best);
+    }
     for next in attempts(opts).iter().skip(1) {
-        if enough(&best) {
-            break;
-        }
         let found = find(next)?;
-        if enough(&found) || count(&found) > count(&best) {
+        if enough(&found) {
+            return Ok(found);
+        }
+        if count(&found) > count(&best) {
             best = found;
         }
     }

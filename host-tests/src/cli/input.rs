@@ -254,13 +254,18 @@ pub(super) fn load_and_calibrate(input: &InputArgs, method: Method, seed: u64, w
 /// The configuration for the file's units: "before" is the readings taken at face value in their
 /// unit (counts: the coarse six-position model).
 fn calibration_config(input: &InputArgs, units: Units, method: Method) -> CalibrationConfig {
-    let gravity = input.gravity as f32;
+    let config = input_config(input);
     let before = match units {
-        Units::G => Some(Params { scale: [gravity; 3], ..Params::IDENTITY }),
+        Units::G => Some(Params { scale: [config.gravity; 3], ..Params::IDENTITY }),
         Units::Mps2 => Some(Params::IDENTITY),
         _ => None,
     };
-    CalibrationConfig { gravity, method, before, init: input.init.into(), ..CalibrationConfig::DEFAULT }
+    CalibrationConfig { method, before, ..config }
+}
+
+/// What the command line sets of the calibration whatever the units: gravity and initial estimate.
+fn input_config(input: &InputArgs) -> CalibrationConfig {
+    CalibrationConfig { gravity: input.gravity as f32, init: input.init.into(), ..CalibrationConfig::DEFAULT }
 }
 
 /// Refuses more poses than one calibration takes ([`calib::MAX_POSES`], the library's buffer),
@@ -282,8 +287,7 @@ fn check_pose_count(file: &Path, found: usize, last_fitting_line: Option<usize>)
 /// The pose finder's test of the poses it found ([`calib::enough_poses`] with the input's initial
 /// estimate and gravity): while they are not enough it tries its later settings.
 fn enough_to_calibrate(input: &InputArgs) -> impl Fn(&[Pose]) -> bool {
-    let config =
-        CalibrationConfig { gravity: input.gravity as f32, init: input.init.into(), ..CalibrationConfig::DEFAULT };
+    let config = input_config(input);
     move |poses: &[Pose]| calib::enough_poses(poses, &config)
 }
 
