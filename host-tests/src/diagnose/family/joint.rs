@@ -9,7 +9,7 @@
 
 use super::{Context, Evaluation};
 use crate::diagnose::PARAMETER_PENALTY;
-use crate::diagnose::math::{cv_residuals, fit_residuals, rms, sum_sq};
+use crate::diagnose::math::{cv_residuals, fit_residuals, sum_sq};
 use crate::diagnose::within::{Within, WithinVariant};
 
 /// The best stacked parametrisation of a family.
@@ -66,11 +66,11 @@ pub(crate) fn add(ctx: &Context<'_>, e: &mut Evaluation, fit: JointFit) {
     if c.applicable && c.heldout_gain >= gain {
         return;
     }
-    let kept: Vec<f64> = fit.after.iter().flatten().copied().collect();
+    let Some(ratio_after) = ctx.ratio_after(&fit.after) else { return };
     c.applicable = true;
     (c.heldout_ratio, c.heldout_gain, c.extra_params) = (fit.ratio, gain, fit.params);
     e.gain_without_worst = f64::NAN;
-    c.ratio_after = ctx.m.to_mg(rms(&kept)) / ctx.m.gap.sim_rmse_mg;
+    c.ratio_after = ratio_after;
     c.detail = format!("{} (pose means and within-pose course together)", fit.detail);
     e.after = fit.after;
 }

@@ -11,7 +11,7 @@
 
 use super::{Context, Evaluation};
 use crate::diagnose::PARAMETER_PENALTY;
-use crate::diagnose::math::{V3, axis, cholesky_solve_many, dot, rms};
+use crate::diagnose::math::{V3, axis, cholesky_solve_many, dot};
 
 /// Knot counts tried.
 const KNOTS: [usize; 4] = [4, 6, 10, 18];
@@ -247,11 +247,11 @@ pub(crate) fn add(ctx: &Context<'_>, e: &mut Evaluation, fit: SmoothFit) {
     if c.applicable && c.heldout_gain >= gain {
         return;
     }
-    let kept: Vec<f64> = fit.after.iter().flatten().copied().collect();
+    let Some(ratio_after) = ctx.ratio_after(&fit.after) else { return };
     c.applicable = true;
     (c.heldout_ratio, c.heldout_gain, c.extra_params) = (fit.ratio, gain, fit.edf.round() as usize);
     (e.gain_without_worst, e.wander) = (f64::NAN, true);
-    c.ratio_after = ctx.m.to_mg(rms(&kept)) / ctx.m.gap.sim_rmse_mg;
+    c.ratio_after = ratio_after;
     c.detail = fit.detail;
     e.after = fit.after;
 }
@@ -271,6 +271,27 @@ mod tests {
                 assert!(nonzero <= 4, "{count} bases at t = {t}: {nonzero} non-zero");
             }
         }
+    }
+
+    #[test]
+    fn a_wander_that_leaves_the_pose_means_far_worse_than_the_nominal_fit_is_not_taken() {
+        use crate::diagnose::{DiagnoseOptions, gap};
+        use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
+        let opts = DiagnoseOptions::DEFAULT;
+        let table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "sim").unwrap();
+        let m = gap::measure(&table, &opts).unwrap();
+        let ctx = Context::new(&table, &m, &opts).unwrap();
+        // A wander carried by the holds' course that leaves the pose means 10 times the nominal
+        // residuals (a warm touch after each placement read as one drift), and one that leaves them.
+        let taken = |scale: f64| {
+            let after = m.r.iter().map(|r| Some(scale * r)).collect();
+            let fit = SmoothFit { ratio: 0.5, after, edf: 1.0, detail: String::new() };
+            let mut e = ctx.not_testable("drift");
+            add(&ctx, &mut e, fit);
+            e.candidate.applicable
+        };
+        assert!(!taken(10.0), "contradicted by the pose means");
+        assert!(taken(1.0));
     }
 
     #[test]
