@@ -5,7 +5,7 @@
 
 use super::{Context, Family, Variant, bias_scale_effect, smooth};
 use crate::diagnose::gap::row_time;
-use crate::diagnose::math::{lstsq, mean};
+use crate::diagnose::math::{lstsq, lstsq_with_covariance, mean};
 use crate::diagnose::within::{Within, WithinVariant};
 
 /// Lag time constants tried, s (0 = no lag).
@@ -15,6 +15,16 @@ const LAGS_S: [f64; 5] = [0.0, 30.0, 100.0, 300.0, 1000.0];
 /// thermometer (1 degC steps) is a staircase whose steps misplace a pose's temperature by up to half
 /// a step; the die's own temperature moves smoothly (its thermal time constants are minutes).
 const SMOOTH_S: f64 = 200.0;
+
+/// Largest local temperature coefficient of a MEMS accelerometer's bias a temperature fit may
+/// claim, mg/K: ten times the datasheet range of current parts (0 g offset vs temperature 0.1-0.5
+/// mg/K). A time drift in a warmed-up part whose thermometer wanders by a few tenths of a kelvin is
+/// fitted by such a thermometer at 3-10 mg/K.
+const MAX_BIAS_MG_PER_K: f64 = 5.0;
+
+/// Largest local relative scale coefficient a temperature fit may claim, per K: ten times the
+/// datasheet range (sensitivity change 0.01-0.05 %/K).
+const MAX_SCALE_PER_K: f64 = 5e-3;
 
 /// The thermometer as read: through a first-order lag of so many seconds (0: as it reads), or as a
 /// smooth course in time (knots [`SMOOTH_S`] apart, no lag).
@@ -147,6 +157,36 @@ fn design(ctx: &Context<'_>, temps: &[f64], power: usize, bias: bool, scale: boo
         .collect()
 }
 
+/// Standard errors by which a fitted temperature coefficient must exceed the physical limits to be
+/// refused: a coefficient the poses barely determine (few poses along an axis) may be large by
+/// chance.
+const BEYOND_LIMIT_SIGMAS: f64 = 2.0;
+
+/// The temperature columns `extra` (from [`design`]), fitted with the calibration to every pose,
+/// claim local coefficients a MEMS part can have over the poses' temperatures: the bias's at most
+/// [`MAX_BIAS_MG_PER_K`], the relative scale's at most [`MAX_SCALE_PER_K`], unless within
+/// [`BEYOND_LIMIT_SIGMAS`] standard errors of them (`None` fit: plausible, the held-out test
+/// decides).
+fn plausible(ctx: &Context<'_>, extra: &[Vec<f64>], temps: &[f64], power: usize, (bias, scale): (bool, bool)) -> bool {
+    let Some((x, cov, ms)) = lstsq_with_covariance(&ctx.rows_with(extra), &ctx.m.r) else { return true };
+    let base = ctx.base_rows[0].len();
+    let t0 = mean(temps);
+    let per_power = 3 * (usize::from(bias) + usize::from(scale));
+    let kinds = [(bias, 0, ctx.m.to_mg(1.0) / MAX_BIAS_MG_PER_K), (scale, 3 * usize::from(bias), 1.0 / MAX_SCALE_PER_K)];
+    let (x, cov) = (&x, &cov);
+    let within_limits = |dt: f64, offset: usize, per_limit: f64, a: usize| {
+        // The local slope d(effect)/dT at `dt` as a combination of the coefficients, and its variance.
+        let terms: Vec<(usize, f64)> =
+            (1..=power).map(|k| (base + (k - 1) * per_power + offset + a, k as f64 * dt.powi(k as i32 - 1))).collect();
+        let slope: f64 = terms.iter().map(|&(j, w)| w * x[j]).sum();
+        let var: f64 = terms.iter().flat_map(|&(j, w)| terms.iter().map(move |&(l, v)| w * v * cov[j][l])).sum();
+        (slope.abs() - BEYOND_LIMIT_SIGMAS * (var * ms).max(0.0).sqrt()) * per_limit <= 1.0
+    };
+    temps.iter().map(|t| t - t0).all(|dt| {
+        kinds.iter().filter(|k| k.0).all(|&(_, offset, per_limit)| (0..3).all(|a| within_limits(dt, offset, per_limit, a)))
+    })
+}
+
 impl Family for Temperature {
     fn name(&self) -> &'static str {
         "temperature"
@@ -169,6 +209,9 @@ impl Family for Temperature {
                 for (power, shape) in [(1, "linear"), (2, "quadratic")] {
                     let params = 3 * power * (usize::from(bias) + usize::from(scale)) + lag_params;
                     let extra = design(ctx, &temps, power, bias, scale);
+                    if !plausible(ctx, &extra, &temps, power, (bias, scale)) {
+                        continue;
+                    }
                     out.push(Variant { extra, params, detail: format!("{what} {shape} in temperature{through}") });
                 }
             }
