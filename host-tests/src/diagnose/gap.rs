@@ -38,8 +38,11 @@ impl PoseData {
     }
 }
 
+/// Seconds from the log's first row to row `row` (a log's clock may start anywhere: a host's uptime,
+/// a logger's; the effects' shapes in time, a warm-up's exponential, the periods searched, are
+/// measured from the log's start). Without a time column, `row / rate`.
 pub(crate) fn row_time(table: &Table, row: usize, rate: f64) -> f64 {
-    table.times_s.as_ref().map_or(row as f64 / rate, |t| t[row])
+    table.times_s.as_ref().map_or(row as f64 / rate, |t| t[row] - t[0])
 }
 
 /// Statistics of rows `first..end`.
