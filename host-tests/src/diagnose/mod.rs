@@ -399,6 +399,26 @@ mod tests {
     }
 
     #[test]
+    fn a_log_whose_clock_starts_late_is_diagnosed_as_from_its_first_row() {
+        // A warm-up drift logged against a host clock that had run 4321 s before the log began: the
+        // effects' shapes in time (the warm-up's exponential, the periods the probe searches) are
+        // measured from the log's start.
+        use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
+        let table = to_table(&generate(&random_scenario(EffectClass::Drift, 7)), "drift").unwrap();
+        let mut late = table.clone();
+        late.times_s = table.times_s.as_ref().map(|t| t.iter().map(|s| s + 4321.0).collect());
+        let opts = DiagnoseOptions::DEFAULT;
+        let (d, d_late) = (diagnose(&table, &opts).unwrap(), diagnose(&late, &opts).unwrap());
+        assert_eq!(d.verdict, d_late.verdict);
+        for (c, c_late) in d.candidates.iter().zip(&d_late.candidates) {
+            assert_eq!(c.detail, c_late.detail, "{}", c.effect);
+            assert!((c.heldout_ratio - c_late.heldout_ratio).abs() <= 1e-6 * c.heldout_ratio, "{c:?}\n{c_late:?}");
+        }
+        let (p, p_late) = (&d.probes, &d_late.probes);
+        assert!(p.iter().zip(p_late).all(|(a, b)| a.detail == b.detail), "{p:?}\n{p_late:?}");
+    }
+
+    #[test]
     fn the_short_still_fragments_of_a_knocked_hold_are_counted_and_left_out() {
         // One knock in every fourth hold, mid-hold: a 0.45 s fragment pressed, then the hold resumes.
         let table = knocked_log(4, 0.5, 0.45, 1);
