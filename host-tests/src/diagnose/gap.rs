@@ -210,6 +210,8 @@ pub(crate) struct Measured {
     pub(crate) poses: Vec<PoseData>,
     /// Still intervals left out as shorter than the least pose duration.
     pub(crate) short_poses: usize,
+    /// Poses whose starts were trimmed as the tails of moves.
+    pub(crate) tails_trimmed: usize,
     /// The factor the pose finder widened its test of a block's mean change by (correlated readings).
     pub(crate) mean_change_widened: Option<f64>,
     pub(crate) params: Params,
@@ -269,6 +271,8 @@ pub use crate::poses::MIN_POSE_S;
 struct Found {
     /// The library's poses.
     lib_poses: Vec<Pose>,
+    /// Poses whose starts were trimmed as the tails of moves ([`trim_move_tails`]).
+    tails_trimmed: usize,
     /// Their statistics from the rows.
     poses: Vec<PoseData>,
     /// Still intervals the library alone would have kept, left out as shorter than the least pose.
@@ -306,8 +310,64 @@ fn read_poses(table: &Table, found_with: &AccumulateOptions) -> Result<Found, Re
             err(format!("{}: {found} static poses{longer} found, diagnose needs at least {min_poses}", table.file));
         return Err(Refusal::NotCalibrated { still_poses: found, rate, error });
     }
-    let poses = acc.spans.iter().map(|s| pose_data(table, s.first_row, s.last_row + 1, rate)).collect();
-    Ok(Found { lib_poses: acc.poses, poses, short, rate, mean_change_widened: acc.mean_change_widened })
+    let mut poses: Vec<PoseData> =
+        acc.spans.iter().map(|s| pose_data(table, s.first_row, s.last_row + 1, rate)).collect();
+    let mut lib_poses = acc.poses;
+    let tails_trimmed = trim_move_tails(table, &mut poses, &mut lib_poses, rate);
+    Ok(Found { lib_poses, poses, short, tails_trimmed, rate, mean_change_widened: acc.mean_change_widened })
+}
+
+/// Standard deviations by which a sixth of a pose must differ from the pose's last four sixths to be
+/// the tail of the move before it.
+const TAIL_Z: f64 = 6.0;
+
+/// Largest share of the poses whose starts are trimmed as move tails: a transient at the start of
+/// most holds is the sensor's or its support's settling, a family the diagnosis tests, not handling.
+const TAILS_AT_MOST: f64 = 0.25;
+
+/// The leading sixths of pose `p` to trim: those (0, 1 or 2) that differ from its last four by more
+/// than [`TAIL_Z`] standard errors on some axis (`var`: white-equivalent variance per sample), and
+/// one more as a guard when there are any (the tail decays into it below the test's reach: a tail
+/// of 8 mg decaying in 0.3 s left 2 of 29 poses 0.04 mg off after one sixth of a 5 s hold).
+fn leading_tail(p: &PoseData, var: V3) -> usize {
+    if p.seg_n < 2 {
+        return 0;
+    }
+    let rest: V3 = std::array::from_fn(|a| p.seg[2..].iter().map(|s| s[a]).sum::<f64>() / (SEGMENTS - 2) as f64);
+    let off = |k: usize| {
+        (0..3).any(|a| {
+            let sd = (var[a] / p.seg_n as f64 * (1.0 + 1.0 / (SEGMENTS - 2) as f64)).sqrt();
+            (p.seg[k][a] - rest[a]).abs() > TAIL_Z * sd
+        })
+    };
+    if !off(0) {
+        0
+    } else if off(1) {
+        3
+    } else {
+        2
+    }
+}
+
+/// Trims the tails of moves from the starts of the poses that hold one (a hand still settling the
+/// part after a lift and a turn the detector's variance test barely sees), when at most
+/// [`TAILS_AT_MOST`] of the poses do; the library's pose means follow. Returns the poses trimmed.
+fn trim_move_tails(table: &Table, poses: &mut [PoseData], lib_poses: &mut [Pose], rate: f64) -> usize {
+    let white: V3 = std::array::from_fn(|a| median(&poses.iter().map(|p| p.var[a]).collect::<Vec<_>>()));
+    let correlation = correlation_factor(table, poses, rate);
+    let var: V3 = std::array::from_fn(|a| white[a] * correlation[a]);
+    let tails: Vec<usize> = poses.iter().map(|p| leading_tail(p, var)).collect();
+    let count = tails.iter().filter(|k| **k > 0).count();
+    if count == 0 || count as f64 > TAILS_AT_MOST * poses.len() as f64 {
+        return 0;
+    }
+    for ((p, lib), k) in poses.iter_mut().zip(lib_poses.iter_mut()).zip(&tails).filter(|(_, k)| **k > 0) {
+        *p = pose_data(table, p.rows.start + k * p.seg_n, p.rows.end, rate);
+        lib.mean = p.mean.map(|v| v as f32);
+        lib.variance = p.var.map(|v| v as f32);
+        lib.n = p.n as u32;
+    }
+    count
 }
 
 /// White-equivalent variance per axis: the median within-pose variance (quantisation included: a
@@ -432,7 +492,8 @@ pub(crate) fn measure_with(
     found_with: &AccumulateOptions,
 ) -> Result<Measured, Refusal> {
     let gravity = opts.gravity;
-    let Found { lib_poses, poses, short: short_poses, rate, mean_change_widened } = read_poses(table, found_with)?;
+    let Found { lib_poses, poses, short: short_poses, tails_trimmed, rate, mean_change_widened } =
+        read_poses(table, found_with)?;
     let config = CalibrationConfig { gravity: gravity as f32, ..CalibrationConfig::DEFAULT };
     let cal = calib::run(&lib_poses, &config, opts.seed).map_err(|e| Refusal::NotCalibrated {
         still_poses: lib_poses.len(),
@@ -455,6 +516,7 @@ pub(crate) fn measure_with(
         rate,
         poses,
         short_poses,
+        tails_trimmed,
         mean_change_widened,
         params: cal.params,
         model,

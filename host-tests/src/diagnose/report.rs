@@ -163,6 +163,8 @@ pub struct Diagnosis {
     pub poses: Vec<PoseReport>,
     /// Still intervals shorter than [`MIN_POSE_S`](super::MIN_POSE_S) left out.
     pub short_poses: usize,
+    /// Poses whose first sixth or two moved with the tail of the move before them, trimmed.
+    pub tails_trimmed: usize,
     /// The factor the pose finder widened its test of a block's mean change by for correlated
     /// (low-passed) readings, when too few poses were found without it.
     pub mean_change_widened: Option<f64>,
@@ -221,6 +223,8 @@ pub struct DiagnosisDocument<'a> {
     poses: usize,
     /// Still intervals shorter than the least pose duration, left out.
     short_poses_left_out: usize,
+    /// Poses whose starts were trimmed as the tail of the move before them.
+    pose_starts_trimmed: usize,
     /// The pose finder's widening of its test of a block's mean change (correlated readings).
     mean_change_widened: Option<f64>,
     params: &'a Params,
@@ -336,6 +340,7 @@ impl Diagnosis {
             repeats: self.repeats,
             poses: self.poses.len(),
             short_poses_left_out: self.short_poses,
+            pose_starts_trimmed: self.tails_trimmed,
             mean_change_widened: self.mean_change_widened,
             params: &self.params,
             noise: NoiseSummary { white_mg: self.white_mg, longest_rest_s: self.allan.rest_s },
@@ -459,6 +464,7 @@ mod tests {
             gap,
             poses: vec![pose(1.0, [0.0, 0.0, 1.0]), pose(9.0, [1.0, 0.0, 0.0])],
             short_poses: 3,
+            tails_trimmed: 0,
             mean_change_widened: None,
             allan: Allan { rest_s: 5.0, tau_s: vec![0.1], adev_mg: vec![0.2], white_mg: vec![0.1] },
             candidates: vec![candidate],

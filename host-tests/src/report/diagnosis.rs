@@ -70,12 +70,16 @@ impl Diagnosis {
             0 => String::new(),
             n => format!(" ({n} still intervals shorter than {} s left out)", crate::diagnose::MIN_POSE_S),
         };
+        let tails = match self.tails_trimmed {
+            0 => String::new(),
+            n => format!(" ({n} pose starts trimmed: the tail of the move before)"),
+        };
         let widened = self.mean_change_widened.map_or(String::new(), |c| {
             format!(" (readings correlated: the still test's limit on a block's mean change widened {c:.1}x)")
         });
         let _ = writeln!(
             s,
-            "{}: {} rows ({}), {} poses{short}{widened}, seed {}",
+            "{}: {} rows ({}), {} poses{short}{tails}{widened}, seed {}",
             self.file,
             self.samples,
             self.units,

@@ -30,9 +30,8 @@ impl Family for ScaleNonlinearity {
             Variant { extra: design(&[2, 3]), params: 6, detail: "k2 a^2 + k3 a^3 per axis".into() },
         ];
         // One axis bowing alone (the out-of-plane axis of most parts): its square and cube terms.
-        let one_axis = |a: usize| -> Vec<Vec<f64>> {
-            design(&[2, 3]).into_iter().map(|row| vec![row[a], row[3 + a]]).collect()
-        };
+        let one_axis =
+            |a: usize| -> Vec<Vec<f64>> { design(&[2, 3]).into_iter().map(|row| vec![row[a], row[3 + a]]).collect() };
         variants.extend((0..3).map(|a| Variant {
             extra: one_axis(a),
             params: 2,

@@ -172,7 +172,8 @@ fn plausible(ctx: &Context<'_>, extra: &[Vec<f64>], temps: &[f64], power: usize,
     let base = ctx.base_rows[0].len();
     let t0 = mean(temps);
     let per_power = 3 * (usize::from(bias) + usize::from(scale));
-    let kinds = [(bias, 0, ctx.m.to_mg(1.0) / MAX_BIAS_MG_PER_K), (scale, 3 * usize::from(bias), 1.0 / MAX_SCALE_PER_K)];
+    let kinds =
+        [(bias, 0, ctx.m.to_mg(1.0) / MAX_BIAS_MG_PER_K), (scale, 3 * usize::from(bias), 1.0 / MAX_SCALE_PER_K)];
     let (x, cov) = (&x, &cov);
     let within_limits = |dt: f64, offset: usize, per_limit: f64, a: usize| {
         // The local slope d(effect)/dT at `dt` as a combination of the coefficients, and its variance.
@@ -183,7 +184,10 @@ fn plausible(ctx: &Context<'_>, extra: &[Vec<f64>], temps: &[f64], power: usize,
         (slope.abs() - BEYOND_LIMIT_SIGMAS * (var * ms).max(0.0).sqrt()) * per_limit <= 1.0
     };
     temps.iter().map(|t| t - t0).all(|dt| {
-        kinds.iter().filter(|k| k.0).all(|&(_, offset, per_limit)| (0..3).all(|a| within_limits(dt, offset, per_limit, a)))
+        kinds
+            .iter()
+            .filter(|k| k.0)
+            .all(|&(_, offset, per_limit)| (0..3).all(|a| within_limits(dt, offset, per_limit, a)))
     })
 }
 
