@@ -317,52 +317,59 @@ fn read_poses(table: &Table, found_with: &AccumulateOptions) -> Result<Found, Re
     Ok(Found { lib_poses, poses, short, tails_trimmed, rate, mean_change_widened: acc.mean_change_widened })
 }
 
-/// Standard deviations by which a sixth of a pose must differ from the pose's last four sixths to be
-/// the tail of the move before it.
+/// Standard deviations by which the first (or last) sixth of a pose must differ from the pose's
+/// other four to be the tail of a move.
 const TAIL_Z: f64 = 6.0;
 
 /// Largest share of the poses whose starts are trimmed as move tails: a transient at the start of
 /// most holds is the sensor's or its support's settling, a family the diagnosis tests, not handling.
 const TAILS_AT_MOST: f64 = 0.25;
 
-/// The leading sixths of pose `p` to trim: those (0, 1 or 2) that differ from its last four by more
-/// than [`TAIL_Z`] standard errors on some axis (`var`: white-equivalent variance per sample), and
-/// one more as a guard when there are any (the tail decays into it below the test's reach: a tail
-/// of 8 mg decaying in 0.3 s left 2 of 29 poses 0.04 mg off after one sixth of a 5 s hold).
-fn leading_tail(p: &PoseData, var: V3) -> usize {
+/// Standard deviations within which a pose's second (or second-to-last) sixth must agree with its
+/// middle for the first (last) to be a move's tail and not a lasting change.
+const AFTER_TAIL_Z: f64 = 3.0;
+
+/// The sixths of pose `p` to trim at its start (`from_end` false) or its end: two when the first
+/// sixth differs from the middle two by more than [`TAIL_Z`] standard errors on some axis (`var`:
+/// white-equivalent variance per sample) and the second agrees with them within [`AFTER_TAIL_Z`] (a
+/// move's tail is over within the first; the second is a guard: the tail decays into it below the
+/// test's reach, a tail of 8 mg decaying in 0.3 s left 2 of 29 poses 0.04 mg off with one sixth
+/// trimmed). When the second differs too, the change lasts: the sensor's own settling (a hand's
+/// warmth leaving the board, tau 10 s) or a drift, not trimmed.
+fn tail_sixths(p: &PoseData, var: V3, from_end: bool) -> usize {
     if p.seg_n < 2 {
         return 0;
     }
-    let rest: V3 = std::array::from_fn(|a| p.seg[2..].iter().map(|s| s[a]).sum::<f64>() / (SEGMENTS - 2) as f64);
-    let off = |k: usize| {
+    let seg = |k: usize| if from_end { p.seg[SEGMENTS - 1 - k] } else { p.seg[k] };
+    let middle = 2..SEGMENTS - 2;
+    let count = middle.len() as f64;
+    let reference: V3 = std::array::from_fn(|a| middle.clone().map(|k| seg(k)[a]).sum::<f64>() / count);
+    let beyond = |k: usize, z: f64| {
         (0..3).any(|a| {
-            let sd = (var[a] / p.seg_n as f64 * (1.0 + 1.0 / (SEGMENTS - 2) as f64)).sqrt();
-            (p.seg[k][a] - rest[a]).abs() > TAIL_Z * sd
+            let sd = (var[a] / p.seg_n as f64 * (1.0 + 1.0 / count)).sqrt();
+            (seg(k)[a] - reference[a]).abs() > z * sd
         })
     };
-    if !off(0) {
-        0
-    } else if off(1) {
-        3
-    } else {
-        2
-    }
+    if beyond(0, TAIL_Z) && !beyond(1, AFTER_TAIL_Z) { 2 } else { 0 }
 }
 
-/// Trims the tails of moves from the starts of the poses that hold one (a hand still settling the
-/// part after a lift and a turn the detector's variance test barely sees), when at most
+/// Trims the tails of moves from the starts and ends of the poses that hold one (a hand still
+/// settling the part after a lift and a turn the detector's variance test barely sees; the start of
+/// a knock that split a hold in two), when at most
 /// [`TAILS_AT_MOST`] of the poses do; the library's pose means follow. Returns the poses trimmed.
 fn trim_move_tails(table: &Table, poses: &mut [PoseData], lib_poses: &mut [Pose], rate: f64) -> usize {
     let white: V3 = std::array::from_fn(|a| median(&poses.iter().map(|p| p.var[a]).collect::<Vec<_>>()));
     let correlation = correlation_factor(table, poses, rate);
     let var: V3 = std::array::from_fn(|a| white[a] * correlation[a]);
-    let tails: Vec<usize> = poses.iter().map(|p| leading_tail(p, var)).collect();
-    let count = tails.iter().filter(|k| **k > 0).count();
+    let tails: Vec<(usize, usize)> =
+        poses.iter().map(|p| (tail_sixths(p, var, false), tail_sixths(p, var, true))).collect();
+    let count = tails.iter().filter(|(lead, trail)| lead + trail > 0).count();
     if count == 0 || count as f64 > TAILS_AT_MOST * poses.len() as f64 {
         return 0;
     }
-    for ((p, lib), k) in poses.iter_mut().zip(lib_poses.iter_mut()).zip(&tails).filter(|(_, k)| **k > 0) {
-        *p = pose_data(table, p.rows.start + k * p.seg_n, p.rows.end, rate);
+    let trimmed = poses.iter_mut().zip(lib_poses.iter_mut()).zip(&tails).filter(|(_, (l, t))| l + t > 0);
+    for ((p, lib), (lead, trail)) in trimmed {
+        *p = pose_data(table, p.rows.start + lead * p.seg_n, p.rows.end - trail * p.seg_n, rate);
         lib.mean = p.mean.map(|v| v as f32);
         lib.variance = p.var.map(|v| v as f32);
         lib.n = p.n as u32;

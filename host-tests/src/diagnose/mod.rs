@@ -425,7 +425,7 @@ mod tests {
         let d = diagnose(&tailed(m.poses.len() / 2), &opts).unwrap();
         assert_eq!(d.tails_trimmed, 2, "{}", d.to_text());
         assert_eq!(d.verdict, "none", "{}", d.to_text());
-        assert!(d.to_text().contains("2 pose starts trimmed"), "{}", d.to_text());
+        assert!(d.to_text().contains("2 poses trimmed"), "{}", d.to_text());
         // Every pose: the part's settling, left to the settling family.
         let d = diagnose(&tailed(1), &opts).unwrap();
         assert_eq!(d.tails_trimmed, 0, "{}", d.to_text());

@@ -163,7 +163,7 @@ pub struct Diagnosis {
     pub poses: Vec<PoseReport>,
     /// Still intervals shorter than [`MIN_POSE_S`](super::MIN_POSE_S) left out.
     pub short_poses: usize,
-    /// Poses whose first sixth or two moved with the tail of the move before them, trimmed.
+    /// Poses whose start or end moved with the tail of a move (a sixth and a guard sixth trimmed).
     pub tails_trimmed: usize,
     /// The factor the pose finder widened its test of a block's mean change by for correlated
     /// (low-passed) readings, when too few poses were found without it.
@@ -223,7 +223,7 @@ pub struct DiagnosisDocument<'a> {
     poses: usize,
     /// Still intervals shorter than the least pose duration, left out.
     short_poses_left_out: usize,
-    /// Poses whose starts were trimmed as the tail of the move before them.
+    /// Poses whose start or end was trimmed as the tail of a move.
     pose_starts_trimmed: usize,
     /// The pose finder's widening of its test of a block's mean change (correlated readings).
     mean_change_widened: Option<f64>,

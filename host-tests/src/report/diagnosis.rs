@@ -72,7 +72,7 @@ impl Diagnosis {
         };
         let tails = match self.tails_trimmed {
             0 => String::new(),
-            n => format!(" ({n} pose starts trimmed: the tail of the move before)"),
+            n => format!(" ({n} poses trimmed: a move's tail at their start or end)"),
         };
         let widened = self.mean_change_widened.map_or(String::new(), |c| {
             format!(" (readings correlated: the still test's limit on a block's mean change widened {c:.1}x)")
