@@ -325,32 +325,41 @@ const TAIL_Z: f64 = 6.0;
 /// most holds is the sensor's or its support's settling, a family the diagnosis tests, not handling.
 const TAILS_AT_MOST: f64 = 0.25;
 
-/// Standard deviations within which a pose's second (or second-to-last) sixth must agree with its
-/// middle for the first (last) to be a move's tail and not a lasting change.
-const AFTER_TAIL_Z: f64 = 3.0;
+/// Shortest pose tested for a move's tail, s: its sixth (a third of a second) is about as long as
+/// a hand takes to settle after a move. In shorter poses a tail spans several sixths (a lasting
+/// change by [`tail_sixths`]' test), and a sixth of a fragment of a quarter of a second still is
+/// noise, not a tail.
+const TAIL_POSE_MIN_S: f64 = 2.0;
+
+/// Largest share of the first sixth's deviation a move's tail leaves in the second: a tail decays
+/// within its sixth (8 mg in 0.3 s over sixths of 0.83 s: 0.06), a slow sway across the hold does
+/// not (a half sine: 0.37), nor a settling of 10 s in sixths of 12 s (0.30). The second sixth's
+/// noise is part of the share: a tail 7 standard errors off in its sixth is trimmed only sometimes
+/// (0.24 measured on one), one 10 or more reliably.
+const TAIL_DECAY: f64 = 0.2;
 
 /// The sixths of pose `p` to trim at its start (`from_end` false) or its end: two when the first
 /// sixth differs from the middle two by more than [`TAIL_Z`] standard errors on some axis (`var`:
-/// white-equivalent variance per sample) and the second agrees with them within [`AFTER_TAIL_Z`] (a
-/// move's tail is over within the first; the second is a guard: the tail decays into it below the
+/// white-equivalent variance per sample) and the second differs on that axis by at most [`TAIL_DECAY`]
+/// of the first's deviation (a move's tail is over within the first; the second is a guard: the tail decays into it below the
 /// test's reach, a tail of 8 mg decaying in 0.3 s left 2 of 29 poses 0.04 mg off with one sixth
 /// trimmed). When the second differs too, the change lasts: the sensor's own settling (a hand's
 /// warmth leaving the board, tau 10 s) or a drift, not trimmed.
 fn tail_sixths(p: &PoseData, var: V3, from_end: bool) -> usize {
-    if p.seg_n < 2 {
+    if p.seg_n < 2 || p.duration() < TAIL_POSE_MIN_S {
         return 0;
     }
     let seg = |k: usize| if from_end { p.seg[SEGMENTS - 1 - k] } else { p.seg[k] };
     let middle = 2..SEGMENTS - 2;
     let count = middle.len() as f64;
     let reference: V3 = std::array::from_fn(|a| middle.clone().map(|k| seg(k)[a]).sum::<f64>() / count);
-    let beyond = |k: usize, z: f64| {
-        (0..3).any(|a| {
-            let sd = (var[a] / p.seg_n as f64 * (1.0 + 1.0 / count)).sqrt();
-            (seg(k)[a] - reference[a]).abs() > z * sd
-        })
-    };
-    if beyond(0, TAIL_Z) && !beyond(1, AFTER_TAIL_Z) { 2 } else { 0 }
+    let sd: V3 = std::array::from_fn(|a| (var[a] / p.seg_n as f64 * (1.0 + 1.0 / count)).sqrt());
+    let off = |k: usize| -> V3 { std::array::from_fn(|a| (seg(k)[a] - reference[a]).abs()) };
+    let (first, second) = (off(0), off(1));
+    let most = (0..3).max_by(|&a, &b| (first[a] / sd[a]).total_cmp(&(first[b] / sd[b]))).unwrap_or(0);
+    let tail = first[most] > TAIL_Z * sd[most];
+    let over = second[most] <= TAIL_DECAY * first[most];
+    if tail && over { 2 } else { 0 }
 }
 
 /// Trims the tails of moves from the starts and ends of the poses that hold one (a hand still
