@@ -210,7 +210,7 @@ pub(crate) struct Measured {
     pub(crate) poses: Vec<PoseData>,
     /// Still intervals left out as shorter than the least pose duration.
     pub(crate) short_poses: usize,
-    /// Poses whose starts were trimmed as the tails of moves.
+    /// Poses whose start or end was trimmed as the tail of a move ([`trim_move_tails`]).
     pub(crate) tails_trimmed: usize,
     /// The factor the pose finder widened its test of a block's mean change by (correlated readings).
     pub(crate) mean_change_widened: Option<f64>,
@@ -271,7 +271,7 @@ pub use crate::poses::MIN_POSE_S;
 struct Found {
     /// The library's poses.
     lib_poses: Vec<Pose>,
-    /// Poses whose starts were trimmed as the tails of moves ([`trim_move_tails`]).
+    /// Poses whose start or end was trimmed as the tail of a move ([`trim_move_tails`]).
     tails_trimmed: usize,
     /// Their statistics from the rows.
     poses: Vec<PoseData>,
@@ -317,12 +317,11 @@ fn read_poses(table: &Table, found_with: &AccumulateOptions) -> Result<Found, Re
     Ok(Found { lib_poses, poses, short, tails_trimmed, rate, mean_change_widened: acc.mean_change_widened })
 }
 
-/// Standard deviations by which the first (or last) sixth of a pose must differ from the pose's
-/// other four to be the tail of a move.
+/// Standard deviations by which the first (or last) sixth of a pose must differ from its middle two
+/// to be the tail of a move.
 const TAIL_Z: f64 = 6.0;
 
-/// Largest share of the poses whose starts are trimmed as move tails: a transient at the start of
-/// most holds is the sensor's or its support's settling, a family the diagnosis tests, not handling.
+/// Largest share of the poses trimmed of move tails: a transient at the start of most holds is the sensor's or its support's settling, a family the diagnosis tests, not handling.
 const TAILS_AT_MOST: f64 = 0.25;
 
 /// Shortest pose tested for a move's tail, s: its sixth (a third of a second) is about as long as
@@ -340,11 +339,11 @@ const TAIL_DECAY: f64 = 0.2;
 
 /// The sixths of pose `p` to trim at its start (`from_end` false) or its end: two when the first
 /// sixth differs from the middle two by more than [`TAIL_Z`] standard errors on some axis (`var`:
-/// white-equivalent variance per sample) and the second differs on that axis by at most [`TAIL_DECAY`]
-/// of the first's deviation (a move's tail is over within the first; the second is a guard: the tail decays into it below the
-/// test's reach, a tail of 8 mg decaying in 0.3 s left 2 of 29 poses 0.04 mg off with one sixth
-/// trimmed). When the second differs too, the change lasts: the sensor's own settling (a hand's
-/// warmth leaving the board, tau 10 s) or a drift, not trimmed.
+/// white-equivalent variance per sample) and the second differs on that axis by at most
+/// [`TAIL_DECAY`] of the first's deviation (a move's tail is over within the first; the second is a
+/// guard: the tail decays into it below the test's reach, a tail of 8 mg decaying in 0.3 s left 2 of
+/// 29 poses 0.04 mg off with one sixth trimmed). When the second differs more, the change lasts: the
+/// sensor's own settling (a hand's warmth leaving the board, tau 10 s) or a drift, not trimmed.
 fn tail_sixths(p: &PoseData, var: V3, from_end: bool) -> usize {
     if p.seg_n < 2 || p.duration() < TAIL_POSE_MIN_S {
         return 0;
@@ -364,8 +363,8 @@ fn tail_sixths(p: &PoseData, var: V3, from_end: bool) -> usize {
 
 /// Trims the tails of moves from the starts and ends of the poses that hold one (a hand still
 /// settling the part after a lift and a turn the detector's variance test barely sees; the start of
-/// a knock that split a hold in two), when at most
-/// [`TAILS_AT_MOST`] of the poses do; the library's pose means follow. Returns the poses trimmed.
+/// a knock that split a hold in two), when at most [`TAILS_AT_MOST`] of the poses do; the library's
+/// poses follow. Returns the poses trimmed.
 fn trim_move_tails(table: &Table, poses: &mut [PoseData], lib_poses: &mut [Pose], rate: f64) -> usize {
     let white: V3 = std::array::from_fn(|a| median(&poses.iter().map(|p| p.var[a]).collect::<Vec<_>>()));
     let correlation = correlation_factor(table, poses, rate);
@@ -378,10 +377,13 @@ fn trim_move_tails(table: &Table, poses: &mut [PoseData], lib_poses: &mut [Pose]
     }
     let trimmed = poses.iter_mut().zip(lib_poses.iter_mut()).zip(&tails).filter(|(_, (l, t))| l + t > 0);
     for ((p, lib), (lead, trail)) in trimmed {
-        *p = pose_data(table, p.rows.start + lead * p.seg_n, p.rows.end - trail * p.seg_n, rate);
+        let (head, tail) = (lead * p.seg_n, trail * p.seg_n);
+        *p = pose_data(table, p.rows.start + head, p.rows.end - tail, rate);
         lib.mean = p.mean.map(|v| v as f32);
         lib.variance = p.var.map(|v| v as f32);
         lib.n = p.n as u32;
+        lib.start_index += head as u32;
+        lib.end_index -= tail as u32;
     }
     count
 }

@@ -224,7 +224,7 @@ pub struct DiagnosisDocument<'a> {
     /// Still intervals shorter than the least pose duration, left out.
     short_poses_left_out: usize,
     /// Poses whose start or end was trimmed as the tail of a move.
-    pose_starts_trimmed: usize,
+    tails_trimmed: usize,
     /// The pose finder's widening of its test of a block's mean change (correlated readings).
     mean_change_widened: Option<f64>,
     params: &'a Params,
@@ -340,7 +340,7 @@ impl Diagnosis {
             repeats: self.repeats,
             poses: self.poses.len(),
             short_poses_left_out: self.short_poses,
-            pose_starts_trimmed: self.tails_trimmed,
+            tails_trimmed: self.tails_trimmed,
             mean_change_widened: self.mean_change_widened,
             params: &self.params,
             noise: NoiseSummary { white_mg: self.white_mg, longest_rest_s: self.allan.rest_s },

@@ -61,11 +61,8 @@ impl Diagnosis {
         }
     }
 
-    /// The human-readable report, one block per step.
-    pub fn to_text(&self) -> String {
-        use std::fmt::Write as _;
-        let mut s = String::new();
-        let g = &self.gap;
+    /// The report's first line: the log, its poses and what the pose finder left out or changed.
+    fn header(&self) -> String {
         let short = match self.short_poses {
             0 => String::new(),
             n => format!(" ({n} still intervals shorter than {} s left out)", crate::diagnose::MIN_POSE_S),
@@ -77,15 +74,22 @@ impl Diagnosis {
         let widened = self.mean_change_widened.map_or(String::new(), |c| {
             format!(" (readings correlated: the still test's limit on a block's mean change widened {c:.1}x)")
         });
-        let _ = writeln!(
-            s,
+        format!(
             "{}: {} rows ({}), {} poses{short}{tails}{widened}, seed {}",
             self.file,
             self.samples,
             self.units,
             self.poses.len(),
             self.seed
-        );
+        )
+    }
+
+    /// The human-readable report, one block per step.
+    pub fn to_text(&self) -> String {
+        use std::fmt::Write as _;
+        let mut s = String::new();
+        let g = &self.gap;
+        let _ = writeln!(s, "{}", self.header());
         if let Some(why) = &self.not_calibrated {
             let _ = writeln!(s, "1. gap: not measured ({why})");
             for c in &self.candidates {
