@@ -331,8 +331,8 @@ const TAILS_AT_MOST: f64 = 0.25;
 const TAIL_POSE_MIN_S: f64 = 2.0;
 
 /// Largest share of the first sixth's deviation a move's tail leaves in the second: a tail decays
-/// within its sixth (8 mg in 0.3 s over sixths of 0.83 s: 0.06), a slow sway across the hold does
-/// not (a half sine: 0.37), nor a settling of 10 s in sixths of 12 s (0.30). The second sixth's
+/// within its sixth (computed: 8 mg in 0.3 s over sixths of 0.83 s, 0.06), a slow sway across the
+/// hold does not (a half sine, 0.37), nor a settling of 10 s in sixths of 12 s (0.30). The second sixth's
 /// noise is part of the share: a tail 7 standard errors off in its sixth is trimmed only sometimes
 /// (0.24 measured on one), one 10 or more reliably.
 const TAIL_DECAY: f64 = 0.2;
@@ -341,8 +341,8 @@ const TAIL_DECAY: f64 = 0.2;
 /// sixth differs from the middle two by more than [`TAIL_Z`] standard errors on some axis (`var`:
 /// white-equivalent variance per sample) and the second differs on that axis by at most
 /// [`TAIL_DECAY`] of the first's deviation (a move's tail is over within the first; the second is a
-/// guard: the tail decays into it below the test's reach, a tail of 8 mg decaying in 0.3 s left 2 of
-/// 29 poses 0.04 mg off with one sixth trimmed). When the second differs more, the change lasts: the
+/// guard: the tail decays into it below the test's reach; with one sixth trimmed, a log with two
+/// tails of 8 mg decaying in 0.3 s kept a significant gap, ratio 1.53). When the second differs more, the change lasts: the
 /// sensor's own settling (a hand's warmth leaving the board, tau 10 s) or a drift, not trimmed.
 fn tail_sixths(p: &PoseData, var: V3, from_end: bool) -> usize {
     if p.seg_n < 2 || p.duration() < TAIL_POSE_MIN_S {
@@ -366,8 +366,7 @@ fn tail_sixths(p: &PoseData, var: V3, from_end: bool) -> usize {
 /// a knock that split a hold in two), when at most [`TAILS_AT_MOST`] of the poses do; the library's
 /// poses follow. Returns the poses trimmed.
 fn trim_move_tails(table: &Table, poses: &mut [PoseData], lib_poses: &mut [Pose], rate: f64) -> usize {
-    let white: V3 = std::array::from_fn(|a| median(&poses.iter().map(|p| p.var[a]).collect::<Vec<_>>()));
-    let correlation = correlation_factor(table, poses, rate);
+    let (white, correlation) = (median_pose_variance(poses), correlation_factor(table, poses, rate));
     let var: V3 = std::array::from_fn(|a| white[a] * correlation[a]);
     let tails: Vec<(usize, usize)> =
         poses.iter().map(|p| (tail_sixths(p, var, false), tail_sixths(p, var, true))).collect();
@@ -388,13 +387,18 @@ fn trim_move_tails(table: &Table, poses: &mut [PoseData], lib_poses: &mut [Pose]
     count
 }
 
+/// The median within-pose variance per sample, per axis.
+fn median_pose_variance(poses: &[PoseData]) -> V3 {
+    std::array::from_fn(|a| median(&poses.iter().map(|p| p.var[a]).collect::<Vec<_>>()))
+}
+
 /// White-equivalent variance per axis: the median within-pose variance (quantisation included: a
 /// reading rounded to a step `q` adds `q^2 / 12`, which the within-pose variance already holds, and at
 /// least that is assumed) times the [`correlation_factor`], so that it over `n` is the variance of a
 /// mean of `n` samples.
 /// Also returns the quantisation floor of a pose mean per axis ([`quantisation_floor`]).
 fn white_variance(table: &Table, poses: &[PoseData], rate: f64) -> Result<(V3, V3), DiagnoseError> {
-    let white: V3 = std::array::from_fn(|a| median(&poses.iter().map(|p| p.var[a]).collect::<Vec<_>>()));
+    let white = median_pose_variance(poses);
     let q = quantisation_step(table);
     // Readings that never change within a pose are a quantised sensor whose noise is below one step:
     // the rounding (q^2 / 12) is then the whole noise.

@@ -21,17 +21,17 @@ impl Family for ScaleNonlinearity {
         };
         let common =
             |k: i32| -> Vec<Vec<f64>> { design(&[k]).into_iter().map(|row| vec![row.iter().sum::<f64>()]).collect() };
+        let both = design(&[2, 3]);
         let mut variants = vec![
             // One coefficient for all axes: testable on logs of few poses.
             Variant { extra: common(2), params: 1, detail: "k2 a^2, one k2 for all axes".into() },
             Variant { extra: common(3), params: 1, detail: "k3 a^3, one k3 for all axes".into() },
             Variant { extra: design(&[2]), params: 3, detail: "k2 a^2 per axis".into() },
             Variant { extra: design(&[3]), params: 3, detail: "k3 a^3 per axis".into() },
-            Variant { extra: design(&[2, 3]), params: 6, detail: "k2 a^2 + k3 a^3 per axis".into() },
+            Variant { extra: both.clone(), params: 6, detail: "k2 a^2 + k3 a^3 per axis".into() },
         ];
         // One axis bowing alone (the out-of-plane axis of most parts): its square and cube terms.
-        let one_axis =
-            |a: usize| -> Vec<Vec<f64>> { design(&[2, 3]).into_iter().map(|row| vec![row[a], row[3 + a]]).collect() };
+        let one_axis = |a: usize| -> Vec<Vec<f64>> { both.iter().map(|row| vec![row[a], row[3 + a]]).collect() };
         variants.extend((0..3).map(|a| Variant {
             extra: one_axis(a),
             params: 2,
