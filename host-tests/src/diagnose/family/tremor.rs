@@ -33,17 +33,28 @@ const LONG_S: [f64; 2] = [0.1, 0.25];
 /// The holds' density ratio above which they move in the tremor band.
 pub(crate) const TREMOR_RATIO: f64 = 1.5;
 
+/// Fewest independent pairs of blocks (the rows of the halves used over `2 m`) a long scale's
+/// Allan variance pooled over the holds must rest on to serve as the floor ([`in_holds`]; the holds
+/// scan flags each hold on its own and counts the flags): 8 pairs are 24 degrees of freedom over three
+/// axes, a relative standard error of about 0.3 against a threshold 1.5 times the floor. Holds cut
+/// into fragments leave the longest scale a pair or two (a flicker log's 38 holds of 0.5-1.2 s: 2,
+/// whose floor came out at a third of the short scale's and read as a tremor); they are judged
+/// over the log instead ([`in_log`]).
+const MIN_FLOOR_PAIRS: usize = 8;
+
 /// The density ratio (`SHORT_S` over the lower of `LONG_S`, pooled over the holds) of the first and of the
 /// second half of every hold: about 1 for white noise, at most about 1 for filtered or correlated
-/// noise; `None` when the sample rate or the holds are too short or no noise is measurable.
-pub(crate) fn band_ratios(table: &Table, poses: &[PoseData], rate: f64) -> Option<(f64, f64)> {
+/// noise; `None` when the sample rate or the holds are too short (no long scale resting on
+/// `min_floor_pairs` independent pairs of blocks) or no noise is measurable.
+pub(crate) fn band_ratios(table: &Table, poses: &[PoseData], rate: f64, min_floor_pairs: usize) -> Option<(f64, f64)> {
     let blocks = |s: f64| (s * rate).round() as usize;
     if blocks(SHORT_S) < 2 {
         return None;
     }
-    // Pooled `m * AVAR` at `m` samples over one half of every hold.
+    // Pooled `m * AVAR` at `m` samples over one half of every hold, and the independent pairs of
+    // blocks it rests on.
     let pooled = |second: bool, m: usize| {
-        let (mut sum, mut terms) = (0.0, 0.0);
+        let (mut sum, mut terms, mut pairs) = (0.0, 0.0, 0);
         for p in poses {
             let mid = p.rows.start + p.rows.len() / 2;
             let rows = if second { &table.samples[mid..p.rows.end] } else { &table.samples[p.rows.start..mid] };
@@ -51,14 +62,18 @@ pub(crate) fn band_ratios(table: &Table, poses: &[PoseData], rate: f64) -> Optio
             if rows.len() >= 2 * blocks(LONG_S[1])
                 && let Some(a) = scaled_allan(rows, m)
             {
-                (sum, terms) = (sum + a.0, terms + a.1);
+                (sum, terms, pairs) = (sum + a.0, terms + a.1, pairs + rows.len() / (2 * m));
             }
         }
-        (terms > 0.0).then(|| sum / terms)
+        (terms > 0.0).then(|| (sum / terms, pairs))
     };
     let half_ratio = |second: bool| {
-        let short = pooled(second, blocks(SHORT_S))?;
-        let floor = LONG_S.iter().filter_map(|s| pooled(second, blocks(*s))).fold(f64::INFINITY, f64::min);
+        let (short, _) = pooled(second, blocks(SHORT_S))?;
+        let floor = LONG_S
+            .iter()
+            .filter_map(|s| pooled(second, blocks(*s)).filter(|(_, pairs)| *pairs >= min_floor_pairs))
+            .map(|(floor, _)| floor)
+            .fold(f64::INFINITY, f64::min);
         (floor > 0.0 && floor.is_finite()).then(|| short / floor)
     };
     Some((half_ratio(false)?, half_ratio(true)?))
@@ -110,7 +125,7 @@ impl Tremor {
 /// ringing mount's decays). Holds too short to measure: the log-wide spectrum's ratio at least
 /// [`LOG_BAND_RATIO`] ([`log_band_ratio`]).
 pub(crate) fn in_holds(table: &Table, poses: &[PoseData], rate: f64) -> Option<Tremor> {
-    let Some((first, second)) = band_ratios(table, poses, rate) else { return in_log(table, rate) };
+    let Some((first, second)) = band_ratios(table, poses, rate, MIN_FLOOR_PAIRS) else { return in_log(table, rate) };
     (second >= TREMOR_RATIO && second - 1.0 >= NOT_DECAYING * (first - 1.0))
         .then_some(Tremor { ratio: second, over_log: false })
 }
@@ -213,7 +228,7 @@ mod tests {
     #[test]
     fn a_tremor_is_motion_white_noise_and_a_decaying_ringing_are_not() {
         let (table, poses) = holds(&|_| 0.0);
-        let (first, second) = band_ratios(&table, &poses, 200.0).unwrap();
+        let (first, second) = band_ratios(&table, &poses, 200.0, MIN_FLOOR_PAIRS).unwrap();
         assert!((first - 1.0).abs() < 0.1 && (second - 1.0).abs() < 0.1, "white: {first} {second}");
         assert!(in_holds(&table, &poses, 200.0).is_none());
         // A 3 mg tremor at 10 Hz over 1 mg white noise per axis: (3 + 36) / (3 + 7), about 3.8.
@@ -222,11 +237,11 @@ mod tests {
         assert!(
             in_holds(&table, &poses, 200.0).is_some_and(|t| !t.over_log && t.ratio > 2.0),
             "{:?}",
-            band_ratios(&table, &poses, 200.0)
+            band_ratios(&table, &poses, 200.0, MIN_FLOOR_PAIRS)
         );
         let ringing = |t: f64| 0.03 * (-t / 0.4).exp() * (std::f64::consts::TAU * 10.0 * t).sin();
         let (table, poses) = holds(&ringing);
-        assert!(in_holds(&table, &poses, 200.0).is_none(), "{:?}", band_ratios(&table, &poses, 200.0));
+        assert!(in_holds(&table, &poses, 200.0).is_none(), "{:?}", band_ratios(&table, &poses, 200.0, MIN_FLOOR_PAIRS));
     }
 
     #[test]
@@ -237,7 +252,7 @@ mod tests {
         let hand =
             |t: f64| 0.003 * (std::f64::consts::TAU * 10.0 * t).sin() + 0.006 * (std::f64::consts::TAU * 0.5 * t).sin();
         let (table, poses) = holds(&hand);
-        assert!(in_holds(&table, &poses, 200.0).is_some(), "{:?}", band_ratios(&table, &poses, 200.0));
+        assert!(in_holds(&table, &poses, 200.0).is_some(), "{:?}", band_ratios(&table, &poses, 200.0, MIN_FLOOR_PAIRS));
     }
 
     #[test]
@@ -251,9 +266,54 @@ mod tests {
             *s = std::array::from_fn(|a| window.iter().map(|r| r[a]).sum::<f64>() / window.len() as f64);
         }
         let poses: Vec<PoseData> = (0..4).map(|k| pose_data(&table, 800 * k, 800 * (k + 1), 200.0)).collect();
-        let (first, second) = band_ratios(&table, &poses, 200.0).unwrap();
+        let (first, second) = band_ratios(&table, &poses, 200.0, MIN_FLOOR_PAIRS).unwrap();
         assert!(first < 1.1 && second < 1.1, "low-passed: {first} {second}");
         assert!(in_holds(&table, &poses, 200.0).is_none());
+    }
+
+    /// Holds of 0.5-1.2 s at 500 Hz (the pose finder's fragments of a log whose noise wanders far
+    /// above white), one per second: 1 mg white noise plus a 5 mg Gauss-Markov noise with a 7.6 Hz
+    /// corner on every axis, a spectrum falling with frequency. Only the holds of 1 s or more reach
+    /// the longest scale, a pair or two of blocks between them.
+    fn fragmented_wander(seed: u64) -> (Table, Vec<PoseData>) {
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed);
+        let rate = 500.0;
+        let phi = (-TAU * 7.6 / rate).exp();
+        let mut level = [0.0; 3];
+        let mut text = String::from("t,ax,ay,az\n");
+        for i in 0..20_000 {
+            let n: Vec<f64> = (0..3)
+                .map(|a| {
+                    let drive = 0.005 * (1.0 - phi * phi).sqrt() * crate::sim::random::standard_normal(&mut rng);
+                    level[a] = phi * level[a] + drive;
+                    level[a] + 0.001 * crate::sim::random::standard_normal(&mut rng)
+                })
+                .collect();
+            text += &format!("{},{},{},{}\n", i as f64 / rate, n[0], n[1], 1.0 + n[2]);
+        }
+        let table = crate::csvio::read_csv_str("fragments", &text, &crate::csvio::ReadOptions::default()).unwrap();
+        let lengths =
+            [0.5, 0.6, 0.7, 0.8, 0.9, 0.5, 0.6, 0.7, 0.8, 1.0, 0.5, 0.6, 0.7, 0.8, 0.9, 0.5, 0.6, 0.7, 0.8, 1.2];
+        let poses = lengths
+            .iter()
+            .enumerate()
+            .map(|(k, s)| pose_data(&table, 1000 * k, 1000 * k + (s * rate) as usize, rate))
+            .collect();
+        (table, poses)
+    }
+
+    #[test]
+    fn a_wander_in_fragments_of_holds_is_not_tremor_from_a_floor_on_two_pairs_of_blocks() {
+        let mut flagged = Vec::new();
+        for seed in 1..=12 {
+            let (table, poses) = fragmented_wander(seed);
+            // The holds' floor rests on too few blocks: judged over the log, whose spectrum falls.
+            assert!(band_ratios(&table, &poses, 500.0, MIN_FLOOR_PAIRS).is_none(), "seed {seed}");
+            if let Some(t) = in_holds(&table, &poses, 500.0) {
+                flagged.push((seed, t.ratio));
+            }
+        }
+        assert!(flagged.is_empty(), "flagged as tremor: {flagged:?}");
     }
 
     /// Poses of 0.3 s, one per second: a hand-held log's fragments, too short for the holds' test.
@@ -268,7 +328,7 @@ mod tests {
             |t: f64| 0.003 * (std::f64::consts::TAU * 10.0 * t).sin() + 0.006 * (std::f64::consts::TAU * 0.5 * t).sin();
         let (table, _) = holds(&hand);
         let poses = fragments(&table);
-        assert!(band_ratios(&table, &poses, 200.0).is_none());
+        assert!(band_ratios(&table, &poses, 200.0, MIN_FLOOR_PAIRS).is_none());
         let tremor = in_holds(&table, &poses, 200.0);
         assert!(tremor.is_some_and(|t| t.over_log && t.ratio > 5.0), "{tremor:?}");
         // At rest: white noise, a random walk of 1 mg/sqrt(s) on it, and the white noise through a
