@@ -176,7 +176,7 @@ pub(crate) fn run(ctx: &Context<'_>) -> Vec<Probe> {
         .filter_map(|&(shape, make, veto_margin)| {
             let variants = make(ctx).into_iter().filter(|v| ctx.leaves_residual_dof(&v.extra)).collect();
             let f = ctx.best_of(variants)?;
-            Some(Probe { shape, heldout_gain: ctx.gain(f.score_ratio), detail: f.detail, veto_margin })
+            Some(Probe { shape, heldout_gain: ctx.value_gain(f.score_ratio), detail: f.detail, veto_margin })
         })
         .collect()
 }

@@ -94,7 +94,8 @@ pub struct Candidate {
     /// Withheld-pose ratio (penalised), 1 = fully explained.
     pub heldout_ratio: f64,
     /// `1 - ln(heldout_ratio) / ln(nominal heldout ratio)` (a ratio below 1 weighted by
-    /// [`OVERSHOOT_WEIGHT`](super::OVERSHOOT_WEIGHT)).
+    /// [`OVERSHOOT_WEIGHT`](super::OVERSHOOT_WEIGHT) for a noise model,
+    /// [`VALUE_OVERSHOOT_WEIGHT`](super::VALUE_OVERSHOOT_WEIGHT) for a fit of the values).
     pub heldout_gain: f64,
     /// The gap ratio with this effect added.
     pub ratio_after: f64,

@@ -147,7 +147,7 @@ pub struct SimLog {
 }
 
 /// `true` when every axis points within 20 deg of up and of down in some direction.
-fn covers_every_axis(directions: &[[f64; 3]]) -> bool {
+pub(crate) fn covers_every_axis(directions: &[[f64; 3]]) -> bool {
     (0..3).all(|a| [1.0, -1.0].iter().all(|s| directions.iter().any(|d| s * d[a] > 0.94)))
 }
 

@@ -152,7 +152,7 @@ impl ColoredNoise {
                     continue;
                 }
                 let Some(ratio) = self.heldout_ratio(ctx, w, f) else { continue };
-                if best.is_none_or(|(b, _, _)| ctx.gain(ratio) > ctx.gain(b)) {
+                if best.is_none_or(|(b, _, _)| ctx.noise_gain(ratio) > ctx.noise_gain(b)) {
                     best = Some((ratio, w, f));
                 }
             }
@@ -243,7 +243,7 @@ impl ColoredNoise {
             effect: "colored-noise",
             applicable,
             heldout_ratio,
-            heldout_gain: if applicable { ctx.gain(heldout_ratio) } else { 0.0 },
+            heldout_gain: if applicable { ctx.noise_gain(heldout_ratio) } else { 0.0 },
             ratio_after: m.gap.real_rmse_mg / sim_after,
             extra_params: 1,
             detail: format!(

@@ -4,13 +4,14 @@
 //! every hold shows the drift's course), a smooth wander: piecewise-linear in time with knots
 //! evenly spaced over the log. The scale factors can drift too (a ratiometric front end on a
 //! discharging supply, a reference that ages or warms with no thermometer): a relative scale per
-//! axis linear in time, alone or with the bias, unless a thermometer moves by [`THERMAL_SPAN_K`] or
+//! axis linear in time, alone or with the bias, or one relative scale common to every axis (linear or
+//! quadratic in time: a ratiometric supply moves all three at once), unless a thermometer moves by [`THERMAL_SPAN_K`] or
 //! more (a scale that changes as the log goes on is then the temperature family's: time is the
 //! temperature's proxy, and on a steady warm-up the two cannot be told apart).
 
 use super::{Context, Evaluation, Family, Variant, bias_scale_effect, smooth, standard_evaluation};
 use crate::diagnose::gap::PoseData;
-use crate::diagnose::math::axis;
+use crate::diagnose::math::{V3, axis, dot};
 use crate::diagnose::within::{Within, WithinVariant};
 
 /// Knot counts of the piecewise-linear wander (within-pose channel).
@@ -112,6 +113,32 @@ fn scale_shapes(ctx: &Context<'_>) -> &'static [(bool, &'static str)] {
     if span >= THERMAL_SPAN_K { &[] } else { &SCALE_SHAPES }
 }
 
+/// Degrees in time of a relative scale common to every axis: a ratiometric front end follows its
+/// supply, and a shared reference its own drift, on all three axes at once. One or two parameters
+/// where the per-axis scale takes three or six: a log of 12 poses, whose calibration leaves 3
+/// degrees of freedom, can test it.
+const COMMON_SCALE_DEGREES: [usize; 2] = [1, 2];
+
+/// The calibrated-reading change per parameter of a relative scale common to every axis, for each
+/// power of `x` up to `degree`, at the calibrated reading `f`.
+fn common_scale_effect(f: V3, x: f64, degree: usize) -> Vec<V3> {
+    (1..=degree).map(|k| f.map(|c| c * x.powi(k as i32))).collect()
+}
+
+/// The common scale's shapes the log tests (as [`scale_shapes`]): degree and description.
+fn common_scale_shapes(ctx: &Context<'_>) -> Vec<(usize, String)> {
+    if scale_shapes(ctx).is_empty() {
+        return Vec::new();
+    }
+    COMMON_SCALE_DEGREES
+        .iter()
+        .map(|&d| {
+            let shape = if d == 1 { "linear".to_string() } else { format!("polynomial of degree {d}") };
+            (d, format!("scale common to every axis, {shape} in time"))
+        })
+        .collect()
+}
+
 impl Family for Drift {
     fn name(&self) -> &'static str {
         "drift"
@@ -132,6 +159,11 @@ impl Family for Drift {
             let params = 3 + 3 * usize::from(bias);
             out.push(within.variant(ctx.m, params, detail.into(), &|p, t, _| {
                 bias_scale_effect(ctx.calibrated()[p], t / t_end, 1, bias, true)
+            }));
+        }
+        for (degree, detail) in common_scale_shapes(ctx) {
+            out.push(within.variant(ctx.m, degree, detail, &|p, t, _| {
+                common_scale_effect(ctx.calibrated()[p], t / t_end, degree)
             }));
         }
         out
@@ -181,20 +213,63 @@ impl Family for Drift {
     }
 }
 
-/// The scale shapes at the pose level, the log ending at `t_end`.
+/// The scale shapes (per axis, and common to every axis) at the pose level, the log ending at
+/// `t_end`.
 fn scale_variants(ctx: &Context<'_>, t_end: f64) -> Vec<Variant> {
     let poses = ctx.poses.iter().zip(ctx.directions()).zip(ctx.calibrated());
-    scale_shapes(ctx)
+    let variant = |params: usize, detail: String, effect: &dyn Fn(V3, f64) -> Vec<V3>| {
+        let extra = poses
+            .clone()
+            .map(|((p, u), f)| effect(*f, p.t_mid() / t_end).iter().map(|e| dot(*u, *e)).collect())
+            .collect();
+        Variant { extra, params, detail }
+    };
+    let mut out: Vec<Variant> = scale_shapes(ctx)
         .iter()
         .map(|&(bias, detail)| {
-            let extra = poses
-                .clone()
-                .map(|((p, u), f)| {
-                    let effect = bias_scale_effect(*f, p.t_mid() / t_end, 1, bias, true);
-                    effect.iter().map(|e| u.iter().zip(e).map(|(a, b)| a * b).sum()).collect()
-                })
-                .collect();
-            Variant { extra, params: 3 + 3 * usize::from(bias), detail: detail.into() }
+            variant(3 + 3 * usize::from(bias), detail.into(), &|f, x| bias_scale_effect(f, x, 1, bias, true))
         })
-        .collect()
+        .collect();
+    for (degree, detail) in common_scale_shapes(ctx) {
+        out.push(variant(degree, detail, &|f, x| common_scale_effect(f, x, degree)));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::diagnose::{DiagnoseOptions, diagnose};
+    use crate::sim::scenario::{EffectClass, SimLog, covers_every_axis, random_scenario, to_table};
+    use crate::sim::{Plan, plan_directions, simulate_with};
+
+    #[test]
+    fn a_scale_sagging_on_every_axis_at_once_is_drift_on_twelve_poses() {
+        // A ratiometric front end on a discharging supply: every axis's scale falls by 0.3 % over
+        // the log, the thermometer flat. Twelve hand-placed poses leave the calibration 3 degrees of
+        // freedom: the per-axis scale in time (3 parameters) cannot be tested, the common one can.
+        for seed in [21, 22, 23] {
+            let mut scenario = random_scenario(EffectClass::None, seed);
+            let mut geometry = seed;
+            while !covers_every_axis(&plan_directions(&Plan::Random(12), geometry)) {
+                geometry = geometry.wrapping_add(0x1_0000_0000);
+            }
+            scenario.sim.plan = Plan::Random(12);
+            scenario.sim.seed = geometry;
+            let sim = &scenario.sim;
+            let end_s = sim.initial_rest_s + 12.0 * (sim.seconds_per_pose + sim.move_seconds);
+            let recording = simulate_with(
+                sim,
+                &mut [&mut |t: f64, _p: Option<usize>, r: &mut [f64; 3]| {
+                    let scale = 1.0 - 3.0e-3 * t / end_s;
+                    r.iter_mut().for_each(|v| *v *= scale);
+                }],
+            );
+            let temps_c = vec![25.0; recording.samples.len()];
+            let table = to_table(&SimLog { recording, temps_c }, "supply-sag").unwrap();
+            let d = diagnose(&table, &DiagnoseOptions { seed, ..DiagnoseOptions::DEFAULT }).unwrap();
+            assert_eq!(d.verdict, "drift", "seed {seed}: {}", d.to_text());
+            let named = d.candidates.iter().find(|c| c.effect == "drift").unwrap();
+            assert!(named.detail.starts_with("scale common to every axis"), "seed {seed}: {:?}", named.variants);
+        }
+    }
 }

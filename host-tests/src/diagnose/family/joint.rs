@@ -61,7 +61,7 @@ pub(crate) fn best(ctx: &Context<'_>, w: &Within, variants: &[WithinVariant]) ->
 /// Puts the stacked fit in the candidate's pose-level line when it predicts the withheld pose
 /// means better than the pose means alone.
 pub(crate) fn add(ctx: &Context<'_>, e: &mut Evaluation, fit: JointFit) {
-    let gain = ctx.gain(fit.ratio);
+    let gain = ctx.value_gain(fit.ratio);
     let c = &mut e.candidate;
     if c.applicable && c.heldout_gain >= gain {
         return;

@@ -26,7 +26,9 @@ use super::math::{
 };
 use super::report::Candidate;
 use super::within::{Within, WithinFit, WithinVariant};
-use super::{CV_NOISE_DRAWS, DiagnoseOptions, LEAVE_ONE_OUT_UP_TO, OVERSHOOT_WEIGHT, PARAMETER_PENALTY};
+use super::{
+    CV_NOISE_DRAWS, DiagnoseOptions, LEAVE_ONE_OUT_UP_TO, OVERSHOOT_WEIGHT, PARAMETER_PENALTY, VALUE_OVERSHOOT_WEIGHT,
+};
 use crate::csvio::Table;
 
 /// Fewest training poses beyond a design's columns (9 calibration parameters plus the probe's) for
@@ -236,10 +238,10 @@ pub(crate) struct Context<'a> {
     tremor: OnceCell<Option<tremor::Tremor>>,
 }
 
-/// `1 - ln(ratio) / |ln(nominal)|`, a ratio below 1 counting [`OVERSHOOT_WEIGHT`] times.
-fn gain_over(nominal: f64, ratio: f64) -> f64 {
+/// `1 - ln(ratio) / |ln(nominal)|`, a ratio below 1 counting `overshoot_weight` times.
+fn gain_over(nominal: f64, ratio: f64, overshoot_weight: f64) -> f64 {
     let before = nominal.ln().abs();
-    let miss = if ratio >= 1.0 { ratio.ln() } else { OVERSHOOT_WEIGHT * ratio.ln().abs() };
+    let miss = if ratio >= 1.0 { ratio.ln() } else { overshoot_weight * ratio.ln().abs() };
     if before > 0.0 { 1.0 - miss / before } else { 0.0 }
 }
 
@@ -370,7 +372,7 @@ impl<'a> Context<'a> {
         let Some(ratio) = self.heldout_ratio_without(rows, dropped, k, Some(worst)) else { return f64::NAN };
         let others = (squares.len() - 1) as f64;
         let nominal = ((squares.iter().sum::<f64>() - squares[worst]) / others / self.e_white).sqrt();
-        if nominal > 1.0 { gain_over(nominal, ratio) } else { 0.0 }
+        if nominal > 1.0 { gain_over(nominal, ratio, VALUE_OVERSHOOT_WEIGHT) } else { 0.0 }
     }
 
     /// Every fold's training poses outnumber the columns of the design with `extra` by
@@ -426,10 +428,16 @@ impl<'a> Context<'a> {
         best.map(|b| Fitted { tried, ..b })
     }
 
-    /// `1 - ln(ratio) / ln(nominal ratio)`; predicting more scatter than there is counts
-    /// [`OVERSHOOT_WEIGHT`] times (it would "explain" any gap).
-    pub(crate) fn gain(&self, ratio: f64) -> f64 {
-        gain_over(self.heldout_ratio_nominal, ratio)
+    /// `1 - ln(ratio) / ln(nominal ratio)` of a noise model; predicting more scatter than there is
+    /// counts [`OVERSHOOT_WEIGHT`] times (it would "explain" any gap).
+    pub(crate) fn noise_gain(&self, ratio: f64) -> f64 {
+        gain_over(self.heldout_ratio_nominal, ratio, OVERSHOOT_WEIGHT)
+    }
+
+    /// `1 - ln(ratio) / ln(nominal ratio)` of a fit that predicts the withheld values; a ratio below
+    /// 1 counts [`VALUE_OVERSHOOT_WEIGHT`] times.
+    pub(crate) fn value_gain(&self, ratio: f64) -> f64 {
+        gain_over(self.heldout_ratio_nominal, ratio, VALUE_OVERSHOOT_WEIGHT)
     }
 
     fn evaluate_fitted(&self, name: &'static str, f: Fitted) -> Evaluation {
@@ -444,7 +452,7 @@ impl<'a> Context<'a> {
             effect: name,
             applicable: true,
             heldout_ratio: f.score_ratio,
-            heldout_gain: self.gain(f.score_ratio),
+            heldout_gain: self.value_gain(f.score_ratio),
             ratio_after: real_after / sim_after,
             extra_params: f.params,
             detail: f.detail,

@@ -165,10 +165,10 @@ impl Family for Settling {
         for &drop in trims {
             let Some((ratio, after, ratio_after)) = trimmed_start(ctx, drop) else { continue };
             let c = &mut e.candidate;
-            if ctx.gain(ratio) > c.evidence() {
+            if ctx.value_gain(ratio) > c.evidence() {
                 c.applicable = true;
                 (c.heldout_ratio, c.heldout_gain, c.ratio_after, c.extra_params) =
-                    (ratio, ctx.gain(ratio), ratio_after, 1);
+                    (ratio, ctx.value_gain(ratio), ratio_after, 1);
                 c.detail = format!("transient: the first {drop}/{SEGMENTS} of every hold left out");
                 e.after = after;
                 e.gain_without_worst = f64::NAN;

@@ -241,7 +241,7 @@ fn median_of_neighbours(ratios: &[(Shape, Option<f64>)], i: usize) -> Option<f64
 /// Puts the wander in the candidate's pose-level line when it predicts the withheld pose means
 /// better than the family's other shapes.
 pub(crate) fn add(ctx: &Context<'_>, e: &mut Evaluation, fit: SmoothFit) {
-    let gain = ctx.gain(fit.ratio);
+    let gain = ctx.value_gain(fit.ratio);
     let c = &mut e.candidate;
     c.variants.push((fit.detail.clone(), fit.ratio));
     if c.applicable && c.heldout_gain >= gain {
