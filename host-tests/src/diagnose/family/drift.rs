@@ -9,7 +9,9 @@
 //! more (a scale that changes as the log goes on is then the temperature family's: time is the
 //! temperature's proxy, and on a steady warm-up the two cannot be told apart).
 
-use super::{Context, Evaluation, Family, Variant, bias_scale_effect, smooth, standard_evaluation};
+use super::{
+    Context, Evaluation, Family, Variant, bias_scale_effect, common_scale_effect, smooth, standard_evaluation,
+};
 use crate::diagnose::gap::PoseData;
 use crate::diagnose::math::{V3, axis, dot};
 use crate::diagnose::within::{Within, WithinVariant};
@@ -118,12 +120,6 @@ fn scale_shapes(ctx: &Context<'_>) -> &'static [(bool, &'static str)] {
 /// where the per-axis scale takes three or six: a log of 12 poses, whose calibration leaves 3
 /// degrees of freedom, can test it.
 const COMMON_SCALE_DEGREES: [usize; 2] = [1, 2];
-
-/// The calibrated-reading change per parameter of a relative scale common to every axis, for each
-/// power of `x` up to `degree`, at the calibrated reading `f`.
-fn common_scale_effect(f: V3, x: f64, degree: usize) -> Vec<V3> {
-    (1..=degree).map(|k| f.map(|c| c * x.powi(k as i32))).collect()
-}
 
 /// The common scale's shapes the log tests (as [`scale_shapes`]): degree and description.
 fn common_scale_shapes(ctx: &Context<'_>) -> Vec<(usize, String)> {

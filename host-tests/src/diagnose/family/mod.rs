@@ -182,6 +182,13 @@ pub(crate) fn bias_scale_effect(f: V3, x: f64, power: usize, bias: bool, scale: 
     out
 }
 
+/// The calibrated-reading change per parameter of one relative scale common to every axis changing
+/// as `x`, for each power of `x` up to `power`, at the calibrated reading `f` (a ratiometric supply
+/// or a shared reference: drift's and temperature's).
+pub(crate) fn common_scale_effect(f: V3, x: f64, power: usize) -> Vec<V3> {
+    (1..=power).map(|k| f.map(|c| c * x.powi(k as i32))).collect()
+}
+
 /// A verdict from the holds' movement alone, for when no family explains the withheld poses:
 /// settling when the movement slows within each hold, else drift when a line per hold explains it,
 /// else colored noise when every hold wanders alike (motion when they move in the tremor band); with

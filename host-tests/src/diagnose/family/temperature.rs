@@ -5,7 +5,7 @@
 
 use super::{Context, Family, Variant, bias_scale_effect, smooth};
 use crate::diagnose::gap::row_time;
-use crate::diagnose::math::{lstsq, lstsq_with_covariance, mean};
+use crate::diagnose::math::{V3, dot, lstsq, lstsq_with_covariance, mean};
 use crate::diagnose::within::{Within, WithinVariant};
 
 /// Lag time constants tried, s (0 = no lag).
@@ -91,6 +91,57 @@ fn smoothed_temps(ctx: &Context<'_>, spacing: f64) -> Option<Vec<f64>> {
 
 pub(crate) struct Temperature;
 
+/// What a temperature variant moves: the bias per axis, the relative scale per axis, or both. (One
+/// relative scale common to every axis, as drift has, was tried: development sets -2, a flicker
+/// and a non-linearity named through it.)
+#[derive(Clone, Copy)]
+enum Terms {
+    Bias,
+    Scale,
+    BiasAndScale,
+}
+
+impl Terms {
+    const ALL: [Terms; 3] = [Terms::Bias, Terms::Scale, Terms::BiasAndScale];
+
+    fn what(self) -> &'static str {
+        match self {
+            Terms::Bias => "bias",
+            Terms::Scale => "scale",
+            Terms::BiasAndScale => "bias and scale",
+        }
+    }
+
+    /// The calibrated-reading change per parameter at the reading `f`, the temperature `dt` from
+    /// the mean, up to the power `power`.
+    fn effect(self, f: V3, dt: f64, power: usize) -> Vec<V3> {
+        match self {
+            Terms::Bias => bias_scale_effect(f, dt, power, true, false),
+            Terms::Scale => bias_scale_effect(f, dt, power, false, true),
+            Terms::BiasAndScale => bias_scale_effect(f, dt, power, true, true),
+        }
+    }
+
+    /// Parameters per power of the temperature.
+    fn per_power(self) -> usize {
+        match self {
+            Terms::Bias | Terms::Scale => 3,
+            Terms::BiasAndScale => 6,
+        }
+    }
+
+    /// Where each kind of coefficient lies within a power's columns ([`Terms::effect`]'s order), the
+    /// columns it has, and its largest plausible local slope (input unit or relative, per K).
+    fn limits(self, ctx: &Context<'_>) -> Vec<(usize, usize, f64)> {
+        let bias = (0, 3, MAX_BIAS_MG_PER_K / ctx.m.to_mg(1.0));
+        match self {
+            Terms::Bias => vec![bias],
+            Terms::Scale => vec![(0, 3, MAX_SCALE_PER_K)],
+            Terms::BiasAndScale => vec![bias, (3, 3, MAX_SCALE_PER_K)],
+        }
+    }
+}
+
 /// The temperature as read through `source`, averaged over each pose.
 fn pose_temps(ctx: &Context<'_>, source: Source) -> Option<Vec<f64>> {
     let temps = source.temps(ctx)?;
@@ -128,12 +179,10 @@ fn within_variants(ctx: &Context<'_>, w: &Within) -> Vec<WithinVariant> {
         let (through, lag_params) = (source.detail(), source.params());
         for power in 1..=2 {
             let shape = if power == 1 { "linear" } else { "quadratic" };
-            for (bias, scale, what) in [(true, false, "bias"), (false, true, "scale"), (true, true, "bias and scale")] {
-                let params = 3 * power * (usize::from(bias) + usize::from(scale));
-                let detail = format!("{what} {shape} in temperature{through}");
-                out.push(w.variant(ctx.m, params, detail, &|p, _, rows| {
-                    let dt = mean(&lagged[rows]) - t0;
-                    bias_scale_effect(ctx.calibrated()[p], dt, power, bias, scale)
+            for terms in Terms::ALL {
+                let detail = format!("{} {shape} in temperature{through}", terms.what());
+                out.push(w.variant(ctx.m, terms.per_power() * power, detail, &|p, _, rows| {
+                    terms.effect(ctx.calibrated()[p], mean(&lagged[rows]) - t0, power)
                 }));
                 out.last_mut().expect("just pushed").params += lag_params;
             }
@@ -142,18 +191,15 @@ fn within_variants(ctx: &Context<'_>, w: &Within) -> Vec<WithinVariant> {
     out
 }
 
-/// Bias and/or scale columns in the pose temperatures `temps`, up to the power `power` of the
+/// The columns of `terms` in the pose temperatures `temps`, up to the power `power` of the
 /// temperature change (a second-order temperature coefficient for `power` 2).
-fn design(ctx: &Context<'_>, temps: &[f64], power: usize, bias: bool, scale: bool) -> Vec<Vec<f64>> {
+fn design(ctx: &Context<'_>, temps: &[f64], power: usize, terms: Terms) -> Vec<Vec<f64>> {
     let t0 = mean(temps);
     temps
         .iter()
         .zip(ctx.directions())
         .zip(ctx.calibrated())
-        .map(|((t, u), f)| {
-            let effect = bias_scale_effect(*f, t - t0, power, bias, scale);
-            effect.iter().map(|e| u.iter().zip(e).map(|(a, b)| a * b).sum()).collect()
-        })
+        .map(|((t, u), f)| terms.effect(*f, t - t0, power).iter().map(|e| dot(*u, *e)).collect())
         .collect()
 }
 
@@ -167,27 +213,24 @@ const BEYOND_LIMIT_SIGMAS: f64 = 2.0;
 /// [`MAX_BIAS_MG_PER_K`], the relative scale's at most [`MAX_SCALE_PER_K`], unless within
 /// [`BEYOND_LIMIT_SIGMAS`] standard errors of them (`None` fit: plausible, the held-out test
 /// decides).
-fn plausible(ctx: &Context<'_>, extra: &[Vec<f64>], temps: &[f64], power: usize, (bias, scale): (bool, bool)) -> bool {
+fn plausible(ctx: &Context<'_>, extra: &[Vec<f64>], temps: &[f64], power: usize, terms: Terms) -> bool {
     let Some((x, cov, ms)) = lstsq_with_covariance(&ctx.rows_with(extra), &ctx.m.r) else { return true };
     let base = ctx.base_rows[0].len();
     let t0 = mean(temps);
-    let per_power = 3 * (usize::from(bias) + usize::from(scale));
-    let kinds =
-        [(bias, 0, ctx.m.to_mg(1.0) / MAX_BIAS_MG_PER_K), (scale, 3 * usize::from(bias), 1.0 / MAX_SCALE_PER_K)];
+    let per_power = terms.per_power();
     let (x, cov) = (&x, &cov);
-    let within_limits = |dt: f64, offset: usize, per_limit: f64, a: usize| {
+    let within_limit = |dt: f64, column: usize, limit: f64| {
         // The local slope d(effect)/dT at `dt` as a combination of the coefficients, and its variance.
-        let terms: Vec<(usize, f64)> =
-            (1..=power).map(|k| (base + (k - 1) * per_power + offset + a, k as f64 * dt.powi(k as i32 - 1))).collect();
-        let slope: f64 = terms.iter().map(|&(j, w)| w * x[j]).sum();
-        let var: f64 = terms.iter().flat_map(|&(j, w)| terms.iter().map(move |&(l, v)| w * v * cov[j][l])).sum();
-        (slope.abs() - BEYOND_LIMIT_SIGMAS * (var * ms).max(0.0).sqrt()) * per_limit <= 1.0
+        let slope_terms: Vec<(usize, f64)> =
+            (1..=power).map(|k| (base + (k - 1) * per_power + column, k as f64 * dt.powi(k as i32 - 1))).collect();
+        let slope: f64 = slope_terms.iter().map(|&(j, w)| w * x[j]).sum();
+        let var: f64 =
+            slope_terms.iter().flat_map(|&(j, w)| slope_terms.iter().map(move |&(l, v)| w * v * cov[j][l])).sum();
+        slope.abs() - BEYOND_LIMIT_SIGMAS * (var * ms).max(0.0).sqrt() <= limit
     };
+    let limits = terms.limits(ctx);
     temps.iter().map(|t| t - t0).all(|dt| {
-        kinds
-            .iter()
-            .filter(|k| k.0)
-            .all(|&(_, offset, per_limit)| (0..3).all(|a| within_limits(dt, offset, per_limit, a)))
+        limits.iter().all(|&(offset, columns, limit)| (0..columns).all(|a| within_limit(dt, offset + a, limit)))
     })
 }
 
@@ -209,14 +252,15 @@ impl Family for Temperature {
                 continue;
             }
             let (through, lag_params) = (source.detail(), source.params());
-            for (bias, scale, what) in [(true, false, "bias"), (false, true, "scale"), (true, true, "bias and scale")] {
+            for terms in Terms::ALL {
                 for (power, shape) in [(1, "linear"), (2, "quadratic")] {
-                    let params = 3 * power * (usize::from(bias) + usize::from(scale)) + lag_params;
-                    let extra = design(ctx, &temps, power, bias, scale);
-                    if !plausible(ctx, &extra, &temps, power, (bias, scale)) {
+                    let params = terms.per_power() * power + lag_params;
+                    let extra = design(ctx, &temps, power, terms);
+                    if !plausible(ctx, &extra, &temps, power, terms) {
                         continue;
                     }
-                    out.push(Variant { extra, params, detail: format!("{what} {shape} in temperature{through}") });
+                    let detail = format!("{} {shape} in temperature{through}", terms.what());
+                    out.push(Variant { extra, params, detail });
                 }
             }
         }
