@@ -226,4 +226,43 @@ mod tests {
             assert!(!decays(EffectClass::None, seed), "clean seed {seed}");
         }
     }
+
+    #[test]
+    fn an_offset_recovering_in_a_fresh_direction_after_each_placement_is_settling() {
+        use crate::diagnose::diagnose;
+        use crate::sim::random::standard_normal;
+        use crate::sim::scenario::SimLog;
+        use crate::sim::simulate_with;
+        use rand_core::SeedableRng;
+        // After each placement the offset jumps by 1.5 mg in a random direction and recovers with a
+        // time constant of 1 s (holds of 4-8 s): each hold decays alike, the pose means scatter as
+        // independent offsets (the transient's average over each hold). (With the time constant at
+        // 2.5 s in 3 s holds two of the three seeds are `unexplained`.)
+        let mut names = Vec::new();
+        for seed in [31, 32, 33] {
+            let scenario = random_scenario(EffectClass::None, seed);
+            let g = scenario.sim.gravity;
+            let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed);
+            let (mut hold, mut start, mut direction) = (None, 0.0, [0.0; 3]);
+            let recording = simulate_with(
+                &scenario.sim,
+                &mut [&mut |t: f64, pose: Option<usize>, r: &mut [f64; 3]| {
+                    if pose.is_some() && pose != hold {
+                        let v: [f64; 3] = std::array::from_fn(|_| standard_normal(&mut rng));
+                        let norm = v.iter().map(|c| c * c).sum::<f64>().sqrt();
+                        (hold, start, direction) = (pose, t, v.map(|c| c / norm));
+                    }
+                    if pose.is_some() {
+                        let offset = 1.5e-3 * g * (-(t - start) / 1.0).exp();
+                        (0..3).for_each(|a| r[a] += offset * direction[a]);
+                    }
+                }],
+            );
+            let temps_c = vec![25.0; recording.samples.len()];
+            let table = to_table(&SimLog { recording, temps_c }, "recovery").unwrap();
+            let d = diagnose(&table, &DiagnoseOptions { seed, ..DiagnoseOptions::DEFAULT }).unwrap();
+            names.push((seed, d.verdict));
+        }
+        assert!(names.iter().all(|(_, v)| *v == "settling"), "{names:?}");
+    }
 }
