@@ -93,21 +93,26 @@ fn main() {
         options.folds
     );
     println!("\ndrift shape on withheld poses (penalised held-out ratio, smaller is better; 1 = explained):\n");
-    println!("| recording | best curved (polynomial) | best single exponential |\n|---|---|---|");
+    println!(
+        "| recording | best curved bias (polynomial) | best single exponential bias | best scale in time |\n|---|---|---|---|"
+    );
     for (file, shapes) in drift_shapes {
-        if let Some(((curved, c), (exponential, e))) = shapes {
-            println!("| `{file}` | {c:.2} ({curved}) | {e:.2} ({exponential}) |");
+        if let Some(((curved, c), (exponential, e), scale)) = shapes {
+            let scale = scale.map_or("-".to_string(), |(d, r)| format!("{r:.2} ({d})"));
+            println!("| `{file}` | {c:.2} ({curved}) | {e:.2} ({exponential}) | {scale} |");
         }
     }
 }
 
-/// The drift family's best polynomial and best single-exponential variants, with their ratios.
+/// A drift variant and its held-out ratio.
 type Shape = (String, f64);
 
-fn curved_vs_exponential(r: &accelcal_host::diagnose::Diagnosis) -> Option<(Shape, Shape)> {
+/// The drift family's best bias polynomial and best single-exponential bias variants, and its best
+/// scale changing with time (per axis or common; none when a thermometer moved a kelvin).
+fn curved_vs_exponential(r: &accelcal_host::diagnose::Diagnosis) -> Option<(Shape, Shape, Option<Shape>)> {
     let drift = r.candidates.iter().find(|c| c.effect == "drift")?;
     let best = |pattern: &str| {
-        drift.variants.iter().filter(|(d, _)| d.contains(pattern)).min_by(|a, b| a.1.total_cmp(&b.1)).cloned()
+        drift.variants.iter().filter(|(d, _)| d.starts_with(pattern)).min_by(|a, b| a.1.total_cmp(&b.1)).cloned()
     };
-    Some((best("polynomial")?, best("(1 - exp")?))
+    Some((best("bias polynomial")?, best("bias (1 - exp")?, best("scale")))
 }
