@@ -4,10 +4,11 @@
 //! every hold shows the drift's course), a smooth wander: piecewise-linear in time with knots
 //! evenly spaced over the log. The scale factors can drift too (a ratiometric front end on a
 //! discharging supply, a reference that ages or warms with no thermometer): a relative scale per
-//! axis linear in time, alone or with the bias, or one relative scale common to every axis (linear or
-//! quadratic in time: a ratiometric supply moves all three at once), unless a thermometer moves by [`THERMAL_SPAN_K`] or
-//! more (a scale that changes as the log goes on is then the temperature family's: time is the
-//! temperature's proxy, and on a steady warm-up the two cannot be told apart).
+//! axis linear in time, alone or with the bias, or one relative scale common to every axis (linear
+//! or quadratic in time: a ratiometric supply moves all three at once), unless a thermometer moves
+//! by [`THERMAL_SPAN_K`] or more (a scale that changes as the log goes on is then the temperature
+//! family's: time is the temperature's proxy, and on a steady warm-up the two cannot be told
+//! apart).
 
 use super::{
     Context, Evaluation, Family, Variant, bias_scale_effect, common_scale_effect, smooth, standard_evaluation,

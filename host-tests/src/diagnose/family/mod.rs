@@ -184,7 +184,7 @@ pub(crate) fn bias_scale_effect(f: V3, x: f64, power: usize, bias: bool, scale: 
 
 /// The calibrated-reading change per parameter of one relative scale common to every axis changing
 /// as `x`, for each power of `x` up to `power`, at the calibrated reading `f` (a ratiometric supply
-/// or a shared reference: drift's and temperature's).
+/// or a shared reference; drift's).
 pub(crate) fn common_scale_effect(f: V3, x: f64, power: usize) -> Vec<V3> {
     (1..=power).map(|k| f.map(|c| c * x.powi(k as i32))).collect()
 }

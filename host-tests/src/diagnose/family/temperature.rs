@@ -93,7 +93,7 @@ pub(crate) struct Temperature;
 
 /// What a temperature variant moves: the bias per axis, the relative scale per axis, or both. (One
 /// relative scale common to every axis, as drift has, was tried: development sets -2, a flicker
-/// and a non-linearity named through it.)
+/// named temperature and a non-linearity then named colored-noise.)
 #[derive(Clone, Copy)]
 enum Terms {
     Bias,
