@@ -321,7 +321,8 @@ fn read_poses(table: &Table, found_with: &AccumulateOptions) -> Result<Found, Re
 /// to be the tail of a move.
 const TAIL_Z: f64 = 6.0;
 
-/// Largest share of the poses trimmed of move tails: a transient at the start of most holds is the sensor's or its support's settling, a family the diagnosis tests, not handling.
+/// Largest share of the poses trimmed of move tails: a transient at the start of most holds is the
+/// sensor's or its support's settling, a family the diagnosis tests, not handling.
 const TAILS_AT_MOST: f64 = 0.25;
 
 /// Shortest pose tested for a move's tail, s: its sixth (a third of a second) is about as long as
@@ -330,20 +331,20 @@ const TAILS_AT_MOST: f64 = 0.25;
 /// noise, not a tail.
 const TAIL_POSE_MIN_S: f64 = 2.0;
 
-/// Largest share of the first sixth's deviation a move's tail leaves in the second: a tail decays
-/// within its sixth (computed: 8 mg in 0.3 s over sixths of 0.83 s, 0.06), a slow sway across the
-/// hold does not (a half sine, 0.37), nor a settling of 10 s in sixths of 12 s (0.30). The second sixth's
-/// noise is part of the share: a tail 7 standard errors off in its sixth is trimmed only sometimes
-/// (0.24 measured on one), one 10 or more reliably.
+/// Largest share of the first sixth's deviation a move's tail leaves in the second (noise aside,
+/// computed): a tail decays within its sixth (tau 0.3 s over sixths of 0.83 s: 0.06), a slow sway
+/// across the hold does not (a half sine: 0.37), nor a settling of 10 s in sixths of 12 s (0.26).
+/// The second sixth's noise is part of the measured share: a tail only a few standard errors
+/// beyond [`TAIL_Z`] is trimmed only sometimes.
 const TAIL_DECAY: f64 = 0.2;
 
 /// The sixths of pose `p` to trim at its start (`from_end` false) or its end: two when the first
 /// sixth differs from the middle two by more than [`TAIL_Z`] standard errors on some axis (`var`:
 /// white-equivalent variance per sample) and the second differs on that axis by at most
 /// [`TAIL_DECAY`] of the first's deviation (a move's tail is over within the first; the second is a
-/// guard: the tail decays into it below the test's reach; with one sixth trimmed, a log with two
-/// tails of 8 mg decaying in 0.3 s kept a significant gap, ratio 1.53). When the second differs more, the change lasts: the
-/// sensor's own settling (a hand's warmth leaving the board, tau 10 s) or a drift, not trimmed.
+/// guard: the tail decays into it below the test's reach). When the second differs more, the
+/// change lasts: the sensor's own settling (a hand's warmth leaving the board, tau 10 s) or a
+/// drift, not trimmed.
 fn tail_sixths(p: &PoseData, var: V3, from_end: bool) -> usize {
     if p.seg_n < 2 || p.duration() < TAIL_POSE_MIN_S {
         return 0;

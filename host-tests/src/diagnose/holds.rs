@@ -223,6 +223,7 @@ fn low_decile(mut values: Vec<f64>) -> Option<f64> {
 fn tremor_ratio(table: &Table, rows: Range<usize>, rate: f64) -> Option<f64> {
     let end = rows.end.min(table.samples.len());
     let hold = [pose_data(table, rows.start, end, rate)];
+    // One hold's flag among many: no least number of pairs of blocks (the flags are counted).
     tremor::band_ratios(table, &hold, rate, 1).map(|(first, second)| first.min(second))
 }
 

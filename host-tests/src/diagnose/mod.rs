@@ -429,10 +429,8 @@ mod tests {
             }
             table
         };
-        // Two of 29 holds, the two longest after the first rest (7 s: the tail is over within a sixth
-        // of them; in a hold of 4 s it would last into the second sixth, computed 0.26 of the first's
-        // deviation, and read as a lasting change):
-        // trimmed, and the log is clean (without the trim it is not).
+        // Two holds, the two longest after the first rest (the longer the hold, the more of the tail
+        // its first sixth holds): trimmed, and the log is clean (without the trim it is not).
         let mut by_length: Vec<usize> = (1..m.poses.len()).collect();
         by_length.sort_by(|a, b| m.poses[*b].duration().total_cmp(&m.poses[*a].duration()));
         let d = diagnose(&tailed(&|p| by_length[..2].contains(&p)), &opts).unwrap();
