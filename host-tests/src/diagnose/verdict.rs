@@ -55,12 +55,14 @@ fn slow_change(e: &Evaluation) -> bool {
     matches!(e.candidate.effect, "drift" | "temperature")
 }
 
-/// A slow change (drift, temperature) whose pose-level gain rests on one pose (gone with the
-/// worst-predicted pose left out) and which the holds do not support: a slow change moves many
-/// poses; one pose alone is a transient of that hold or a bad pose.
+/// A slow change (drift, temperature) or a settling transient whose pose-level gain rests on one
+/// pose (gone with the worst-predicted pose left out) and which the holds do not support: a slow
+/// change moves many poses, a transient follows every set-down; one pose alone is a transient of
+/// that hold or a bad pose.
 fn rests_on_one_pose(e: &Evaluation) -> bool {
     let c = &e.candidate;
-    slow_change(e) && c.heldout_gain >= MIN_GAIN && e.gain_without_worst < MIN_GAIN && !(c.within_gain >= MIN_GAIN)
+    let moves_many = slow_change(e) || c.effect == "settling";
+    moves_many && c.heldout_gain >= MIN_GAIN && e.gain_without_worst < MIN_GAIN && !(c.within_gain >= MIN_GAIN)
 }
 
 /// The value family leaves most of the gap in the poses it was fitted on, or is a penalised wander

@@ -7,14 +7,17 @@
 //! noise. Cross-validated over the pose-level folds (a withheld pose loses both its mean and its
 //! segments); only the withheld means are scored, with the pose level's penalty.
 
-use super::{Context, Evaluation};
+use super::{Context, Evaluation, gain_over};
 use crate::diagnose::PARAMETER_PENALTY;
+use crate::diagnose::VALUE_OVERSHOOT_WEIGHT;
 use crate::diagnose::math::{cv_residuals, fit_residuals, sum_sq};
 use crate::diagnose::within::{Within, WithinVariant};
 
 /// The best stacked parametrisation of a family.
 pub(crate) struct JointFit {
     ratio: f64,
+    /// The held-out gain with the pose the nominal model predicts worst left out of both scores.
+    gain_without_worst: f64,
     after: Vec<Option<f64>>,
     params: usize,
     detail: String,
@@ -34,13 +37,21 @@ fn stacked(ctx: &Context<'_>, w: &Within, v: &WithinVariant) -> (Vec<Vec<f64>>, 
     (rows, r, fold)
 }
 
-/// Penalised held-out ratio of the withheld pose means (1 for white noise and the nominal model).
-fn heldout_ratio(ctx: &Context<'_>, w: &Within, v: &WithinVariant) -> Option<f64> {
+/// Penalised held-out ratio of the withheld pose means (1 for white noise and the nominal model),
+/// and the held-out gain without the pose the nominal model predicts worst.
+fn heldout_ratio(ctx: &Context<'_>, w: &Within, v: &WithinVariant) -> Option<(f64, f64)> {
     let (rows, r, fold) = stacked(ctx, w, v);
     let cv = cv_residuals(&rows, &r, &fold, ctx.folds, &vec![false; r.len()])?;
     let n = ctx.poses.len();
     let (ss, _) = sum_sq(&cv[..n]);
-    Some(((ss + PARAMETER_PENALTY * v.params as f64) / n as f64).sqrt())
+    let penalty = PARAMETER_PENALTY * v.params as f64;
+    let ratio = ((ss + penalty) / n as f64).sqrt();
+    let without_worst =
+        ctx.worst_nominal_pose().filter(|&(_, nominal)| nominal > 1.0).map_or(0.0, |(worst, nominal)| {
+            let left = cv[worst].map_or(0.0, |c| c * c);
+            gain_over(nominal, ((ss - left + penalty) / (n - 1) as f64).sqrt(), VALUE_OVERSHOOT_WEIGHT)
+        });
+    Some((ratio, without_worst))
 }
 
 /// The variant whose stacked fit predicts the withheld pose means best, with the pose residuals
@@ -49,13 +60,15 @@ pub(crate) fn best(ctx: &Context<'_>, w: &Within, variants: &[WithinVariant]) ->
     if !ctx.pose_level || !(ctx.e_white > 0.0) {
         return None;
     }
-    let (ratio, v) =
-        variants.iter().filter_map(|v| heldout_ratio(ctx, w, v).map(|r| (r, v))).min_by(|a, b| a.0.total_cmp(&b.0))?;
+    let ((ratio, gain_without_worst), v) = variants
+        .iter()
+        .filter_map(|v| heldout_ratio(ctx, w, v).map(|r| (r, v)))
+        .min_by(|a, b| a.0.0.total_cmp(&b.0.0))?;
     let (rows, r, _) = stacked(ctx, w, v);
     let fitted = fit_residuals(&rows, &r, &vec![false; r.len()])?;
     let scale = ctx.e_white.sqrt();
     let after = fitted[..ctx.poses.len()].iter().map(|x| x.map(|x| x * scale)).collect();
-    Some(JointFit { ratio, after, params: v.params, detail: v.detail.clone() })
+    Some(JointFit { ratio, gain_without_worst, after, params: v.params, detail: v.detail.clone() })
 }
 
 /// Puts the stacked fit in the candidate's pose-level line when it predicts the withheld pose
@@ -69,7 +82,7 @@ pub(crate) fn add(ctx: &Context<'_>, e: &mut Evaluation, fit: JointFit) {
     let Some(ratio_after) = ctx.ratio_after(&fit.after) else { return };
     c.applicable = true;
     (c.heldout_ratio, c.heldout_gain, c.extra_params) = (fit.ratio, gain, fit.params);
-    e.gain_without_worst = f64::NAN;
+    e.gain_without_worst = fit.gain_without_worst;
     c.ratio_after = ratio_after;
     c.detail = format!("{} (pose means and within-pose course together)", fit.detail);
     e.after = fit.after;

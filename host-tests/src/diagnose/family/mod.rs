@@ -246,7 +246,7 @@ pub(crate) struct Context<'a> {
 }
 
 /// `1 - ln(ratio) / |ln(nominal)|`, a ratio below 1 counting `overshoot_weight` times.
-fn gain_over(nominal: f64, ratio: f64, overshoot_weight: f64) -> f64 {
+pub(crate) fn gain_over(nominal: f64, ratio: f64, overshoot_weight: f64) -> f64 {
     let before = nominal.ln().abs();
     let miss = if ratio >= 1.0 { ratio.ln() } else { overshoot_weight * ratio.ln().abs() };
     if before > 0.0 { 1.0 - miss / before } else { 0.0 }
@@ -372,14 +372,18 @@ impl<'a> Context<'a> {
     /// the others, offset by a transient its length averages differently) explains that pose.
     /// 0 when that pose held the whole gap.
     fn gain_without_worst_pose(&self, rows: &[Vec<f64>], dropped: &[bool], k: usize) -> f64 {
-        let squares: Vec<f64> = self.nominal_cv.iter().map(|c| c.map_or(0.0, |c| c * c)).collect();
-        let Some(worst) = (0..squares.len()).max_by(|&a, &b| squares[a].total_cmp(&squares[b])) else {
-            return f64::NAN;
-        };
+        let Some((worst, nominal)) = self.worst_nominal_pose() else { return f64::NAN };
         let Some(ratio) = self.heldout_ratio_without(rows, dropped, k, Some(worst)) else { return f64::NAN };
-        let others = (squares.len() - 1) as f64;
-        let nominal = ((squares.iter().sum::<f64>() - squares[worst]) / others / self.e_white).sqrt();
         if nominal > 1.0 { gain_over(nominal, ratio, VALUE_OVERSHOOT_WEIGHT) } else { 0.0 }
+    }
+
+    /// The pose the nominal model predicts worst on withheld poses, and the nominal model's held-out
+    /// ratio on the others.
+    pub(crate) fn worst_nominal_pose(&self) -> Option<(usize, f64)> {
+        let squares: Vec<f64> = self.nominal_cv.iter().map(|c| c.map_or(0.0, |c| c * c)).collect();
+        let worst = (0..squares.len()).max_by(|&a, &b| squares[a].total_cmp(&squares[b]))?;
+        let others = (squares.len() - 1) as f64;
+        Some((worst, ((squares.iter().sum::<f64>() - squares[worst]) / others / self.e_white).sqrt()))
     }
 
     /// Every fold's training poses outnumber the columns of the design with `extra` by
