@@ -101,8 +101,9 @@ fn same_hold(ctx: &Context<'_>, q: &PoseData, p: &PoseData) -> bool {
     let window = ((ctx.m.rate * STILL_WINDOW_S) as usize).max(1);
     let limit = STILL_SHARE * norm(p.mean);
     let near = |x: V3, y: V3| norm(std::array::from_fn(|a| x[a] - y[a])) < limit;
+    let between = ctx.table.samples.get(q.rows.end..p.rows.start).unwrap_or_default();
     p.t_start - q.t_end < SAME_HOLD_GAP_S
-        && ctx.table.samples[q.rows.end..p.rows.start].chunks(window).all(|c| {
+        && between.chunks(window).all(|c| {
             let mean: V3 = std::array::from_fn(|a| c.iter().map(|s| s[a]).sum::<f64>() / c.len() as f64);
             near(mean, p.mean) && near(mean, q.mean)
         })
