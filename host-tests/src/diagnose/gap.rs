@@ -84,13 +84,28 @@ pub(crate) fn pose_data(table: &Table, first: usize, end: usize, rate: f64) -> P
     }
 }
 
-/// Noise per axis in the input unit: white variance per sample, random-walk variance per second and
-/// a bias-instability floor (variance of every pose mean, independent between poses).
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// Noise per axis in the input unit: white variance per sample, random-walk variance per second,
+/// a bias-instability floor (variance of every pose mean, independent between poses) and a
+/// Gauss-Markov noise (variance `markov`, correlation time `markov_tau_s`; its pose means are drawn
+/// independently, [`markov_mean_share`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub(crate) struct Noise {
     pub(crate) white: V3,
     pub(crate) walk: V3,
     pub(crate) floor: V3,
+    pub(crate) markov: V3,
+    pub(crate) markov_tau_s: f64,
+}
+
+/// The share of a Gauss-Markov noise's variance (correlation time `tau_s`) left in its mean over
+/// `duration_s`: `2/x (1 - (1 - e^-x)/x)` with `x = duration / tau` (1 for a short mean, `2 tau / T`
+/// for a long one: white noise of a higher level).
+pub(crate) fn markov_mean_share(duration_s: f64, tau_s: f64) -> f64 {
+    let x = duration_s / tau_s;
+    if !(x > 1e-6) {
+        return 1.0;
+    }
+    2.0 / x * (1.0 - (1.0 - (-x).exp()) / x)
 }
 
 /// One draw of the pose-mean noise (input unit) for every pose: white over `n`, plus the random walk
@@ -107,7 +122,8 @@ pub(crate) fn draw_noise(poses: &[PoseData], noise: &Noise, rng: &mut Xoshiro256
             std::array::from_fn(|a| {
                 walk[a] += (noise.walk[a] * dt).sqrt() * standard_normal(rng);
                 let within = noise.walk[a] * p.duration() / 12.0;
-                walk[a] + (noise.white[a] / p.n as f64 + within + noise.floor[a]).sqrt() * standard_normal(rng)
+                let markov = noise.markov[a] * markov_mean_share(p.duration(), noise.markov_tau_s);
+                walk[a] + (noise.white[a] / p.n as f64 + within + noise.floor[a] + markov).sqrt() * standard_normal(rng)
             })
         })
         .collect()
@@ -529,7 +545,7 @@ pub(crate) fn measure_with(
     let directions: Vec<V3> = calibrated.iter().map(|f| f.map(|c| c / norm(*f))).collect();
     let r = residuals(&model, &means, gravity);
     let (white, quantisation) = white_variance(table, &poses, rate)?;
-    let white_noise = Noise { white, walk: [0.0; 3], floor: quantisation };
+    let white_noise = Noise { white, floor: quantisation, ..Noise::default() };
     let sims = simulate_gap(&model, &directions, &poses, &white_noise, gravity, opts.repeats, opts.seed);
     if sims.len() < 2 {
         return Err(Refusal::Undetermined { still_poses: lib_poses.len() });

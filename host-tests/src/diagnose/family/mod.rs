@@ -15,6 +15,7 @@ mod temperature;
 pub(super) mod tremor;
 
 use std::cell::OnceCell;
+use std::ops::Range;
 
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
@@ -22,7 +23,7 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 use super::gap::{Measured, Noise, PoseData, expected_cv_ms, expected_fit_rmse_mg, residual_noise_draws};
 use super::math::{
     V3, axis, cholesky_solve, cv_residuals, cv_residuals_predictable, fit_residuals, jacobian_row,
-    lstsq_with_covariance, rms, sum_sq,
+    lstsq_with_covariance, norm, rms, sum_sq,
 };
 use super::report::Candidate;
 use super::within::{Within, WithinFit, WithinVariant};
@@ -275,6 +276,19 @@ fn assign_folds(n: usize, folds: usize, seed: u64) -> Vec<usize> {
     fold
 }
 
+/// Two successive poses are pieces of one hold (the pose finder split it where a block moved too
+/// much: a settling transient, a bias jump) when the second starts within this time of the first's
+/// end ...
+const SAME_HOLD_GAP_S: f64 = 5.0;
+
+/// ... and the readings between them, averaged over [`STILL_WINDOW_S`], stay within this share of
+/// their modulus of both poses' means: a set-down lifts or turns the part (tens of mg), a block
+/// the pose finder rejected within a hold moves by its noise and the effect.
+const STILL_SHARE: f64 = 0.02;
+
+/// Averaging window for [`STILL_SHARE`], s.
+const STILL_WINDOW_S: f64 = 0.1;
+
 impl<'a> Context<'a> {
     /// The cross-validation set-up; `None` when a fold leaves too few poses.
     pub(crate) fn new(table: &'a Table, m: &'a Measured, opts: &'a DiagnoseOptions) -> Option<Self> {
@@ -283,7 +297,7 @@ impl<'a> Context<'a> {
         let fold = assign_folds(n, folds, opts.seed);
         let base_rows: Vec<Vec<f64>> =
             m.poses.iter().zip(&m.directions).map(|(p, u)| jacobian_row(p.mean, *u).to_vec()).collect();
-        let white_noise = Noise { white: m.white, walk: [0.0; 3], floor: m.quantisation };
+        let white_noise = Noise { white: m.white, floor: m.quantisation, ..Noise::default() };
         let white_draws =
             residual_noise_draws(&m.model, &m.directions, &m.poses, &white_noise, CV_NOISE_DRAWS, opts.seed);
         let none_dropped = vec![false; n];
@@ -439,6 +453,32 @@ impl<'a> Context<'a> {
             }
         }
         best.map(|b| Fitted { tried, ..b })
+    }
+
+    /// Poses `q` and then `p` are pieces of one hold: close in time, and no movement between them.
+    pub(crate) fn same_hold(&self, q: &PoseData, p: &PoseData) -> bool {
+        let window = ((self.m.rate * STILL_WINDOW_S) as usize).max(1);
+        let limit = STILL_SHARE * norm(p.mean);
+        let near = |x: V3, y: V3| norm(std::array::from_fn(|a| x[a] - y[a])) < limit;
+        let between = self.table.samples.get(q.rows.end..p.rows.start).unwrap_or_default();
+        p.t_start - q.t_end < SAME_HOLD_GAP_S
+            && between.chunks(window).all(|c| {
+                let mean: V3 = std::array::from_fn(|a| c.iter().map(|s| s[a]).sum::<f64>() / c.len() as f64);
+                near(mean, p.mean) && near(mean, q.mean)
+            })
+    }
+
+    /// The table rows of each hold: successive poses that are pieces of one hold ([`Self::same_hold`])
+    /// joined with the rows between them.
+    pub(crate) fn hold_rows(&self) -> Vec<Range<usize>> {
+        let mut holds: Vec<Range<usize>> = Vec::new();
+        for (i, p) in self.poses.iter().enumerate() {
+            match holds.last_mut() {
+                Some(last) if self.same_hold(&self.poses[i - 1], p) => last.end = p.rows.end,
+                _ => holds.push(p.rows.clone()),
+            }
+        }
+        holds
     }
 
     /// `1 - ln(ratio) / ln(nominal ratio)` of a noise model; predicting more scatter than there is

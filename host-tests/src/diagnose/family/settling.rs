@@ -18,7 +18,6 @@
 use super::{Context, Evaluation, Family, Variant, motion, ringing, standard_evaluation};
 use crate::diagnose::PARAMETER_PENALTY;
 use crate::diagnose::SEGMENTS;
-use crate::diagnose::gap::PoseData;
 use crate::diagnose::locate::within_chi2_of;
 use crate::diagnose::math::{V3, axis, cv_residuals, dot, fit_residuals, mean_of, median, norm, rms, sum_sq};
 use crate::diagnose::within::{Within, WithinVariant};
@@ -39,18 +38,6 @@ const MEASURED: [&str; 2] =
 /// A first hold starting within this time of the log's first row was not placed during the log
 /// (the recording began with the part at rest): its transient, if any, is of unknown age and size.
 const LOG_START_S: f64 = 1.0;
-
-/// Two successive poses are pieces of one hold (the pose finder split it where a block moved too
-/// much) when the second starts within this time of the first's end ...
-const SAME_HOLD_GAP_S: f64 = 5.0;
-
-/// ... and the readings between them, averaged over [`STILL_WINDOW_S`], stay within this share of
-/// their modulus of both poses' means: a set-down lifts or turns the part (tens of mg), a block
-/// the pose finder rejected within a hold moves by its noise and the effect.
-const STILL_SHARE: f64 = 0.02;
-
-/// Averaging window for [`STILL_SHARE`], s.
-const STILL_WINDOW_S: f64 = 0.1;
 
 /// How many times the excess movement of the holds' first halves must exceed their second halves'
 /// for a transient that decays (an exponential with `tau` a third of the hold gives about 20).
@@ -89,24 +76,11 @@ fn placements(ctx: &Context<'_>) -> Vec<Option<f64>> {
     for (i, p) in ctx.poses.iter().enumerate() {
         out.push(match i {
             0 => (p.t_start > LOG_START_S).then_some(p.t_start),
-            _ if same_hold(ctx, &ctx.poses[i - 1], p) => out[i - 1],
+            _ if ctx.same_hold(&ctx.poses[i - 1], p) => out[i - 1],
             _ => Some(p.t_start),
         });
     }
     out
-}
-
-/// Poses `q` and then `p` are pieces of one hold: close in time, and no movement between them.
-fn same_hold(ctx: &Context<'_>, q: &PoseData, p: &PoseData) -> bool {
-    let window = ((ctx.m.rate * STILL_WINDOW_S) as usize).max(1);
-    let limit = STILL_SHARE * norm(p.mean);
-    let near = |x: V3, y: V3| norm(std::array::from_fn(|a| x[a] - y[a])) < limit;
-    let between = ctx.table.samples.get(q.rows.end..p.rows.start).unwrap_or_default();
-    p.t_start - q.t_end < SAME_HOLD_GAP_S
-        && between.chunks(window).all(|c| {
-            let mean: V3 = std::array::from_fn(|a| c.iter().map(|s| s[a]).sum::<f64>() / c.len() as f64);
-            near(mean, p.mean) && near(mean, q.mean)
-        })
 }
 
 /// The holds, pooled, move more in their first half than in their second, beyond white noise: the
