@@ -1,0 +1,248 @@
+//! The noise levels beyond white measured in time segments (the longest rest, every hold) from
+//! their overlapping Allan variances: a random walk and a bias-instability floor, or a
+//! Gauss-Markov noise.
+
+use std::ops::Range;
+
+use crate::csvio::Table;
+use crate::diagnose::WALK_EXCESS;
+use crate::diagnose::gap::row_time;
+use crate::diagnose::math::{V3, lstsq, mean, median, predict};
+
+/// The noise beyond white per axis (input unit), measured on the longest rest (a time segment, not
+/// the pose means it is judged on): the rest is detrended (quadratic in time, linear in temperature
+/// when there is a temperature column, so warm-up and temperature are not taken for noise), then
+/// the excess of its overlapping Allan variance over white noise for `tau` from 1/50 to 1/5 of the
+/// rest is fitted as a random walk `K^2 tau / 3` plus a flat bias-instability floor (weighted
+/// least squares; when one term comes out negative, the better of the two alone). Returns
+/// `(K^2 per s, floor variance)`; both zero when the excess is not at
+/// least [`WALK_EXCESS`] times the white noise at the longest `tau`.
+pub(super) fn colored_noise_estimate(table: &Table, first: usize, end: usize, rate: f64, white: V3) -> (V3, V3) {
+    let n = end - first;
+    let mut walk = [0.0; 3];
+    let mut floor = [0.0; 3];
+    if n < 200 {
+        return (walk, floor);
+    }
+    let rows = trend_design(table, first, end, rate);
+    let idx: Vec<usize> = (0..n).collect();
+    for a in 0..3 {
+        let y: Vec<f64> = table.samples[first..end].iter().map(|s| -s[a]).collect();
+        let Some(x) = lstsq(&rows, &y, &idx) else { continue };
+        let detrended: Vec<f64> = (0..n).map(|i| -predict(&rows, &y, &x, i)).collect();
+        let (points, last_excess) = allan_excess(&detrended, rate, white[a]);
+        if points.is_empty() || !(last_excess > WALK_EXCESS) {
+            continue;
+        }
+        (walk[a], floor[a]) = fit_walk_and_floor(&points);
+    }
+    (walk, floor)
+}
+
+/// [`colored_noise_estimate`] pooled over every hold (`holds`: table rows; a log may have no long
+/// rest): each hold is cleared of its mean and slope, and the Allan excesses of all holds are
+/// fitted together; the excess test is on their mean at each hold's longest `tau`.
+pub(super) fn pooled_estimate(table: &Table, holds: &[Range<usize>], rate: f64, white: V3) -> (V3, V3) {
+    let mut walk = [0.0; 3];
+    let mut floor = [0.0; 3];
+    for a in 0..3 {
+        let (points, lasts) = hold_excesses(table, holds, rate, white[a], a);
+        if lasts.len() >= 3 && mean(&lasts) > WALK_EXCESS {
+            (walk[a], floor[a]) = fit_walk_and_floor(&points);
+        }
+    }
+    (walk, floor)
+}
+
+/// The Allan excesses (`tau`, excess, weight) of every hold of at least 100 rows on axis `a`, each
+/// cleared of its mean and slope, and each hold's excess at its longest `tau` (in units of the
+/// white Allan variance there).
+fn hold_excesses(
+    table: &Table,
+    holds: &[Range<usize>],
+    rate: f64,
+    white: f64,
+    a: usize,
+) -> (Vec<(f64, f64, f64)>, Vec<f64>) {
+    let (mut points, mut lasts) = (Vec::new(), Vec::new());
+    for rows in holds.iter().filter(|r| r.len() >= 100) {
+        let y: Vec<f64> = table.samples[rows.clone()].iter().map(|s| s[a]).collect();
+        let (hold_points, last) = allan_excess(&detrend_linear(&y), rate, white);
+        points.extend(hold_points);
+        lasts.push(last);
+    }
+    (points, lasts)
+}
+
+/// A Gauss-Markov noise ([`fit_markov`]) measured on the whole holds (`holds`: a hold the pose
+/// finder cut at a bias jump is whole here), on the axes where most holds move beyond white noise
+/// (the median hold's excess at its longest `tau` above [`WALK_EXCESS`]): a noise moves most holds,
+/// one disturbed hold (a bias step within it) is none. Returns `(variances, correlation time)`.
+pub(super) fn pooled_markov(table: &Table, holds: &[Range<usize>], rate: f64, white: V3) -> (V3, f64) {
+    let excesses: [Vec<(f64, f64, f64)>; 3] = std::array::from_fn(|a| {
+        let (points, lasts) = hold_excesses(table, holds, rate, white[a], a);
+        let moves = lasts.len() >= 3 && median(&lasts) > WALK_EXCESS;
+        if moves { white_weighted(&points, white[a], rate) } else { Vec::new() }
+    });
+    fit_markov(&excesses)
+}
+
+/// The Allan points (`tau`, excess, weight) re-weighted by the clusters over the white noise's
+/// Allan variance squared instead of the observed one's: a telegraph noise moves some holds far
+/// more than others, and weights from the observed variance would fit the quiet holds only.
+fn white_weighted(points: &[(f64, f64, f64)], white: f64, rate: f64) -> Vec<(f64, f64, f64)> {
+    points
+        .iter()
+        .map(|&(t, e, w)| {
+            let white_avar = white / (t * rate);
+            (t, e, w * ((e + white_avar) / white_avar).powi(2))
+        })
+        .collect()
+}
+
+/// Correlation times of the Gauss-Markov noise tried, s.
+const MARKOV_TAUS_S: [f64; 8] = [0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0];
+
+/// The Allan variance of a unit Gauss-Markov noise of correlation time `tau_c` at `tau`:
+/// `(tau_c / tau)^2 (2 x - 3 + 4 e^-x - e^-2x)`, `x = tau / tau_c` (a walk for `tau` far below
+/// `tau_c`, white noise far above).
+fn markov_allan(tau: f64, tau_c: f64) -> f64 {
+    let x = tau / tau_c;
+    (2.0 * x - 3.0 + 4.0 * (-x).exp() - (-2.0 * x).exp()) / (x * x)
+}
+
+/// The excesses per axis (empty: none) fitted as a Gauss-Markov noise: the correlation time of
+/// [`MARKOV_TAUS_S`] with the least weighted misfit over the axes, each axis's variance by weighted
+/// least squares (at least 0). Returns `(variances, correlation time)`.
+fn fit_markov(excesses: &[Vec<(f64, f64, f64)>; 3]) -> (V3, f64) {
+    let fit = |points: &[(f64, f64, f64)], tau_c: f64| {
+        let num: f64 = points.iter().map(|&(t, e, w)| w * e * markov_allan(t, tau_c)).sum();
+        let den: f64 = points.iter().map(|&(t, _, w)| w * markov_allan(t, tau_c).powi(2)).sum();
+        let var = if den > 0.0 { (num / den).max(0.0) } else { 0.0 };
+        let misfit: f64 = points.iter().map(|&(t, e, w)| w * (e - var * markov_allan(t, tau_c)).powi(2)).sum();
+        (var, misfit)
+    };
+    let mut best = ([0.0; 3], 0.0, f64::INFINITY);
+    for tau_c in MARKOV_TAUS_S {
+        let per_axis: [(f64, f64); 3] = std::array::from_fn(|a| fit(&excesses[a], tau_c));
+        let misfit: f64 = per_axis.iter().map(|(_, m)| m).sum();
+        if misfit < best.2 {
+            best = (per_axis.map(|(v, _)| v), tau_c, misfit);
+        }
+    }
+    (best.0, best.1)
+}
+
+/// `y` less its least-squares line over the sample index.
+fn detrend_linear(y: &[f64]) -> Vec<f64> {
+    let n = y.len() as f64;
+    let x_mean = (n - 1.0) / 2.0;
+    let y_mean = y.iter().sum::<f64>() / n;
+    let sxx: f64 = (0..y.len()).map(|i| (i as f64 - x_mean).powi(2)).sum();
+    let sxy: f64 = y.iter().enumerate().map(|(i, v)| (i as f64 - x_mean) * (v - y_mean)).sum();
+    let slope = if sxx > 0.0 { sxy / sxx } else { 0.0 };
+    y.iter().enumerate().map(|(i, v)| v - y_mean - slope * (i as f64 - x_mean)).collect()
+}
+
+/// The trend a rest is cleared of: quadratic in time, linear in temperature when it varies.
+fn trend_design(table: &Table, first: usize, end: usize, rate: f64) -> Vec<Vec<f64>> {
+    let t0 = row_time(table, first, rate);
+    let span = (row_time(table, end - 1, rate) - t0).max(1e-9);
+    let temps = table.temps_c.as_ref().map(|t| &t[first..end]);
+    let t_mean = temps.map_or(0.0, mean);
+    let has_temp = temps.is_some_and(|t| t.iter().any(|v| (v - t_mean).abs() > 1e-9));
+    (first..end)
+        .map(|i| {
+            let x = 2.0 * (row_time(table, i, rate) - t0) / span - 1.0;
+            let mut row = vec![1.0, x, x * x];
+            if let (true, Some(t)) = (has_temp, temps) {
+                row.push(t[i - first] - t_mean);
+            }
+            row
+        })
+        .collect()
+}
+
+/// Overlapping Allan variance in excess of white noise (`white` per sample) for `tau` from 1/50 to
+/// 1/5 of the record: `(tau s, excess, weight)` per `tau`, and the excess at the longest `tau` in
+/// units of the white Allan variance there.
+fn allan_excess(detrended: &[f64], rate: f64, white: f64) -> (Vec<(f64, f64, f64)>, f64) {
+    let n = detrended.len();
+    let mut prefix = vec![0.0; n + 1];
+    for i in 0..n {
+        prefix[i + 1] = prefix[i] + detrended[i];
+    }
+    let mut points = Vec::new();
+    let mut last_excess = 0.0;
+    let mut m = ((n as f64 / 50.0) as usize).max(1);
+    while 5 * m <= n {
+        let count = n - 2 * m + 1;
+        let sum: f64 = (0..count).map(|k| (prefix[k + 2 * m] - 2.0 * prefix[k + m] + prefix[k]).powi(2)).sum();
+        let avar = sum / (2.0 * count as f64 * (m * m) as f64);
+        let white_avar = white / m as f64;
+        let excess = avar - white_avar;
+        // Weighted by the number of independent clusters over the relative variance.
+        let w = (n as f64 / m as f64) / (avar * avar).max(1e-300);
+        points.push((m as f64 / rate, excess, w));
+        last_excess = excess / white_avar;
+        m *= 2;
+    }
+    (points, last_excess)
+}
+
+/// The excess fitted as a random walk `K^2 tau / 3` plus a flat floor (weighted least squares):
+/// both when both come out positive, else the better single term. Returns `(K^2, floor)`.
+fn fit_walk_and_floor(points: &[(f64, f64, f64)]) -> (f64, f64) {
+    let sum = |f: &dyn Fn(f64, f64) -> f64| points.iter().map(|&(t, e, w)| w * f(t, e)).sum::<f64>();
+    let k2 = (sum(&|t, e| e * t / 3.0) / sum(&|t, _| (t / 3.0).powi(2))).max(0.0);
+    let level = (sum(&|_, e| e) / sum(&|_, _| 1.0)).max(0.0);
+    let (saa, sab, sbb) = (sum(&|t, _| (t / 3.0).powi(2)), sum(&|t, _| t / 3.0), sum(&|_, _| 1.0));
+    let (sea, seb) = (sum(&|t, e| e * t / 3.0), sum(&|_, e| e));
+    let det = saa * sbb - sab * sab;
+    let joint = (det > 0.0).then(|| ((sea * sbb - seb * sab) / det, (saa * seb - sab * sea) / det));
+    match joint {
+        Some((k, c)) if k >= 0.0 && c >= 0.0 => (k, c),
+        _ => {
+            let misfit_walk = sum(&|t, e| (e - k2 * t / 3.0).powi(2));
+            let misfit_floor = sum(&|_, e| (e - level).powi(2));
+            if misfit_walk <= misfit_floor { (k2, 0.0) } else { (0.0, level) }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use rand_core::SeedableRng;
+    use rand_xoshiro::Xoshiro256PlusPlus;
+
+    use crate::sim::random::standard_normal;
+
+    #[test]
+    fn the_allan_variance_of_a_simulated_gauss_markov_noise_follows_its_formula() {
+        // First-order Gauss-Markov noises (unit variance, correlation time 100 s) at 10 Hz for
+        // 2000 s, averaged over 16 runs: their overlapping Allan variance at tau 40-320 s (0.4-3.2
+        // correlation times: the walk-like rise, the peak, the white-like fall) against the closed
+        // form.
+        let (rate, tau_c, runs): (f64, f64, usize) = (10.0, 100.0, 16);
+        let phi = (-1.0 / (rate * tau_c)).exp();
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(11);
+        let mut sums: Vec<(f64, f64)> = Vec::new();
+        for _ in 0..runs {
+            let mut x = standard_normal(&mut rng);
+            let series: Vec<f64> = (0..20_000)
+                .map(|_| {
+                    x = phi * x + (1.0 - phi * phi).sqrt() * standard_normal(&mut rng);
+                    x
+                })
+                .collect();
+            let (points, _) = super::allan_excess(&series, rate, 0.0);
+            sums.resize(points.len(), (0.0, 0.0));
+            points.iter().zip(&mut sums).for_each(|(p, s)| *s = (p.0, s.1 + p.1 / runs as f64));
+        }
+        assert!(sums.len() >= 3);
+        for (tau, avar) in sums {
+            let expected = super::markov_allan(tau, tau_c);
+            assert!((avar / expected - 1.0).abs() < 0.25, "tau {tau}: {avar} vs {expected}");
+        }
+    }
+}
