@@ -4,9 +4,10 @@
 //! withheld poses better than every family, the verdict is `unexplained` and the probe says where
 //! the gap lies.
 
+use super::SEGMENTS;
 use super::family::{Context, Variant};
 use super::gap::PoseData;
-use super::math::dot;
+use super::math::{V3, dot, lstsq_with_covariance};
 use super::report::Probe;
 use crate::vec3::cross;
 
@@ -63,8 +64,69 @@ fn bias_step(ctx: &Context<'_>) -> Vec<Variant> {
 }
 
 /// Evidence by which a bias step must exceed a family to veto it: a warm-up or a wander is a smooth
-/// step, and on a few poses a step fits a slow drift nearly as well as the drift does.
+/// step, and on a few poses a step fits a slow drift nearly as well as the drift does. None over a
+/// slow change (drift, temperature) when a hold beside the step shows it as a jump
+/// ([`step_seen_in_holds`]).
 const STEP_OVER_DRIFT: f64 = 0.2;
+
+/// The step fitted in `rows` (the calibration columns, then the step's three): the first pose after
+/// it and the step's modulus change per unit direction (the columns enter as `r + rows . x`, the
+/// modulus moves by `-u . x`).
+fn fitted_step(ctx: &Context<'_>, rows: &[Vec<f64>]) -> Option<(usize, V3)> {
+    let base = ctx.base_rows.first().map_or(0, Vec::len);
+    let after = rows.iter().position(|r| r[base..].iter().any(|x| *x != 0.0))?;
+    let (x, _, _) = lstsq_with_covariance(rows, &ctx.m.r)?;
+    (after > 0 && x.len() >= base + 3).then(|| (after, std::array::from_fn(|a| -x[base + a])))
+}
+
+/// One of the two holds beside a bias step shows it as a jump ([`jump_inside_hold`]): the bias
+/// jumped within that hold, where a slow change that imitates the step on the pose means would move
+/// it as a line.
+fn step_seen_in_holds(ctx: &Context<'_>, rows: &[Vec<f64>]) -> bool {
+    fitted_step(ctx, rows)
+        .is_some_and(|(after, step)| [after - 1, after].iter().any(|&p| jump_inside_hold(ctx, p, step)))
+}
+
+/// Chi-square by which a jump inside a hold must fit its segments better than a line in time (three
+/// standard deviations of one degree of freedom).
+const JUMP_CHI2_GAIN: f64 = 9.0;
+
+/// Hold `p`'s segments show the step as a jump at one time in the hold (size fitted, the sign of the
+/// step's along the pose's direction, within a factor of two of it): that fits them better than a
+/// line in time by [`JUMP_CHI2_GAIN`]. The bias jumped within the hold (too little for the pose
+/// finder to cut it there); a drift moves a hold as a line.
+fn jump_inside_hold(ctx: &Context<'_>, p: usize, step: V3) -> bool {
+    let Some((y, var)) = hold_deviations(ctx, p) else { return false };
+    let expected = dot(ctx.directions()[p], step);
+    // Least squares of `y` on a constant and one shape; the residual chi-square and the shape's
+    // coefficient.
+    let fit = |shape: &dyn Fn(usize) -> f64| {
+        let n = SEGMENTS as f64;
+        let (sx, sy) = ((0..SEGMENTS).map(shape).sum::<f64>() / n, y.iter().sum::<f64>() / n);
+        let sxx: f64 = (0..SEGMENTS).map(|j| (shape(j) - sx).powi(2)).sum();
+        let sxy: f64 = (0..SEGMENTS).map(|j| (shape(j) - sx) * (y[j] - sy)).sum();
+        let c = if sxx > 0.0 { sxy / sxx } else { 0.0 };
+        ((0..SEGMENTS).map(|j| (y[j] - sy - c * (shape(j) - sx)).powi(2)).sum::<f64>() / var, c)
+    };
+    let (line, _) = fit(&|j| j as f64);
+    // The jump on a quarter-segment grid: the segment it falls in takes its share.
+    let share = |j: usize, at: f64| (j as f64 + 1.0 - at).clamp(0.0, 1.0);
+    let (jump, size) = (1..4 * SEGMENTS)
+        .map(|q| fit(&|j| share(j, q as f64 / 4.0)))
+        .fold((f64::INFINITY, 0.0), |best, f| if f.0 < best.0 { f } else { best });
+    let agrees = size * expected > 0.0 && (0.5..=2.0).contains(&(size / expected));
+    agrees && line - jump >= JUMP_CHI2_GAIN
+}
+
+/// Pose `p`'s segment means as modulus deviations from its mean (output unit) and their variance
+/// under white noise; `None` with too few samples per segment.
+fn hold_deviations(ctx: &Context<'_>, p: usize) -> Option<([f64; SEGMENTS], f64)> {
+    let (pose, m) = (&ctx.poses[p], ctx.m);
+    let kt = m.model.kt_times(m.directions[p]);
+    let var: f64 = (0..3).map(|a| kt[a] * kt[a] * m.white[a]).sum::<f64>() / pose.seg_n as f64;
+    let y = std::array::from_fn(|j| dot(kt, std::array::from_fn(|a| pose.seg[j][a] - pose.mean[a])));
+    (pose.seg_n >= 4 && var > 0.0).then_some((y, var))
+}
 
 /// Fewest poses on each side of a probed bias step.
 const STEP_SIDE_POSES: usize = 2;
@@ -176,7 +238,9 @@ pub(crate) fn run(ctx: &Context<'_>) -> Vec<Probe> {
         .filter_map(|&(shape, make, veto_margin)| {
             let variants = make(ctx).into_iter().filter(|v| ctx.leaves_residual_dof(&v.extra)).collect();
             let f = ctx.best_of(variants)?;
-            Some(Probe { shape, heldout_gain: ctx.value_gain(f.score_ratio), detail: f.detail, veto_margin })
+            let jump_in_hold = shape == "bias-step" && step_seen_in_holds(ctx, &f.rows);
+            let heldout_gain = ctx.value_gain(f.score_ratio);
+            Some(Probe { shape, heldout_gain, detail: f.detail, veto_margin, jump_in_hold })
         })
         .collect()
 }
@@ -184,6 +248,42 @@ pub(crate) fn run(ctx: &Context<'_>) -> Vec<Probe> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::csvio::{self, AccumulateOptions, Table};
+    use crate::diagnose::{DiagnoseOptions, diagnose, gap};
+    use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
+
+    /// A clean simulated log whose bias along one direction changes by `size_mg` in the middle of
+    /// the middle hold: at once (`ramp_s` 0: an offset step) or as a ramp over `ramp_s` seconds
+    /// centred there (a drift as fast as a step on the pose means, moving the holds as it goes).
+    fn shifted_log(seed: u64, size_mg: f64, ramp_s: f64) -> Table {
+        let mut table = to_table(&generate(&random_scenario(EffectClass::None, seed)), "shift").unwrap();
+        let acc = csvio::accumulate(&table, &AccumulateOptions::default()).unwrap();
+        let rate = acc.sample_rate_hz.unwrap();
+        let hold = acc.spans[acc.spans.len() / 2];
+        let at_s = gap::row_time(&table, (hold.first_row + hold.last_row) / 2, rate);
+        let mg = table.median_magnitude / 1000.0;
+        let direction = [0.48, -0.6, 0.64];
+        for i in 0..table.samples.len() {
+            let t = gap::row_time(&table, i, rate);
+            let share = if ramp_s > 0.0 { ((t - at_s) / ramp_s + 0.5).clamp(0.0, 1.0) } else { f64::from(t >= at_s) };
+            (0..3).for_each(|a| table.samples[i][a] += size_mg * mg * share * direction[a]);
+        }
+        table
+    }
+
+    #[test]
+    fn an_offset_step_inside_a_hold_is_not_a_drift_but_a_ramp_as_large_is() {
+        // 0.8 mg at once in the middle of the middle hold: that hold shows the jump, and the step
+        // vetoes the drift that imitates it on the pose means (both seeds were drift without the
+        // holds' evidence). The same change as a ramp over 40 s moves the holds as lines: drift.
+        let opts = DiagnoseOptions::DEFAULT;
+        for seed in [3, 8] {
+            let step = diagnose(&shifted_log(seed, 0.8, 0.0), &opts).unwrap();
+            assert_eq!(step.verdict, "unexplained", "seed {seed}: {}", step.to_text());
+            let ramp = diagnose(&shifted_log(seed, 0.8, 40.0), &opts).unwrap();
+            assert_eq!(ramp.verdict, "drift", "seed {seed}: {}", ramp.to_text());
+        }
+    }
 
     #[test]
     fn a_hysteresis_state_is_set_by_a_move_and_kept_or_cleared_by_a_still_step() {

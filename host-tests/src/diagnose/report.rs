@@ -137,6 +137,10 @@ pub struct Probe {
     /// a catalogue family can take (a bias step is a fast drift).
     #[serde(skip)]
     pub veto_margin: f64,
+    /// A bias step that a hold beside it shows as a jump: a slow change (drift, temperature) that
+    /// imitates it on the pose means would move that hold as a line, so it vetoes those with no margin.
+    #[serde(skip)]
+    pub jump_in_hold: bool,
 }
 
 /// The whole diagnosis.

@@ -145,7 +145,8 @@ fn beaten(e: &Evaluation, probes: &[Probe]) -> bool {
     let gain = e.candidate.evidence();
     probes.iter().any(|p| {
         let explains = !e.predicts_values && p.heldout_gain >= MIN_GAIN;
-        p.heldout_gain > gain + p.veto_margin || explains && p.heldout_gain + NOISE_FAR_AHEAD > gain + p.veto_margin
+        let margin = if p.jump_in_hold && slow_change(e) { 0.0 } else { p.veto_margin };
+        p.heldout_gain > gain + margin || explains && p.heldout_gain + NOISE_FAR_AHEAD > gain + margin
     })
 }
 
@@ -305,6 +306,7 @@ mod tests {
             heldout_gain: gain,
             detail: String::new(),
             veto_margin: 0.0,
+            jump_in_hold: false,
         };
         let verdict = |gain: f64, predicts_values: bool, probe_gain: f64| {
             let effect = if predicts_values { "drift" } else { "colored-noise" };
