@@ -14,7 +14,7 @@ use std::ops::Range;
 
 use super::PARAMETER_PENALTY;
 use super::SEGMENTS;
-use super::gap::{Measured, PoseData, markov_mean_share, row_time};
+use super::gap::{Measured, PoseData, row_time};
 use super::math::{V3, cv_residuals, dot, median, sum_sq};
 use crate::csvio::Table;
 
@@ -152,10 +152,8 @@ impl Within {
     /// The mean square of the whitened deviations a noise model predicts beyond white noise (0 for
     /// white noise): per segment, a bias-instability floor `floor` (variance per axis, input unit)
     /// moves its mean as an independent draw, a random walk `walk` (variance per second per axis) as
-    /// a Brownian path over the hold does, a Gauss-Markov noise (`markov`: variance, correlation
-    /// time `markov_tau_s`) by what it leaves in a segment's mean beyond the hold's, all along the
-    /// pose's direction.
-    pub(crate) fn predicted_excess(&self, m: &Measured, walk: V3, floor: V3, markov: (V3, f64)) -> f64 {
+    /// a Brownian path over the hold does, both along the pose's direction.
+    pub(crate) fn predicted_excess(&self, m: &Measured, walk: V3, floor: V3) -> f64 {
         if self.d.is_empty() {
             return 0.0;
         }
@@ -167,12 +165,7 @@ impl Within {
                 let kt = m.model.kt_times(m.directions[p]);
                 let along = |v: V3| (0..3).map(|a| kt[a] * kt[a] * v[a]).sum::<f64>();
                 let hold = m.poses[p].duration();
-                // The mean of the segments' variances about the hold mean: a segment's less the hold's.
-                let share = |t: f64| markov_mean_share(t, markov.1);
-                let markov = along(markov.0) * (share(hold / s) - share(hold));
-                (along(floor) * (s - 1.0) / s + along(walk) * hold * brownian + markov)
-                    * self.weight[i]
-                    * self.weight[i]
+                (along(floor) * (s - 1.0) / s + along(walk) * hold * brownian) * self.weight[i] * self.weight[i]
             })
             .sum();
         total / self.d.len() as f64

@@ -105,7 +105,7 @@ impl Colored {
 fn walk_from_holds(ctx: &Context<'_>) -> Option<V3> {
     let within = ctx.within.as_ref()?;
     let (observed, _) = within.observed_excess();
-    let level = observed / within.predicted_excess(ctx.m, [1.0; 3], [0.0; 3], ([0.0; 3], 1.0));
+    let level = observed / within.predicted_excess(ctx.m, [1.0; 3], [0.0; 3]);
     (level > 0.0 && level.is_finite()).then_some([level; 3])
 }
 
@@ -161,10 +161,11 @@ const HOLDS_SHORT_Z: f64 = 3.0;
 /// hold's segment means; the holds are where it was measured): the model's level is an artefact of
 /// the white level it was measured against (successive differences understate a digitally
 /// low-passed sensor's white noise, and its excess then reads as a floor), not a noise the holds
-/// carry.
+/// carry. The Gauss-Markov part is not asked: it was measured on the whole holds, and the poses the
+/// pose finder cut them into at its jumps hold still between the jumps.
 fn holds_refute(ctx: &Context<'_>, c: &Colored) -> bool {
     let Some(within) = ctx.within.as_ref() else { return false };
-    let predicted = within.predicted_excess(ctx.m, c.walk, c.floor, (c.markov, c.markov_tau_s));
+    let predicted = within.predicted_excess(ctx.m, c.walk, c.floor);
     let (observed, sigma) = within.observed_excess();
     observed < predicted - HOLDS_SHORT_Z * sigma * (1.0 + predicted)
 }
@@ -207,11 +208,7 @@ impl ColoredNoise {
         let mut best: Option<(f64, Colored)> = None;
         for (estimate, pooled) in estimates {
             for c in estimate.parts() {
-                // A Gauss-Markov part is checked on the whole holds it was measured on, not on the
-                // pieces the pose finder cut them into at its jumps (a telegraph noise's pieces
-                // hold still).
-                let unsplit = Colored { markov: [0.0; 3], ..c };
-                if !(ctx.pose_level && c.any()) || (*pooled && holds_refute(ctx, &unsplit)) {
+                if !(ctx.pose_level && c.any()) || (*pooled && holds_refute(ctx, &c)) {
                     continue;
                 }
                 let Some(ratio) = self.heldout_ratio(ctx, &c) else { continue };
