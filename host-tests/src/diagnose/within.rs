@@ -73,12 +73,17 @@ pub(crate) struct Within {
     pub(crate) significant: bool,
 }
 
+/// The covariance of a Brownian path's means over segments `i` and `j` of a hold of unit duration
+/// cut in [`SEGMENTS`]: segment `i`'s mean has variance `h (i + 1/3)`, two segments' means covary by
+/// `h (min + 1/2)` (`h` a segment's duration).
+fn brownian_cov(i: usize, j: usize) -> f64 {
+    (i.min(j) as f64 + if i == j { 1.0 / 3.0 } else { 0.5 }) / SEGMENTS as f64
+}
+
 /// A Brownian path's segment means about their own mean over a hold of unit duration cut in
-/// [`SEGMENTS`]: the mean variance of a segment's deviation. Segment `i`'s mean has variance
-/// `h (i + 1/3)`, two segments' means covary by `h (min + 1/2)` (`h` a segment's duration).
+/// [`SEGMENTS`]: the mean variance of a segment's deviation.
 fn brownian_deviation_share() -> f64 {
-    let (s, h) = (SEGMENTS, 1.0 / SEGMENTS as f64);
-    let cov = |i: usize, j: usize| h * (i.min(j) as f64 + if i == j { 1.0 / 3.0 } else { 0.5 });
+    let (s, cov) = (SEGMENTS, brownian_cov);
     let mean_var: f64 = (0..s).flat_map(|i| (0..s).map(move |j| cov(i, j))).sum::<f64>() / (s * s) as f64;
     (0..s).map(|j| cov(j, j) - 2.0 * (0..s).map(|i| cov(i, j)).sum::<f64>() / s as f64 + mean_var).sum::<f64>()
         / s as f64
@@ -171,6 +176,39 @@ impl Within {
         total / self.d.len() as f64
     }
 
+    /// The holds' movement that a line per hold leaves (their roughness) against what a random walk
+    /// `walk` and a floor `floor` (as in [`Within::predicted_excess`]) with the white noise would
+    /// leave: `(shortfall, power)`, the observed roughness less the expected in standard deviations
+    /// of the expectation (about 0 or above when the holds carry that noise, strongly negative when
+    /// they move smoothly however much they move), and the noise's own share of the expectation in
+    /// the same unit (how well the test can see it). Per hold the segment means have covariance
+    /// `S = a C + (f + k/(k-1)) I` (whitened: `C` a Brownian path's, `a` the walk's variance over the
+    /// hold, `f` the floor's); what a line leaves, `P x` (`P` the projection off a line in time),
+    /// has mean `tr(P S)` and variance `2 tr((P S)^2)` (Gaussian). A random walk leaves 29 % of its
+    /// movement to the roughness, a floor 80 %.
+    pub(crate) fn roughness_shortfall(&self, m: &Measured, walk: V3, floor: V3) -> (f64, f64) {
+        self.roughness_under(&|p, w| {
+            let kt = m.model.kt_times(m.directions[p]);
+            let along = |v: V3| (0..3).map(|a| kt[a] * kt[a] * v[a]).sum::<f64>() * w * w;
+            (along(walk) * m.poses[p].duration(), along(floor))
+        })
+    }
+
+    /// [`Within::roughness_shortfall`] with each pose's whitened walk variance over its hold and
+    /// floor variance given by `levels(pose, whitening weight)`.
+    fn roughness_under(&self, levels: &dyn Fn(usize, f64) -> (f64, f64)) -> (f64, f64) {
+        let (mut observed, mut mean, mut white_mean, mut var) = (0.0, 0.0, 0.0, 0.0);
+        for range in self.pose_ranges() {
+            let (walk, floor) = levels(self.pose[range.start], self.weight[range.start]);
+            let hold = Roughness::of_hold(&self.d[range.clone()], &self.t[range], walk, floor);
+            observed += hold.observed;
+            mean += hold.mean;
+            white_mean += hold.white_mean;
+            var += hold.var;
+        }
+        if var > 0.0 { ((observed - mean) / var.sqrt(), (mean - white_mean) / var.sqrt()) } else { (0.0, 0.0) }
+    }
+
     /// The mean square of the whitened deviations beyond white noise, and its standard deviation
     /// under white noise (over the deviations' degrees of freedom).
     pub(crate) fn observed_excess(&self) -> (f64, f64) {
@@ -251,10 +289,15 @@ impl Within {
 
     /// Each pose's deviations and segment times.
     fn by_pose(&self) -> impl Iterator<Item = (&[f64], &[f64])> {
+        self.pose_ranges().map(|r| (&self.d[r.clone()], &self.t[r]))
+    }
+
+    /// Each pose's rows of the channel.
+    fn pose_ranges(&self) -> impl Iterator<Item = Range<usize>> + '_ {
         let mut i = 0;
         std::iter::from_fn(move || {
             let j = (i..self.d.len()).find(|&j| self.pose[j] != self.pose[i]).unwrap_or(self.d.len());
-            let out = (i < self.d.len()).then(|| (&self.d[i..j], &self.t[i..j]));
+            let out = (i < self.d.len()).then_some(i..j);
             i = j;
             out
         })
@@ -350,6 +393,46 @@ impl Within {
     }
 }
 
+/// One hold's roughness (what a line in time leaves of its whitened segment deviations) and its
+/// expectation under a noise.
+struct Roughness {
+    observed: f64,
+    mean: f64,
+    white_mean: f64,
+    var: f64,
+}
+
+impl Roughness {
+    /// The hold's deviations `d` at segment times `t`, under a walk of whitened variance `a` over the
+    /// hold and a floor of whitened variance `f`.
+    fn of_hold(d: &[f64], t: &[f64], a: f64, f: f64) -> Self {
+        let k = d.len();
+        let white = k as f64 / (k as f64 - 1.0);
+        let off_line = off_line_projection(t);
+        let cov = |i: usize, j: usize| a * brownian_cov(i, j) + if i == j { f + white } else { 0.0 };
+        // `P S`, its trace and the trace of its square.
+        let ps: Vec<Vec<f64>> =
+            (0..k).map(|i| (0..k).map(|j| (0..k).map(|l| off_line[i][l] * cov(l, j)).sum()).collect()).collect();
+        let pairs = (0..k).flat_map(|i| (0..k).map(move |j| (i, j)));
+        Roughness {
+            observed: (0..k).map(|i| (0..k).map(|j| off_line[i][j] * d[j]).sum::<f64>().powi(2)).sum(),
+            mean: (0..k).map(|i| ps[i][i]).sum(),
+            white_mean: white * (0..k).map(|i| off_line[i][i]).sum::<f64>(),
+            var: 2.0 * pairs.map(|(i, j)| ps[i][j] * ps[j][i]).sum::<f64>(),
+        }
+    }
+}
+
+/// The projection that takes a line in time (`t`, the segments' times) out of a hold's segment
+/// values: `I - 1/k - (t_i - tm)(t_j - tm) / stt`.
+fn off_line_projection(t: &[f64]) -> Vec<Vec<f64>> {
+    let k = t.len();
+    let tm = t.iter().sum::<f64>() / k as f64;
+    let stt: f64 = t.iter().map(|x| (x - tm).powi(2)).sum();
+    let slope = |i: usize, j: usize| if stt > 0.0 { (t[i] - tm) * (t[j] - tm) / stt } else { 0.0 };
+    (0..k).map(|i| (0..k).map(|j| f64::from(u8::from(i == j)) - 1.0 / k as f64 - slope(i, j)).collect()).collect()
+}
+
 /// The effect's contribution per parameter to the calibrated reading at a pose, a time and over
 /// some table rows.
 pub(crate) type Effect<'a> = dyn Fn(usize, f64, Range<usize>) -> Vec<V3> + 'a;
@@ -408,6 +491,41 @@ mod tests {
     fn median(v: &mut [f64]) -> f64 {
         v.sort_by(f64::total_cmp);
         v[v.len() / 2]
+    }
+
+    #[test]
+    fn holds_moving_along_lines_are_too_smooth_for_a_walk_as_large_and_a_walk_is_not() {
+        // 24 holds, whitened: a Brownian path with variance `level` over each hold, and lines whose
+        // slopes move the holds as much (a line's six segment deviations carry 0.139 of the
+        // squared slope over the hold as a Brownian path's do of its variance, for this share).
+        let level = 40.0;
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(21);
+        let mut draw = Xoshiro256PlusPlus::seed_from_u64(22);
+        let mut normal = move || <StandardNormal as Distribution<f64>>::sample(&StandardNormal, &mut draw);
+        let (mut walk_short, mut line_short) = (Vec::new(), Vec::new());
+        for _ in 0..20 {
+            let steps: Vec<Vec<f64>> = (0..24).map(|_| (0..2 * SEGMENTS).map(|_| normal()).collect()).collect();
+            let walk = channel(24, &mut rng, &mut |p, k| {
+                // A Brownian path's mean over a segment of variance `h`: the path at its start, half
+                // its step over the segment, and a bridge's mean (variance `h / 12`).
+                let h = level / SEGMENTS as f64;
+                let start = (0..k).map(|j| steps[p][j] * h.sqrt()).sum::<f64>();
+                start + 0.5 * steps[p][k] * h.sqrt() + steps[p][SEGMENTS + k] * (h / 12.0).sqrt()
+            });
+            let slopes: Vec<f64> = (0..24).map(|_| normal()).collect();
+            let lines = channel(24, &mut rng, &mut |p, k| {
+                (level * brownian_deviation_share()).sqrt() * slopes[p] * (k as f64 - 2.5) / 1.708
+            });
+            let under_walk = |w: &Within| w.roughness_under(&|_, _| (level, 0.0));
+            let (walk_z, power) = under_walk(&walk);
+            assert!(power >= 3.0, "the test sees a walk this large: power {power}");
+            walk_short.push(walk_z);
+            line_short.push(under_walk(&lines).0);
+        }
+        let walks_refuted = walk_short.iter().filter(|z| **z < -3.0).count();
+        let lines_refuted = line_short.iter().filter(|z| **z < -3.0).count();
+        assert_eq!(walks_refuted, 0, "walks: {walk_short:?}");
+        assert!(lines_refuted >= 18, "lines: {line_short:?}");
     }
 
     #[test]
