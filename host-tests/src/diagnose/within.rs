@@ -80,6 +80,14 @@ fn brownian_cov(i: usize, j: usize) -> f64 {
     (i.min(j) as f64 + if i == j { 1.0 / 3.0 } else { 0.5 }) / SEGMENTS as f64
 }
 
+/// A random walk's variance over pose `p`'s hold and a floor's variance, both along the pose's
+/// direction in the calibrated reading (`walk` variance per second and `floor` per axis, input unit).
+fn noise_along_hold(m: &Measured, p: usize, walk: V3, floor: V3) -> (f64, f64) {
+    let kt = m.model.kt_times(m.directions[p]);
+    let along = |v: V3| (0..3).map(|a| kt[a] * kt[a] * v[a]).sum::<f64>();
+    (along(walk) * m.poses[p].duration(), along(floor))
+}
+
 /// A Brownian path's segment means about their own mean over a hold of unit duration cut in
 /// [`SEGMENTS`]: the mean variance of a segment's deviation.
 fn brownian_deviation_share() -> f64 {
@@ -166,11 +174,8 @@ impl Within {
         let brownian = brownian_deviation_share();
         let total: f64 = (0..self.d.len())
             .map(|i| {
-                let p = self.pose[i];
-                let kt = m.model.kt_times(m.directions[p]);
-                let along = |v: V3| (0..3).map(|a| kt[a] * kt[a] * v[a]).sum::<f64>();
-                let hold = m.poses[p].duration();
-                (along(floor) * (s - 1.0) / s + along(walk) * hold * brownian) * self.weight[i] * self.weight[i]
+                let (walk, floor) = noise_along_hold(m, self.pose[i], walk, floor);
+                (floor * (s - 1.0) / s + walk * brownian) * self.weight[i] * self.weight[i]
             })
             .sum();
         total / self.d.len() as f64
@@ -188,9 +193,8 @@ impl Within {
     /// movement to the roughness, a floor 80 %.
     pub(crate) fn roughness_shortfall(&self, m: &Measured, walk: V3, floor: V3) -> (f64, f64) {
         self.roughness_under(&|p, w| {
-            let kt = m.model.kt_times(m.directions[p]);
-            let along = |v: V3| (0..3).map(|a| kt[a] * kt[a] * v[a]).sum::<f64>() * w * w;
-            (along(walk) * m.poses[p].duration(), along(floor))
+            let (walk, floor) = noise_along_hold(m, p, walk, floor);
+            (walk * w * w, floor * w * w)
         })
     }
 
@@ -308,13 +312,8 @@ impl Within {
     fn line_fit(&self) -> (f64, f64, usize) {
         let (mut before, mut after, mut poses) = (0.0, 0.0, 0);
         for (d, t) in self.by_pose() {
-            let tm = t.iter().sum::<f64>() / t.len() as f64;
-            let dm = d.iter().sum::<f64>() / d.len() as f64;
-            let stt: f64 = t.iter().map(|x| (x - tm).powi(2)).sum();
-            let sdt: f64 = t.iter().zip(d).map(|(x, y)| (x - tm) * (y - dm)).sum();
-            let slope = if stt > 0.0 { sdt / stt } else { 0.0 };
             before += d.iter().map(|y| y * y).sum::<f64>();
-            after += t.iter().zip(d).map(|(x, y)| (y - dm - slope * (x - tm)).powi(2)).sum::<f64>();
+            after += off_line_sum_sq(&off_line_projection(t), d);
             poses += 1;
         }
         (before, after, poses)
@@ -415,7 +414,7 @@ impl Roughness {
             (0..k).map(|i| (0..k).map(|j| (0..k).map(|l| off_line[i][l] * cov(l, j)).sum()).collect()).collect();
         let pairs = (0..k).flat_map(|i| (0..k).map(move |j| (i, j)));
         Roughness {
-            observed: (0..k).map(|i| (0..k).map(|j| off_line[i][j] * d[j]).sum::<f64>().powi(2)).sum(),
+            observed: off_line_sum_sq(&off_line, d),
             mean: (0..k).map(|i| ps[i][i]).sum(),
             white_mean: white * (0..k).map(|i| off_line[i][i]).sum::<f64>(),
             var: 2.0 * pairs.map(|(i, j)| ps[i][j] * ps[j][i]).sum::<f64>(),
@@ -431,6 +430,11 @@ fn off_line_projection(t: &[f64]) -> Vec<Vec<f64>> {
     let stt: f64 = t.iter().map(|x| (x - tm).powi(2)).sum();
     let slope = |i: usize, j: usize| if stt > 0.0 { (t[i] - tm) * (t[j] - tm) / stt } else { 0.0 };
     (0..k).map(|i| (0..k).map(|j| f64::from(u8::from(i == j)) - 1.0 / k as f64 - slope(i, j)).collect()).collect()
+}
+
+/// The sum of squares of what the projection `off_line` leaves of `d`.
+fn off_line_sum_sq(off_line: &[Vec<f64>], d: &[f64]) -> f64 {
+    off_line.iter().map(|row| row.iter().zip(d).map(|(p, v)| p * v).sum::<f64>().powi(2)).sum()
 }
 
 /// The effect's contribution per parameter to the calibrated reading at a pose, a time and over
