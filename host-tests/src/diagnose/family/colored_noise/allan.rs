@@ -76,15 +76,31 @@ fn hold_excesses(
 
 /// A Gauss-Markov noise ([`fit_markov`]) measured on the whole holds (`holds`: a hold the pose
 /// finder cut at a bias jump is whole here), on the axes where most holds move beyond white noise
-/// (the median hold's excess at its longest `tau` above [`WALK_EXCESS`]): a noise moves most holds,
-/// one disturbed hold (a bias step within it) is none. Returns `(variances, correlation time)`.
+/// (the median hold's excess at its longest `tau` above [`WALK_EXCESS`]), or where a telegraph
+/// noise would ([`telegraph_moves`]): a noise moves many holds, one disturbed hold (a bias step
+/// within it) is none. Returns `(variances, correlation time)`.
 pub(super) fn pooled_markov(table: &Table, holds: &[Range<usize>], rate: f64, white: V3) -> (V3, f64) {
     let excesses: [Vec<(f64, f64, f64)>; 3] = std::array::from_fn(|a| {
         let (points, lasts) = hold_excesses(table, holds, rate, white[a], a);
-        let moves = lasts.len() >= 3 && median(&lasts) > WALK_EXCESS;
+        let moves = lasts.len() >= 3 && (median(&lasts) > WALK_EXCESS || telegraph_moves(&lasts));
         if moves { white_weighted(&points, white[a], rate) } else { Vec::new() }
     });
     fit_markov(&excesses)
+}
+
+/// Fewest holds, as a share of all, that a telegraph noise moves beyond white noise.
+const TELEGRAPH_SHARE: f64 = 0.25;
+
+/// Fewest holds a telegraph noise moves beyond white noise: one or two are a bias step, a bad pose.
+const TELEGRAPH_HOLDS: usize = 3;
+
+/// A telegraph (popcorn) noise moves the holds it jumps in, and only those: with a dwell time of
+/// several holds most holds stand still (the median hold's excess is white), but at least
+/// [`TELEGRAPH_HOLDS`] and [`TELEGRAPH_SHARE`] of the holds move beyond white noise (excess at their
+/// longest `tau` above [`WALK_EXCESS`]).
+fn telegraph_moves(lasts: &[f64]) -> bool {
+    let moving = lasts.iter().filter(|&&l| l > WALK_EXCESS).count();
+    moving >= TELEGRAPH_HOLDS && moving as f64 >= TELEGRAPH_SHARE * lasts.len() as f64
 }
 
 /// The Allan points (`tau`, excess, weight) re-weighted by the clusters over the white noise's
