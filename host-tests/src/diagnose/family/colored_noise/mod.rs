@@ -2,7 +2,8 @@
 //! rest and pooled over every hold, or a Gauss-Markov noise (a telegraph or popcorn noise whose
 //! jumps come every few seconds) measured on the whole holds (time segments, not the pose means it
 //! is judged on) and given to the simulator; judged by how well the noise model predicts the
-//! nominal model's held-out scatter.
+//! nominal model's held-out scatter. Holds that move with one sinusoid in phase over the whole log
+//! (`coherent.rs`) carry a periodic bias, not a noise.
 
 mod allan;
 mod coherent;
