@@ -21,6 +21,13 @@ const HIGHEST_HZ: f64 = 1.0;
 /// Frequencies scanned per independent one (`1 / span`).
 const OVERSAMPLING: f64 = 4.0;
 
+/// Most block means: longer logs average longer blocks (and scan up to a quarter of the block
+/// rate), so that the scan's work stays bounded.
+const MAX_BLOCKS: usize = 10_000;
+
+/// Most frequencies scanned: beyond it the grid is coarser than [`OVERSAMPLING`] (a log of hours).
+const MAX_FREQUENCIES: f64 = 1000.0;
+
 /// The holds' block means about each hold's mean, per axis in white-noise standard deviations of a
 /// block mean, with their times (s) and holds.
 struct Blocks {
@@ -28,13 +35,16 @@ struct Blocks {
     y: Vec<V3>,
     hold: Vec<usize>,
     holds: usize,
+    /// A block's duration, s.
+    block_s: f64,
 }
 
 impl Blocks {
     fn new(table: &Table, holds: &[Range<usize>], rate: f64, white: V3) -> Self {
-        let n = ((rate * BLOCK_S).round() as usize).max(1);
+        let rows: usize = holds.iter().map(Range::len).sum();
+        let n = ((rate * BLOCK_S).round() as usize).max(rows.div_ceil(MAX_BLOCKS)).max(1);
         let sd: V3 = std::array::from_fn(|a| (white[a] / n as f64).sqrt());
-        let mut out = Self { t: Vec::new(), y: Vec::new(), hold: Vec::new(), holds: 0 };
+        let mut out = Self { t: Vec::new(), y: Vec::new(), hold: Vec::new(), holds: 0, block_s: n as f64 / rate };
         for rows in holds {
             let (first, count) = (out.y.len(), rows.len() / n);
             if count < 4 {
@@ -101,7 +111,7 @@ pub(super) struct Line {
 const LINE_OVER_NEIGHBOURS: f64 = 20.0;
 
 /// The strongest line of the holds' periodogram, from [`LOWEST_CYCLES`] over their span to
-/// [`HIGHEST_HZ`], if it stands [`LINE_OVER_NEIGHBOURS`] times over the median of the frequencies
+/// [`HIGHEST_HZ`] (at most [`MAX_FREQUENCIES`] of them), if it stands [`LINE_OVER_NEIGHBOURS`] times over the median of the frequencies
 /// within a factor of two of it (more than two independent frequencies away): a sinusoid in phase
 /// over the whole log.
 pub(super) fn periodic_bias(table: &Table, holds: &[Range<usize>], rate: f64, white: V3) -> Option<Line> {
@@ -110,11 +120,11 @@ pub(super) fn periodic_bias(table: &Table, holds: &[Range<usize>], rate: f64, wh
     if blocks.holds < 3 || !(span > 0.0) {
         return None;
     }
-    let step = 1.0 / (OVERSAMPLING * span);
-    let lowest = LOWEST_CYCLES / span;
+    let (lowest, highest) = (LOWEST_CYCLES / span, HIGHEST_HZ.min(0.25 / blocks.block_s));
+    let step = (1.0 / (OVERSAMPLING * span)).max((highest - lowest) / MAX_FREQUENCIES);
     let scan: Vec<(f64, f64)> = (0..)
         .map(|k| lowest + k as f64 * step)
-        .take_while(|f| *f <= HIGHEST_HZ)
+        .take_while(|f| *f <= highest)
         .map(|f| (f, blocks.line_chi2(f)))
         .collect();
     let &(f_hz, peak) = scan.iter().max_by(|a, b| a.1.total_cmp(&b.1))?;
