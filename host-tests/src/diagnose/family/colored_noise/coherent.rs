@@ -41,8 +41,8 @@ struct Blocks {
 
 impl Blocks {
     fn new(table: &Table, holds: &[Range<usize>], rate: f64, white: V3) -> Self {
-        let rows: usize = holds.iter().map(Range::len).sum();
-        let n = ((rate * BLOCK_S).round() as usize).max(rows.div_ceil(MAX_BLOCKS)).max(1);
+        let total_rows: usize = holds.iter().map(Range::len).sum();
+        let n = ((rate * BLOCK_S).round() as usize).max(total_rows.div_ceil(MAX_BLOCKS)).max(1);
         let sd: V3 = std::array::from_fn(|a| (white[a] / n as f64).sqrt());
         let mut out = Self { t: Vec::new(), y: Vec::new(), hold: Vec::new(), holds: 0, block_s: n as f64 / rate };
         for rows in holds {
