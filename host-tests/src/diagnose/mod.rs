@@ -232,7 +232,8 @@ pub fn diagnose(table: &Table, opts: &DiagnoseOptions) -> Result<Diagnosis, Diag
         not_calibrated: None,
     };
     if d.verdict == "unexplained" {
-        d.located = Some(decision.probe_where.unwrap_or_else(|| locate::unexplained_location(&d)));
+        let periodic = || ctx.as_ref().and_then(family::periodic::location);
+        d.located = Some(decision.probe_where.or_else(periodic).unwrap_or_else(|| locate::unexplained_location(&d)));
         if ctx.is_none() {
             let place = d.located.take().unwrap_or_default();
             d.located = Some(format!("{place}; too few poses to test the catalogue on withheld poses"));

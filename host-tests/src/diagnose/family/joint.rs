@@ -71,6 +71,13 @@ pub(crate) fn best(ctx: &Context<'_>, w: &Within, variants: &[WithinVariant]) ->
     Some(JointFit { ratio, gain_without_worst, after, params: v.params, detail: v.detail.clone() })
 }
 
+impl JointFit {
+    /// The penalised held-out ratio of the withheld pose means.
+    pub(crate) fn ratio(&self) -> f64 {
+        self.ratio
+    }
+}
+
 /// Puts the stacked fit in the candidate's pose-level line when it predicts the withheld pose
 /// means better than the pose means alone.
 pub(crate) fn add(ctx: &Context<'_>, e: &mut Evaluation, fit: JointFit) {

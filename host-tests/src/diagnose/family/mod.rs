@@ -8,6 +8,7 @@ mod drift;
 mod joint;
 mod motion;
 mod nonlinearity;
+pub(crate) mod periodic;
 mod ringing;
 mod settling;
 mod smooth;
@@ -246,6 +247,10 @@ pub(crate) struct Context<'a> {
     pub(crate) holds_walk: OnceCell<Option<(V3, Option<f64>)>>,
     /// Motion in the tremor band, once measured ([`Context::tremor`]).
     tremor: OnceCell<Option<tremor::Tremor>>,
+    /// The best sinusoid over the log, once fitted ([`Context::periodic`]).
+    periodic: OnceCell<Option<periodic::PeriodicFit>>,
+    /// The holds' periodogram's line, once scanned ([`Context::periodic_line`]).
+    periodic_line: OnceCell<Option<colored_noise::coherent::Line>>,
 }
 
 /// `1 - ln(ratio) / |ln(nominal)|`, a ratio below 1 counting `overshoot_weight` times.
@@ -331,6 +336,8 @@ impl<'a> Context<'a> {
             pose_level,
             holds_walk: OnceCell::new(),
             tremor: OnceCell::new(),
+            periodic: OnceCell::new(),
+            periodic_line: OnceCell::new(),
         })
     }
 
@@ -338,6 +345,20 @@ impl<'a> Context<'a> {
     /// ([`tremor::in_holds`]; asked by the motion and colored-noise families and the holds' answer).
     pub(crate) fn tremor(&self) -> Option<tremor::Tremor> {
         *self.tremor.get_or_init(|| tremor::in_holds(self.table, self.poses, self.m.rate))
+    }
+
+    /// The sinusoid over the log that predicts the withheld poses best ([`periodic::best`]; asked by
+    /// the drift family and the holds' answer).
+    pub(crate) fn periodic(&self) -> Option<periodic::PeriodicFit> {
+        *self.periodic.get_or_init(|| periodic::best(self))
+    }
+
+    /// A sinusoid in phase over the whole log in the holds ([`colored_noise::coherent::periodic_bias`];
+    /// asked by the noise model and the holds' answer).
+    pub(crate) fn periodic_line(&self) -> Option<colored_noise::coherent::Line> {
+        *self.periodic_line.get_or_init(|| {
+            colored_noise::coherent::periodic_bias(self.table, &self.hold_rows(), self.m.rate, self.m.white)
+        })
     }
 
     pub(crate) fn directions(&self) -> &[V3] {

@@ -98,9 +98,10 @@ impl Blocks {
 
 /// A line in the holds' periodogram: its frequency and its height over the median of the
 /// periodogram beside it.
-pub(super) struct Line {
-    pub(super) f_hz: f64,
-    pub(super) over_neighbours: f64,
+#[derive(Clone, Copy)]
+pub(crate) struct Line {
+    pub(crate) f_hz: f64,
+    pub(crate) over_neighbours: f64,
 }
 
 /// Height over its neighbours ([`Line::over_neighbours`]) from which the strongest line is a periodic
@@ -114,7 +115,7 @@ const LINE_OVER_NEIGHBOURS: f64 = 20.0;
 /// [`HIGHEST_HZ`] (at most [`MAX_FREQUENCIES`] of them), if it stands [`LINE_OVER_NEIGHBOURS`] times over the median of the frequencies
 /// within a factor of two of it (more than two independent frequencies away): a sinusoid in phase
 /// over the whole log.
-pub(super) fn periodic_bias(table: &Table, holds: &[Range<usize>], rate: f64, white: V3) -> Option<Line> {
+pub(crate) fn periodic_bias(table: &Table, holds: &[Range<usize>], rate: f64, white: V3) -> Option<Line> {
     let blocks = Blocks::new(table, holds, rate, white);
     let span = blocks.t.last()? - blocks.t.first()?;
     if blocks.holds < 3 || !(span > 0.0) {

@@ -6,13 +6,13 @@
 //! (`coherent.rs`) carry a periodic bias, not a noise.
 
 mod allan;
-mod coherent;
+pub(crate) mod coherent;
 
 use std::ops::Range;
 
 use allan::{colored_noise_estimate, pooled_estimate, pooled_markov};
 
-use super::{Candidate, Context, Evaluation, Family, Variant};
+use super::{Candidate, Context, Evaluation, Family, Variant, periodic};
 use crate::diagnose::gap::Measured;
 use crate::diagnose::gap::{Noise, expected_cv_ms, quantisation_step, residual_noise_draws, simulate_gap};
 use crate::diagnose::math::cv_residuals;
@@ -30,7 +30,10 @@ const EVEN_HOLDS: f64 = 0.25;
 /// spread, and no more than a random walk at the holds' level spreads them
 /// ([`walk_accounts_for_poses`]). The description, or `None`.
 pub(crate) fn wandering_holds(ctx: &Context<'_>) -> Option<String> {
-    let within = ctx.within.as_ref().filter(|_| wander_alike(ctx) && periodic_line(ctx).is_none())?;
+    let within = ctx
+        .within
+        .as_ref()
+        .filter(|_| wander_alike(ctx) && periodic_line(ctx).is_none() && !periodic::predicts_poses(ctx))?;
     let evenness = within.evenness();
     walk_accounts_for_poses(ctx).then(|| {
         format!(
@@ -42,9 +45,10 @@ pub(crate) fn wandering_holds(ctx: &Context<'_>) -> Option<String> {
 }
 
 /// A sinusoid in phase over the whole log in the holds ([`coherent::periodic_bias`]): a periodic
-/// bias (an aliased vibration), not a noise, whose phase wanders from hold to hold.
+/// bias (an aliased vibration), not a noise, whose phase wanders from hold to hold. Once per log
+/// ([`Context::periodic_line`]).
 fn periodic_line(ctx: &Context<'_>) -> Option<coherent::Line> {
-    coherent::periodic_bias(ctx.table, &ctx.hold_rows(), ctx.m.rate, ctx.m.white)
+    ctx.periodic_line()
 }
 
 /// The holds' movement is significant and every hold moves about alike (a noise, not a few
