@@ -2,9 +2,9 @@
 //! log, `s sin(2 pi t / P) + c cos(2 pi t / P)` (6 amplitudes), fitted to the pose means and each
 //! hold's course together (`joint.rs`). An aliased vibration (a motor near a multiple of the
 //! sample rate) or a pickup beats at a slow frequency; a drift has no period. Searched from 1.5
-//! cycles over the log (slower is a warm-up or a tilt to any smooth shape) to half the pose count
-//! (faster, the pose means alias it; the holds' periodogram, `colored_noise/coherent.rs`, sees
-//! those within the holds).
+//! cycles over the log (slower is a warm-up or a tilt to any smooth shape) to a quarter of the pose
+//! count ([`POSES_PER_CYCLE`]; faster, the holds' periodogram, `colored_noise/coherent.rs`, sees it
+//! within the holds).
 
 use super::Context;
 use crate::diagnose::MIN_GAIN;
@@ -12,6 +12,12 @@ use crate::diagnose::math::axis;
 
 /// Fewest cycles over the log searched.
 const LOWEST_CYCLES: f64 = 1.5;
+
+/// Fewest poses per cycle of the fastest sinusoid searched. Nearer twice the pose spacing the pose
+/// means sample a cycle at two or three points: a sinusoid alternates from pose to pose, which any
+/// noise imitates (a Gauss-Markov noise of 3.4 s on 12 poses over 81 s was fitted at 6 cycles,
+/// two poses per cycle, with a held-out gain of 0.83: a held-out set of stop 40).
+const POSES_PER_CYCLE: f64 = 4.0;
 
 /// Cycles over the log between two periods tried (a quarter of an independent period).
 const CYCLE_STEP: f64 = 0.25;
@@ -31,7 +37,7 @@ pub(crate) struct PeriodicFit {
 pub(crate) fn best(ctx: &Context<'_>) -> Option<PeriodicFit> {
     let w = ctx.within.as_ref()?;
     let t_end = ctx.poses.last()?.t_end.max(1e-9);
-    let highest = 0.5 * ctx.poses.len() as f64;
+    let highest = ctx.poses.len() as f64 / POSES_PER_CYCLE;
     let params = 6 + ((highest - LOWEST_CYCLES).max(1.0).ln().ceil() as usize).max(1);
     let mut best: Option<PeriodicFit> = None;
     let mut cycles = LOWEST_CYCLES;
