@@ -39,7 +39,7 @@ fn stacked(ctx: &Context<'_>, w: &Within, v: &WithinVariant) -> (Vec<Vec<f64>>, 
 
 /// Penalised held-out ratio of the withheld pose means (1 for white noise and the nominal model),
 /// and the held-out gain without the pose the nominal model predicts worst.
-fn heldout_ratio(ctx: &Context<'_>, w: &Within, v: &WithinVariant) -> Option<(f64, f64)> {
+pub(crate) fn heldout_ratio(ctx: &Context<'_>, w: &Within, v: &WithinVariant) -> Option<(f64, f64)> {
     let (rows, r, fold) = stacked(ctx, w, v);
     let cv = cv_residuals(&rows, &r, &fold, ctx.folds, &vec![false; r.len()])?;
     let n = ctx.poses.len();
@@ -69,13 +69,6 @@ pub(crate) fn best(ctx: &Context<'_>, w: &Within, variants: &[WithinVariant]) ->
     let scale = ctx.e_white.sqrt();
     let after = fitted[..ctx.poses.len()].iter().map(|x| x.map(|x| x * scale)).collect();
     Some(JointFit { ratio, gain_without_worst, after, params: v.params, detail: v.detail.clone() })
-}
-
-impl JointFit {
-    /// The penalised held-out ratio of the withheld pose means.
-    pub(crate) fn ratio(&self) -> f64 {
-        self.ratio
-    }
 }
 
 /// Puts the stacked fit in the candidate's pose-level line when it predicts the withheld pose

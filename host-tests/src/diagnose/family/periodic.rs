@@ -35,7 +35,7 @@ pub(crate) struct PeriodicFit {
 /// within-pose channel or the pose level. The search is charged as the periodic probe's
 /// (`probe.rs`): `ln` of the independent periods searched, beyond the 6 amplitudes.
 pub(crate) fn best(ctx: &Context<'_>) -> Option<PeriodicFit> {
-    let w = ctx.within.as_ref()?;
+    let w = ctx.within.as_ref().filter(|_| ctx.pose_level && ctx.e_white > 0.0)?;
     let t_end = ctx.poses.last()?.t_end.max(1e-9);
     let highest = ctx.poses.len() as f64 / POSES_PER_CYCLE;
     let params = 6 + ((highest - LOWEST_CYCLES).max(1.0).ln().ceil() as usize).max(1);
@@ -48,7 +48,7 @@ pub(crate) fn best(ctx: &Context<'_>) -> Option<PeriodicFit> {
             (0..3).map(|a| axis(a, s)).chain((0..3).map(|a| axis(a, c))).collect()
         });
         v.params = params;
-        let ratio = super::joint::best(ctx, w, std::slice::from_ref(&v)).map(|fit| fit.ratio());
+        let ratio = super::joint::heldout_ratio(ctx, w, &v).map(|(ratio, _)| ratio);
         if let Some(ratio) = ratio.filter(|r| best.as_ref().is_none_or(|b| *r < b.ratio)) {
             best = Some(PeriodicFit { ratio, period_s: t_end / cycles, cycles });
         }

@@ -7,7 +7,7 @@ use std::ops::Range;
 
 use crate::csvio::Table;
 use crate::diagnose::gap::row_time;
-use crate::diagnose::math::{V3, median};
+use crate::diagnose::math::{V3, mean_of, median};
 
 /// Length of a block mean, s.
 const BLOCK_S: f64 = 0.1;
@@ -46,19 +46,17 @@ impl Blocks {
         let sd: V3 = std::array::from_fn(|a| (white[a] / n as f64).sqrt());
         let mut out = Self { t: Vec::new(), y: Vec::new(), hold: Vec::new(), holds: 0, block_s: n as f64 / rate };
         for rows in holds {
-            let (first, count) = (out.y.len(), rows.len() / n);
-            if count < 4 {
+            let first = out.y.len();
+            let blocks = table.samples[rows.clone()].chunks_exact(n);
+            if blocks.len() < 4 {
                 continue;
             }
-            for k in 0..count {
-                let r = rows.start + k * n..rows.start + (k + 1) * n;
-                let mean: V3 =
-                    std::array::from_fn(|a| table.samples[r.clone()].iter().map(|s| s[a]).sum::<f64>() / n as f64);
-                out.t.push(row_time(table, r.start + n / 2, rate));
-                out.y.push(mean);
+            for (k, block) in blocks.enumerate() {
+                out.t.push(row_time(table, rows.start + k * n + n / 2, rate));
+                out.y.push(mean_of(block));
                 out.hold.push(out.holds);
             }
-            let centre: V3 = std::array::from_fn(|a| out.y[first..].iter().map(|v| v[a]).sum::<f64>() / count as f64);
+            let centre = mean_of(&out.y[first..]);
             for v in &mut out.y[first..] {
                 *v = std::array::from_fn(|a| if sd[a] > 0.0 { (v[a] - centre[a]) / sd[a] } else { 0.0 });
             }
@@ -112,9 +110,9 @@ pub(crate) struct Line {
 const LINE_OVER_NEIGHBOURS: f64 = 20.0;
 
 /// The strongest line of the holds' periodogram, from [`LOWEST_CYCLES`] over their span to
-/// [`HIGHEST_HZ`] (at most [`MAX_FREQUENCIES`] of them), if it stands [`LINE_OVER_NEIGHBOURS`] times over the median of the frequencies
-/// within a factor of two of it (more than two independent frequencies away): a sinusoid in phase
-/// over the whole log.
+/// [`HIGHEST_HZ`] (at most [`MAX_FREQUENCIES`] of them), if it stands [`LINE_OVER_NEIGHBOURS`] times
+/// over the median of the frequencies within a factor of two of it (more than two independent
+/// frequencies away): a sinusoid in phase over the whole log.
 pub(crate) fn periodic_bias(table: &Table, holds: &[Range<usize>], rate: f64, white: V3) -> Option<Line> {
     let blocks = Blocks::new(table, holds, rate, white);
     let span = blocks.t.last()? - blocks.t.first()?;

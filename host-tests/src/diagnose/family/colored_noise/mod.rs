@@ -33,7 +33,7 @@ pub(crate) fn wandering_holds(ctx: &Context<'_>) -> Option<String> {
     let within = ctx
         .within
         .as_ref()
-        .filter(|_| wander_alike(ctx) && periodic_line(ctx).is_none() && !periodic::predicts_poses(ctx))?;
+        .filter(|_| wander_alike(ctx) && ctx.periodic_line().is_none() && !periodic::predicts_poses(ctx))?;
     let evenness = within.evenness();
     walk_accounts_for_poses(ctx).then(|| {
         format!(
@@ -42,13 +42,6 @@ pub(crate) fn wandering_holds(ctx: &Context<'_>) -> Option<String> {
             100.0 * within.line_share().clamp(0.0, 1.0)
         )
     })
-}
-
-/// A sinusoid in phase over the whole log in the holds ([`coherent::periodic_bias`]): a periodic
-/// bias (an aliased vibration), not a noise, whose phase wanders from hold to hold. Once per log
-/// ([`Context::periodic_line`]).
-fn periodic_line(ctx: &Context<'_>) -> Option<coherent::Line> {
-    ctx.periodic_line()
 }
 
 /// The holds' movement is significant and every hold moves about alike (a noise, not a few
@@ -296,7 +289,7 @@ impl Family for ColoredNoise {
             e.candidate.detail = "the holds move at 2-20 Hz: motion, not sensor noise".into();
             return e;
         }
-        if let Some(line) = periodic_line(ctx) {
+        if let Some(line) = ctx.periodic_line() {
             let mut e = ctx.not_testable(self.name());
             e.candidate.detail = format!(
                 "the holds move with a sinusoid of period {:.1} s in phase over the whole log ({:.0} times the \
