@@ -52,6 +52,9 @@ fn wander_alike(ctx: &Context<'_>) -> bool {
 
 pub(crate) struct ColoredNoise;
 
+/// Correlation times, s, after which a walk measured in the holds may level off ([`Colored::saturating`]).
+const SATURATION_TAUS_S: [f64; 6] = [8.0, 16.0, 32.0, 64.0, 128.0, 256.0];
+
 /// A bias noise beyond white, per axis (input unit): a random walk (variance per second), a
 /// bias-instability floor (variance of every pose mean) and a Gauss-Markov noise (variance, and
 /// correlation time common to the axes): a telegraph or Gauss-Markov noise whose correlation time
@@ -86,6 +89,29 @@ impl Colored {
             line += &format!(", Gauss-Markov {} mg, correlation time {} s", three(self.markov), self.markov_tau_s);
         }
         line
+    }
+
+    /// A walk alone, measured over every hold, as Gauss-Markov noises rising as it does within the
+    /// holds (variance `K^2 tau_c / 2`) and levelling off after a correlation time `tau_c` of
+    /// [`SATURATION_TAUS_S`] shorter than the log, each with the parameters it is charged (one, and
+    /// the search's `ln` of the times tried): the holds measure a noise's rise, the pose means where
+    /// it stops (a flicker or Gauss-Markov noise does; a walk at the holds' level then spreads them
+    /// far more than they are). None from holds that settle: they rise with their transients.
+    fn saturating(&self, ctx: &Context<'_>) -> Vec<(Colored, f64)> {
+        let t_end = ctx.poses.last().map_or(0.0, |p| p.t_end);
+        let walk_alone = self.walk.iter().any(|v| *v > 0.0) && !self.floor.iter().chain(&self.markov).any(|v| *v > 0.0);
+        let walk_alone = walk_alone && super::settling::settling_holds(ctx).is_none();
+        let params = 1.0 + (SATURATION_TAUS_S.len() as f64).ln().ceil();
+        SATURATION_TAUS_S
+            .iter()
+            .filter(|&&tau| walk_alone && tau < t_end)
+            .map(|&tau| {
+                (
+                    Colored { markov: self.walk.map(|k2| k2 * tau / 2.0), markov_tau_s: tau, ..Colored::default() },
+                    params,
+                )
+            })
+            .collect()
     }
 
     fn any(&self) -> bool {
@@ -196,6 +222,11 @@ impl ColoredNoise {
     /// put far more of their scatter in one pose than the model ever does (one bad pose, not noise:
     /// no draw of the model concentrates it so).
     fn heldout_ratio(&self, ctx: &Context<'_>, c: &Colored) -> Option<f64> {
+        self.heldout_ratio_charged(ctx, c, 1.0)
+    }
+
+    /// [`Self::heldout_ratio`] charged `params` parameters.
+    fn heldout_ratio_charged(&self, ctx: &Context<'_>, c: &Colored, params: f64) -> Option<f64> {
         let m = ctx.m;
         let noise = c.noise(m);
         let draws = residual_noise_draws(&m.model, &m.directions, &m.poses, &noise, CV_NOISE_DRAWS, ctx.opts.seed);
@@ -209,18 +240,20 @@ impl ColoredNoise {
             return None;
         }
         let e_col = expected_cv_ms(&ctx.base_rows, &draws, &ctx.fold, ctx.folds, &ctx.none_dropped);
-        let ms =
-            (crate::diagnose::math::sum_sq(&ctx.nominal_cv).0 + PARAMETER_PENALTY * ctx.e_white) / m.poses.len() as f64;
+        let ms = (crate::diagnose::math::sum_sq(&ctx.nominal_cv).0 + params * PARAMETER_PENALTY * ctx.e_white)
+            / m.poses.len() as f64;
         Some((ms / e_col).sqrt())
     }
 
     /// The noise model the withheld poses' scatter agrees with best, among each estimate's random
     /// walk and floor together and each component alone (their levels come from the holds, not
-    /// from the pose means): `(ratio, model)`.
+    /// from the pose means), and a walk pooled over the holds levelling off
+    /// ([`Colored::saturating`]): `(ratio, model)`.
     ///
     /// An estimate pooled over the holds is checked against the holds' own movement
     /// ([`holds_refute`]); the longest rest's reaches time scales longer than a hold, where a slow
-    /// Gauss-Markov noise has not yet reached its floor.
+    /// Gauss-Markov noise has not yet reached its floor (and one rest may hold a step a walk's
+    /// level would be read from).
     fn best_noise(&self, ctx: &Context<'_>, estimates: &[Estimate]) -> Option<(f64, Colored)> {
         let mut best: Option<(f64, Colored)> = None;
         for (estimate, pooled) in estimates {
@@ -228,9 +261,12 @@ impl ColoredNoise {
                 if !(ctx.pose_level && c.any()) || (*pooled && (holds_refute(ctx, &c) || too_smooth(ctx, &c))) {
                     continue;
                 }
-                let Some(ratio) = self.heldout_ratio(ctx, &c) else { continue };
-                if best.is_none_or(|(b, _)| ctx.noise_gain(ratio) > ctx.noise_gain(b)) {
-                    best = Some((ratio, c));
+                let saturating = if *pooled { c.saturating(ctx) } else { Vec::new() };
+                for (c, params) in std::iter::once((c, 1.0)).chain(saturating) {
+                    let Some(ratio) = self.heldout_ratio_charged(ctx, &c, params) else { continue };
+                    if best.is_none_or(|(b, _)| ctx.noise_gain(ratio) > ctx.noise_gain(b)) {
+                        best = Some((ratio, c));
+                    }
                 }
             }
         }
@@ -486,6 +522,22 @@ mod tests {
             let table = markov_log(seed, 2.0, tau_s);
             let d = diagnose(&table, &opts).unwrap();
             assert_eq!(d.verdict, "colored-noise", "seed {seed}: {}", d.to_text());
+        }
+    }
+
+    #[test]
+    fn a_bias_noise_correlated_for_tens_of_seconds_levels_off_as_the_holds_rise_implies() {
+        // Correlated for 20-40 s, several holds: the holds see its rise as a random walk's, and the
+        // pose means its level. A walk or a floor at the holds' level predicted the withheld scatter
+        // to 0.77, 1.70 and 0.73 on these seeds (ratio: observed over predicted); the walk levelling
+        // off after a correlation time chosen on the withheld poses predicts it.
+        let opts = DiagnoseOptions::DEFAULT;
+        for (seed, sigma_mg, tau_s) in [(4, 0.5, 20.0), (1, 0.5, 40.0), (5, 1.0, 40.0)] {
+            let d = diagnose(&markov_log(seed, sigma_mg, tau_s), &opts).unwrap();
+            assert_eq!(d.verdict, "colored-noise", "seed {seed}: {}", d.to_text());
+            let noise = d.candidates.iter().find(|c| c.effect == "colored-noise").unwrap();
+            assert!((0.85..=1.15).contains(&noise.heldout_ratio), "seed {seed}: {}", d.to_text());
+            assert!(noise.detail.contains("Gauss-Markov"), "seed {seed}: {}", noise.detail);
         }
     }
 
