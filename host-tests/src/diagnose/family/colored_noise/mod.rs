@@ -96,11 +96,10 @@ impl Colored {
     /// [`SATURATION_TAUS_S`] shorter than the log, each with the parameters it is charged (one, and
     /// the search's `ln` of the times tried): the holds measure a noise's rise, the pose means where
     /// it stops (a flicker or Gauss-Markov noise does; a walk at the holds' level then spreads them
-    /// far more than they are). None from holds that settle: they rise with their transients.
+    /// far more than they are).
     fn saturating(&self, ctx: &Context<'_>) -> Vec<(Colored, f64)> {
         let t_end = ctx.poses.last().map_or(0.0, |p| p.t_end);
         let walk_alone = self.walk.iter().any(|v| *v > 0.0) && !self.floor.iter().chain(&self.markov).any(|v| *v > 0.0);
-        let walk_alone = walk_alone && super::settling::settling_holds(ctx).is_none();
         let params = 1.0 + (SATURATION_TAUS_S.len() as f64).ln().ceil();
         SATURATION_TAUS_S
             .iter()
@@ -248,7 +247,8 @@ impl ColoredNoise {
     /// The noise model the withheld poses' scatter agrees with best, among each estimate's random
     /// walk and floor together and each component alone (their levels come from the holds, not
     /// from the pose means), and a walk pooled over the holds levelling off
-    /// ([`Colored::saturating`]): `(ratio, model)`.
+    /// ([`Colored::saturating`]; not when the holds settle: they rise with their transients):
+    /// `(ratio, model)`.
     ///
     /// An estimate pooled over the holds is checked against the holds' own movement
     /// ([`holds_refute`]); the longest rest's reaches time scales longer than a hold, where a slow
@@ -256,12 +256,13 @@ impl ColoredNoise {
     /// level would be read from).
     fn best_noise(&self, ctx: &Context<'_>, estimates: &[Estimate]) -> Option<(f64, Colored)> {
         let mut best: Option<(f64, Colored)> = None;
+        let settle = super::settling::settling_holds(ctx).is_some();
         for (estimate, pooled) in estimates {
             for c in estimate.parts() {
                 if !(ctx.pose_level && c.any()) || (*pooled && (holds_refute(ctx, &c) || too_smooth(ctx, &c))) {
                     continue;
                 }
-                let saturating = if *pooled { c.saturating(ctx) } else { Vec::new() };
+                let saturating = if *pooled && !settle { c.saturating(ctx) } else { Vec::new() };
                 for (c, params) in std::iter::once((c, 1.0)).chain(saturating) {
                     let Some(ratio) = self.heldout_ratio_charged(ctx, &c, params) else { continue };
                     if best.is_none_or(|(b, _)| ctx.noise_gain(ratio) > ctx.noise_gain(b)) {
