@@ -35,8 +35,11 @@
 //!    worst-predicted pose alone, with no support in the holds, is not named). When the gap is significant and no family or probe explains it, the holds
 //!    answer from how each one moves (`family::from_holds`: settling if it slows, drift if a line per
 //!    hold explains it, colored noise if every hold wanders alike and a walk at their level spreads
-//!    the pose means as much; no shrink claimed); else `unexplained` (with where the gap lies).
-//!    `none` when there is no significant gap.
+//!    the pose means as much; no shrink claimed); else the value family that alone fits every pose
+//!    to white noise (gap ratio <= 1.2, a chi-square drop of 10 times the residual per column, as
+//!    many residual degrees of freedom as columns spent; no other family nor probe fitting them to
+//!    white noise: a design that few poses determine, which the withheld poses cannot test); else
+//!    `unexplained` (with where the gap lies). `none` when there is no significant gap.
 //! 4. **How far it shrinks.** The winner is added (to the model, or to the simulator for
 //!    `colored-noise`) and step 1 redone: `shrink = (before - after) / (before - 1)`, clipped to
 //!    `[0, 1]`.
@@ -88,7 +91,7 @@ use std::fmt;
 
 pub use gap::MIN_POSE_S;
 pub(crate) use locate::orientation_label;
-pub use report::{Allan, Candidate, Diagnosis, DiagnosisDocument, Gap, PoseReport, Probe};
+pub use report::{Allan, Candidate, Diagnosis, DiagnosisDocument, Gap, InSampleFit, PoseReport, Probe};
 
 use crate::csvio::{AccumulateOptions, Table};
 
@@ -359,6 +362,7 @@ fn motion_answer(table: &Table, opts: &DiagnoseOptions, still_poses: usize, deta
         within_detail: String::new(),
         within_disagreement: f64::NAN,
         variants: Vec::new(),
+        in_sample: None,
     };
     let reason = format!("{} still poses: too few to calibrate", still_poses);
     Diagnosis { verdict: "motion", explained: true, ..unmeasured(table, opts, vec![candidate], reason) }

@@ -240,7 +240,8 @@ pub(crate) fn run(ctx: &Context<'_>) -> Vec<Probe> {
             let f = ctx.best_of(variants)?;
             let jump_in_hold = shape == "bias-step" && step_seen_in_holds(ctx, &f.rows);
             let heldout_gain = ctx.value_gain(f.score_ratio);
-            Some(Probe { shape, heldout_gain, detail: f.detail, veto_margin, jump_in_hold })
+            let in_sample_ratio = f.in_sample.map_or(f64::NAN, |fit| fit.ratio);
+            Some(Probe { shape, heldout_gain, detail: f.detail, in_sample_ratio, veto_margin, jump_in_hold })
         })
         .collect()
 }

@@ -115,6 +115,26 @@ pub struct Candidate {
     /// better; the chosen one is the smallest).
     #[serde(serialize_with = "variants_json")]
     pub variants: Vec<(String, f64)>,
+    /// The pose-level parametrisation that fits the poses it is fitted on best (with enough residual
+    /// degrees of freedom), for a gap the withheld poses cannot test; `None` when none was fitted.
+    pub in_sample: Option<InSampleFit>,
+}
+
+/// A parametrisation fitted to every pose and judged on those poses alone (no pose withheld).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct InSampleFit {
+    /// The parametrisation.
+    pub detail: String,
+    /// The gap ratio it leaves on the poses it was fitted on (1 = white noise).
+    pub ratio: f64,
+    /// Poses beyond the design's columns.
+    pub residual_dof: usize,
+    /// The drop in the poses' chi-square per extra column, over the chi-square left per residual
+    /// degree of freedom (an F statistic).
+    pub explained_per_param: f64,
+    /// The pose residuals with it (`None`: dropped).
+    #[serde(skip)]
+    pub after: Vec<Option<f64>>,
 }
 
 impl Candidate {
@@ -133,6 +153,9 @@ pub struct Probe {
     pub heldout_gain: f64,
     /// The best parametrisation.
     pub detail: String,
+    /// The smallest gap ratio a parametrisation leaves on the poses it was fitted on (NaN: none had
+    /// enough residual degrees of freedom), as [`Candidate::in_sample`].
+    pub in_sample_ratio: f64,
     /// Evidence by which it must exceed a family's to veto it (`unexplained`): 0, or more for a shape
     /// a catalogue family can take (a bias step is a fast drift).
     #[serde(skip)]
@@ -187,7 +210,8 @@ pub struct Diagnosis {
     /// For `unexplained`: where the gap lies; for a verdict the withheld poses do not test (drift
     /// seen only within the holds): what supports it.
     pub located: Option<String>,
-    /// `true` when the gap is significant and a candidate explains it (gain >= [`MIN_GAIN`](super::MIN_GAIN)).
+    /// `true` when the gap is significant and a candidate explains it (gain >= [`MIN_GAIN`](super::MIN_GAIN),
+    /// or its fit to every pose alone leaves white noise: see `located`).
     pub explained: bool,
     /// Step 4.
     pub shrink: f64,
@@ -456,6 +480,7 @@ mod tests {
             within_detail: String::new(),
             within_disagreement: f64::NAN,
             variants: vec![("tau 5 s".into(), 1.5)],
+            in_sample: None,
         };
         Diagnosis {
             file: "f.csv".into(),

@@ -1,13 +1,14 @@
 //! Step 3's verdict and step 4's shrink: the family with the largest held-out gain, if the gap is
 //! significant and the gain at least [`MIN_GAIN`]; `unexplained` when the gap is significant but no
-//! family explains the withheld part; `none` when there is no significant gap.
+//! family explains the withheld part (nor alone fits every pose to white noise); `none` when there
+//! is no significant gap.
 
 use super::MIN_GAIN;
 
 use super::family::Evaluation;
 use super::gap::Measured;
 use super::math::rms;
-use super::report::{Gap, Probe};
+use super::report::{Gap, InSampleFit, Probe};
 
 /// The decision: the verdict, the winner's index, the gap after it and the residuals after it.
 pub(crate) struct Decision {
@@ -18,7 +19,8 @@ pub(crate) struct Decision {
     pub(crate) after: Vec<Option<f64>>,
     /// For `unexplained`: the probe that explains the withheld poses best, if one does.
     pub(crate) probe_where: Option<String>,
-    /// For a verdict the withheld poses do not test: what within the holds supports it.
+    /// For a verdict the withheld poses do not test: what supports it (the holds, or the fit to
+    /// every pose).
     pub(crate) located: Option<String>,
 }
 
@@ -158,10 +160,49 @@ fn walk_not_slow_change(v: &Evaluation, holds_walk: bool) -> bool {
     holds_walk && slow_change(v) && !(v.candidate.within_gain > SLOW_CHANGE_MISSES_HOLDS)
 }
 
+/// Gap ratio up to which a family's fit to every pose accounts for the gap on those poses
+/// ([`fits_every_pose`]).
+const FITS_TO_NOISE: f64 = 1.2;
+
+/// Drop in the poses' chi-square per extra column, in units of the chi-square left per residual
+/// degree of freedom (an F statistic), from which a fit to every pose is more than the freedom of
+/// its columns ([`fits_every_pose`]).
+const EXPLAINED_PER_PARAM: f64 = 10.0;
+
+/// When no family explains the withheld poses: the value family the withheld poses do not support
+/// (evidence below [`MIN_GAIN`]) that alone fits every pose to
+/// white noise ([`FITS_TO_NOISE`]) with a chi-square drop of [`EXPLAINED_PER_PARAM`] per column;
+/// no other family (the thermometer named before time, as on withheld poses) nor out-of-catalogue
+/// probe fits them to white noise too. The withheld poses cannot test a design that few poses
+/// determine: a cube term per axis on a log of faces and a few tilted poses, each tilted pose
+/// alone deciding a term, predicts none of them withheld although its fit to all of them leaves
+/// white noise.
+fn fits_every_pose<'e>(
+    evaluations: &'e [Evaluation],
+    probes: &[Probe],
+) -> Option<(usize, &'e Evaluation, &'e InSampleFit)> {
+    let in_sample =
+        |e: &'e Evaluation| e.candidate.in_sample.as_ref().filter(|_| e.predicts_values && e.candidate.applicable);
+    let fits = |e: &'e Evaluation| in_sample(e).is_some_and(|f| f.ratio <= FITS_TO_NOISE);
+    // A family the withheld poses support but a guard kept from the verdict (its gain resting on one
+    // pose, a probe explaining more) stays kept from it.
+    let untested = |e: &Evaluation| !(e.candidate.evidence() >= MIN_GAIN);
+    let explains =
+        |e: &'e Evaluation| untested(e) && in_sample(e).is_some_and(|f| f.explained_per_param >= EXPLAINED_PER_PARAM);
+    let cause_over_proxy = |e: &Evaluation, o: &Evaluation| e.candidate.effect == "temperature" && slow_change(o);
+    let alone = |i: usize, e: &Evaluation| {
+        let rival = |(j, o): (usize, &'e Evaluation)| j != i && fits(o) && !cause_over_proxy(e, o);
+        !evaluations.iter().enumerate().any(rival) && !probes.iter().any(|p| p.in_sample_ratio <= FITS_TO_NOISE)
+    };
+    let (i, e) = evaluations.iter().enumerate().find(|&(i, e)| fits(e) && explains(e) && alone(i, e))?;
+    Some((i, e, in_sample(e)?))
+}
+
 /// Picks the verdict among the evaluated families and measures the shrink. `from_holds` is the
 /// holds' own answer ([`super::family::from_holds`]: settling, drift or colored noise, and why): when no family
 /// explains the withheld poses and no probe does either, it names the effect (with no shrink: the
-/// pose means cannot follow it).
+/// pose means cannot follow it); else, when no probe explains the withheld poses either, a family
+/// that alone fits every pose is named ([`fits_every_pose`]).
 pub(crate) fn decide(
     m: &Measured,
     evaluations: &[Evaluation],
@@ -179,22 +220,24 @@ pub(crate) fn decide(
     let winner =
         best.filter(|(_, e)| significant && e.candidate.evidence() >= MIN_GAIN && !beaten(e, probes)).map(|(i, _)| i);
     let mut gap = m.gap.clone();
-    let (verdict, after, located) = match winner {
-        Some(i) => {
-            let e = &evaluations[i];
-            gap.ratio_after = e.candidate.ratio_after;
-            if e.predicts_values {
-                gap.real_rmse_after_mg = m.to_mg(rms(&e.after.iter().flatten().copied().collect::<Vec<_>>()));
-            }
-            (e.candidate.effect, e.after.clone(), None)
+    let kept_rmse_mg = |after: &[Option<f64>]| m.to_mg(rms(&after.iter().flatten().copied().collect::<Vec<_>>()));
+    let unchanged = || m.r.iter().map(|v| Some(*v)).collect();
+    let (verdict, winner, after, located) = if let Some(i) = winner {
+        let e = &evaluations[i];
+        gap.ratio_after = e.candidate.ratio_after;
+        if e.predicts_values {
+            gap.real_rmse_after_mg = kept_rmse_mg(&e.after);
         }
-        None => {
-            let unchanged = m.r.iter().map(|v| Some(*v)).collect();
-            match from_holds.filter(|_| significant && best_probe.is_none()) {
-                Some((effect, why)) => (effect, unchanged, Some(why)),
-                None => (if significant { "unexplained" } else { "none" }, unchanged, None),
-            }
-        }
+        (e.candidate.effect, Some(i), e.after.clone(), None)
+    } else if let Some((effect, why)) = from_holds.filter(|_| significant && best_probe.is_none()) {
+        (effect, None, unchanged(), Some(why))
+    } else if let Some((i, e, fit)) =
+        fits_every_pose(evaluations, probes).filter(|_| significant && best_probe.is_none())
+    {
+        (gap.ratio_after, gap.real_rmse_after_mg) = (fit.ratio, kept_rmse_mg(&fit.after));
+        (e.candidate.effect, Some(i), fit.after.clone(), Some(in_sample_why(fit)))
+    } else {
+        (if significant { "unexplained" } else { "none" }, None, unchanged(), None)
     };
     gap.sim_rmse_after_mg = if gap.ratio_after > 0.0 { gap.real_rmse_after_mg / gap.ratio_after } else { f64::NAN };
     let shrink = if significant && gap.ratio_before > 1.0 {
@@ -204,6 +247,16 @@ pub(crate) fn decide(
     };
     let probe_where = best_probe.map(|p| format!("{} (held-out gain {:.2})", p.detail, p.heldout_gain));
     Decision { verdict, winner, gap, shrink, after, probe_where, located }
+}
+
+/// What supports a verdict from the fit to every pose.
+fn in_sample_why(fit: &InSampleFit) -> String {
+    format!(
+        "not confirmed on withheld poses: {} alone fits every pose to gap ratio {:.2} ({} residual degrees of \
+         freedom, chi-square drop {:.0} times the residual per parameter); no other family nor out-of-catalogue \
+         probe fits them to white noise",
+        fit.detail, fit.ratio, fit.residual_dof, fit.explained_per_param
+    )
 }
 
 #[cfg(test)]
@@ -226,6 +279,7 @@ mod tests {
             within_detail: String::new(),
             within_disagreement,
             variants: Vec::new(),
+            in_sample: None,
         };
         Evaluation { candidate, after: Vec::new(), predicts_values: true, gain_without_worst: f64::NAN, wander: false }
     }
@@ -305,6 +359,7 @@ mod tests {
             shape: "rotation-direction",
             heldout_gain: gain,
             detail: String::new(),
+            in_sample_ratio: f64::NAN,
             veto_margin: 0.0,
             jump_in_hold: false,
         };
@@ -377,5 +432,51 @@ mod tests {
         assert_eq!(named(&[holds_only("drift", 0.77, 1.0), holds_only("settling", 0.66, 3.1)]), Some("drift"));
         // A family that agrees but does not explain the holds does not count.
         assert_eq!(named(&[drift(), holds_only("settling", 0.2, 0.5)]), Some("drift"));
+    }
+
+    fn fitting_every_pose(effect: &'static str, ratio: f64, explained_per_param: f64) -> Evaluation {
+        let mut e = on_pose_means(effect, 5.0, 0.1, true);
+        let fit = InSampleFit { detail: String::new(), ratio, residual_dof: 4, explained_per_param, after: Vec::new() };
+        e.candidate.in_sample = Some(fit);
+        e
+    }
+
+    #[test]
+    fn a_family_that_alone_fits_every_pose_to_white_noise_is_named_when_no_family_explains_withheld_ones() {
+        let table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "sim").unwrap();
+        let mut m = gap::measure(&table, &DiagnoseOptions::DEFAULT).unwrap();
+        (m.gap.significant, m.gap.ratio_before) = (true, 6.0);
+        let probe = |in_sample_ratio: f64| Probe {
+            shape: "cross-axis",
+            heldout_gain: 0.2,
+            detail: String::new(),
+            in_sample_ratio,
+            veto_margin: 0.0,
+            jump_in_hold: false,
+        };
+        let decide_on = |e: &[Evaluation], p: &[Probe]| decide(&m, e, p, None, false);
+        let probe_that_explains = |p: Probe| Probe { heldout_gain: MIN_GAIN, ..p };
+        // A development log's cube terms per axis (16 poses): 1.07 with 71 per column; the withheld
+        // poses did not confirm them (held-out gain below 0.3); the best probe on every pose 1.84.
+        // Not when another family or a probe fits the poses to white noise too, nor on a small drop,
+        // nor when a probe explains the withheld poses.
+        let cube = || fitting_every_pose("scale-nonlinearity", 1.07, 71.0);
+        let named = decide_on(&[fitting_every_pose("drift", 3.1, 7.0), cube()], &[probe(1.84)]);
+        assert_eq!((named.verdict, named.winner), ("scale-nonlinearity", Some(1)));
+        assert!(named.located.is_some_and(|w| w.contains("not confirmed on withheld poses")));
+        assert!((named.gap.ratio_after - 1.07).abs() < 1e-12 && named.shrink > 0.9);
+        assert_eq!(decide_on(&[fitting_every_pose("drift", 1.1, 9.0), cube()], &[]).verdict, "unexplained");
+        assert_eq!(decide_on(&[cube()], &[probe(1.15)]).verdict, "unexplained");
+        assert_eq!(decide_on(&[cube()], &[probe_that_explains(probe(1.84))]).verdict, "unexplained");
+        assert_eq!(decide_on(&[fitting_every_pose("scale-nonlinearity", 1.07, 8.0)], &[]).verdict, "unexplained");
+        assert_eq!(decide_on(&[fitting_every_pose("scale-nonlinearity", 1.3, 71.0)], &[]).verdict, "unexplained");
+        // Nor a family the withheld poses support but whose gain rests on one pose (own simulator: a
+        // 7 s sinusoidal bias, a temperature quadratic fitting every pose to 1.15).
+        let mut one_pose = fitting_every_pose("temperature", 1.15, 12.0);
+        (one_pose.candidate.heldout_gain, one_pose.gain_without_worst) = (0.36, 0.0);
+        assert_eq!(decide_on(&[one_pose], &[]).verdict, "unexplained");
+        // The thermometer is named before time when both fit.
+        let thermal = [fitting_every_pose("drift", 1.1, 12.0), fitting_every_pose("temperature", 0.9, 20.0)];
+        assert_eq!(decide_on(&thermal, &[]).verdict, "temperature");
     }
 }

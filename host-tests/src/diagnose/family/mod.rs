@@ -26,7 +26,7 @@ use super::math::{
     V3, axis, cholesky_solve, cv_residuals, cv_residuals_predictable, fit_residuals, jacobian_row,
     lstsq_with_covariance, norm, rms, sum_sq,
 };
-use super::report::Candidate;
+use super::report::{Candidate, InSampleFit};
 use super::within::{Within, WithinFit, WithinVariant};
 use super::{
     CV_NOISE_DRAWS, DiagnoseOptions, LEAVE_ONE_OUT_UP_TO, OVERSHOOT_WEIGHT, PARAMETER_PENALTY, VALUE_OVERSHOOT_WEIGHT,
@@ -67,6 +67,13 @@ const MIN_FIT_DOF: usize = 0;
 /// model although it fitted every other pose to white noise.
 const UNPREDICTABLE: f64 = 1e6;
 
+/// Fewest poses beyond a design's columns for it to be judged on the poses it is fitted on
+/// ([`Context::in_sample`]), and no fewer than its extra columns: a design with as many columns as
+/// poses fits any gap, and one that spends more columns than it leaves traces most gaps (a
+/// temperature quadratic in bias and scale through a smoothed thermometer, 12 columns, left 4 poses
+/// at white noise on a sinusoidal bias of 25 poses).
+pub(crate) const IN_SAMPLE_MIN_DOF: usize = 3;
+
 /// Logs of at most this many poses count a probe's residual degrees of freedom leaving one out
 /// ([`Context::leaves_residual_dof`]); longer ones as if a fold of `opts.folds` were withheld. A
 /// probe searches many designs (a period, a step's place, a turn axis) on the same withheld poses:
@@ -92,6 +99,8 @@ pub(crate) struct Fitted {
     pub(crate) detail: String,
     /// Every parametrisation tried with its penalised held-out ratio.
     pub(crate) tried: Vec<(String, f64)>,
+    /// The parametrisation that fits every pose best ([`Context::in_sample`]).
+    pub(crate) in_sample: Option<InSampleFit>,
 }
 
 /// A family's result: its candidate line and the pose residuals with it added (`None`: dropped).
@@ -457,9 +466,15 @@ impl<'a> Context<'a> {
         }
         let mut best: Option<Fitted> = None;
         let mut tried = Vec::new();
+        let mut in_sample: Option<InSampleFit> = None;
         for v in variants.into_iter().filter(|v| self.trains_beyond(&v.extra, MIN_FIT_DOF)) {
             let rows = self.rows_with(&v.extra);
             let dropped = self.none_dropped.clone();
+            if let Some(fit) = self.in_sample(&rows, &dropped, &v.detail)
+                && in_sample.as_ref().is_none_or(|b| fit.ratio < b.ratio)
+            {
+                in_sample = Some(fit);
+            }
             let Some(ratio) = self.heldout_ratio(&rows, &dropped, v.params) else { continue };
             tried.push((v.detail.clone(), ratio));
             if best.as_ref().is_none_or(|b| ratio < b.score_ratio) {
@@ -470,10 +485,40 @@ impl<'a> Context<'a> {
                     params: v.params,
                     detail: v.detail,
                     tried: Vec::new(),
+                    in_sample: None,
                 });
             }
         }
-        best.map(|b| Fitted { tried, ..b })
+        best.map(|b| Fitted { tried, in_sample, ..b })
+    }
+
+    /// The gap ratio a design leaves on the poses it is fitted on (against the same design fitted to
+    /// white noise) and the residuals: `None` when it cannot be fitted.
+    fn fit_ratio(&self, rows: &[Vec<f64>], dropped: &[bool]) -> Option<(f64, Vec<Option<f64>>)> {
+        let after = fit_residuals(rows, &self.m.r, dropped)?;
+        let kept: Vec<f64> = after.iter().flatten().copied().collect();
+        let real_after = self.m.to_mg(rms(&kept));
+        let sim_after = expected_fit_rmse_mg(rows, &self.white_draws, dropped, self.m.gravity);
+        // The linearised sims and the library's differ slightly: scale to the library's.
+        let sim_after = sim_after * self.m.gap.sim_rmse_mg / self.base_fit_rmse_mg;
+        Some((real_after / sim_after, after))
+    }
+
+    /// A design judged on every pose it is fitted on, when it leaves at least
+    /// [`IN_SAMPLE_MIN_DOF`] poses beyond its columns and at least as many as its extra columns: the
+    /// ratio it leaves and the drop in the poses' chi-square per extra column over the chi-square
+    /// left per degree of freedom.
+    fn in_sample(&self, rows: &[Vec<f64>], dropped: &[bool], detail: &str) -> Option<InSampleFit> {
+        let base = self.base_rows.first().map_or(0, Vec::len);
+        let columns = rows.first().map_or(0, Vec::len);
+        let kept = dropped.iter().filter(|d| !**d).count();
+        let least = IN_SAMPLE_MIN_DOF.max(columns.saturating_sub(base));
+        let residual_dof = kept.checked_sub(columns).filter(|&d| d >= least)?;
+        let (ratio, after) = self.fit_ratio(rows, dropped)?;
+        let before = self.m.gap.ratio_before.powi(2) * kept.saturating_sub(base) as f64;
+        let left = ratio * ratio;
+        let explained_per_param = (before - left * residual_dof as f64) / (columns - base).max(1) as f64 / left;
+        Some(InSampleFit { detail: detail.to_string(), ratio, residual_dof, explained_per_param, after })
     }
 
     /// Poses `q` and then `p` are pieces of one hold: close in time, and no movement between them.
@@ -516,24 +561,20 @@ impl<'a> Context<'a> {
 
     fn evaluate_fitted(&self, name: &'static str, f: Fitted) -> Evaluation {
         let n = self.m.r.len();
-        let after = fit_residuals(&f.rows, &self.m.r, &f.dropped).unwrap_or_else(|| vec![None; n]);
-        let kept: Vec<f64> = after.iter().flatten().copied().collect();
-        let real_after = self.m.to_mg(rms(&kept));
-        let sim_after = expected_fit_rmse_mg(&f.rows, &self.white_draws, &f.dropped, self.m.gravity);
-        // The linearised sims and the library's differ slightly: scale to the library's.
-        let sim_after = sim_after * self.m.gap.sim_rmse_mg / self.base_fit_rmse_mg;
+        let (ratio_after, after) = self.fit_ratio(&f.rows, &f.dropped).unwrap_or((f64::NAN, vec![None; n]));
         let candidate = Candidate {
             effect: name,
             applicable: true,
             heldout_ratio: f.score_ratio,
             heldout_gain: self.value_gain(f.score_ratio),
-            ratio_after: real_after / sim_after,
+            ratio_after,
             extra_params: f.params,
             detail: f.detail,
             within_gain: f64::NAN,
             within_detail: String::new(),
             within_disagreement: f64::NAN,
             variants: f.tried,
+            in_sample: f.in_sample,
         };
         let gain_without_worst = self.gain_without_worst_pose(&f.rows, &f.dropped, f.params);
         Evaluation { candidate, after, predicts_values: true, gain_without_worst, wander: false }
@@ -552,6 +593,7 @@ impl<'a> Context<'a> {
             within_detail: String::new(),
             within_disagreement: f64::NAN,
             variants: Vec::new(),
+            in_sample: None,
         };
         let after = self.m.r.iter().map(|v| Some(*v)).collect();
         Evaluation { candidate, after, predicts_values: true, gain_without_worst: f64::NAN, wander: false }

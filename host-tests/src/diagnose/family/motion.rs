@@ -73,6 +73,7 @@ pub(crate) fn without(ctx: &Context<'_>, dropped: Vec<bool>, what: &str) -> Opti
         params: count,
         detail: format!("{what}: {}", list.join(" ")),
         tried: Vec::new(),
+        in_sample: None,
     })
 }
 

@@ -383,6 +383,7 @@ impl ColoredNoise {
             within_detail: String::new(),
             within_disagreement: f64::NAN,
             variants: Vec::new(),
+            in_sample: None,
         };
         Evaluation {
             candidate,
