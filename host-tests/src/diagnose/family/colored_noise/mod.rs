@@ -157,7 +157,7 @@ fn too_smooth(ctx: &Context<'_>, c: &Colored) -> bool {
 fn holds_walk(ctx: &Context<'_>) -> Option<(V3, Option<f64>)> {
     *ctx.holds_walk.get_or_init(|| {
         walk_from_holds(ctx)
-            .map(|walk| (walk, ColoredNoise.heldout_ratio(ctx, &Colored { walk, ..Colored::default() })))
+            .map(|walk| (walk, ColoredNoise.heldout_ratio(ctx, &Colored { walk, ..Colored::default() }, 1.0)))
     })
 }
 
@@ -217,15 +217,10 @@ fn holds_refute(ctx: &Context<'_>, c: &Colored) -> bool {
 const MIN_DRAWS_AS_CONCENTRATED: usize = 1;
 
 impl ColoredNoise {
-    /// Penalised held-out ratio of the pose means under white noise plus `c`; `None` when the data
-    /// put far more of their scatter in one pose than the model ever does (one bad pose, not noise:
-    /// no draw of the model concentrates it so).
-    fn heldout_ratio(&self, ctx: &Context<'_>, c: &Colored) -> Option<f64> {
-        self.heldout_ratio_charged(ctx, c, 1.0)
-    }
-
-    /// [`Self::heldout_ratio`] charged `params` parameters.
-    fn heldout_ratio_charged(&self, ctx: &Context<'_>, c: &Colored, params: f64) -> Option<f64> {
+    /// Held-out ratio of the pose means under white noise plus `c`, charged `params` parameters;
+    /// `None` when the data put far more of their scatter in one pose than the model ever does (one
+    /// bad pose, not noise: no draw of the model concentrates it so).
+    fn heldout_ratio(&self, ctx: &Context<'_>, c: &Colored, params: f64) -> Option<f64> {
         let m = ctx.m;
         let noise = c.noise(m);
         let draws = residual_noise_draws(&m.model, &m.directions, &m.poses, &noise, CV_NOISE_DRAWS, ctx.opts.seed);
@@ -264,7 +259,7 @@ impl ColoredNoise {
                 }
                 let saturating = if *pooled && !settle { c.saturating(ctx) } else { Vec::new() };
                 for (c, params) in std::iter::once((c, 1.0)).chain(saturating) {
-                    let Some(ratio) = self.heldout_ratio_charged(ctx, &c, params) else { continue };
+                    let Some(ratio) = self.heldout_ratio(ctx, &c, params) else { continue };
                     if best.is_none_or(|(b, _)| ctx.noise_gain(ratio) > ctx.noise_gain(b)) {
                         best = Some((ratio, c));
                     }
