@@ -7,7 +7,7 @@ use accelcal::model::Params;
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
 
-use super::math::{Model, V3, cv_residuals, dot, fit_residuals, mean, median, norm, rms, std_dev, sum_sq};
+use super::math::{Model, V3, dot, kept_design, mean, median, norm, rms, std_dev, sum_sq};
 use super::report::Gap;
 use super::{DiagnoseError, DiagnoseOptions, SEGMENTS, SIGNIFICANT_RATIO, SIGNIFICANT_Z, err};
 use crate::calib;
@@ -187,31 +187,25 @@ pub(crate) fn residual_noise_draws(
     (0..reps).map(|_| draw_noise(poses, noise, &mut rng).iter().zip(&kt).map(|(d, k)| dot(*d, *k)).collect()).collect()
 }
 
-/// Mean-square cross-validated residual of pure noise for a design (the expectation without effect).
-pub(crate) fn expected_cv_ms(
-    rows: &[Vec<f64>],
-    draws: &[Vec<f64>],
-    fold: &[usize],
-    folds: usize,
-    dropped: &[bool],
-) -> f64 {
-    let mut total = Vec::new();
-    for e in draws {
-        if let Some(cv) = cv_residuals(rows, e, fold, folds, dropped) {
+/// The mean over noise draws of each draw's mean-square held-out residual (draws with none held
+/// out left out): the expectation without effect.
+pub(crate) fn mean_cv_ms(cvs: impl IntoIterator<Item = Vec<Option<f64>>>) -> f64 {
+    let total: Vec<f64> = cvs
+        .into_iter()
+        .filter_map(|cv| {
             let (s, n) = sum_sq(&cv);
-            if n > 0 {
-                total.push(s / n as f64);
-            }
-        }
-    }
+            (n > 0).then(|| s / n as f64)
+        })
+        .collect();
     mean(&total)
 }
 
 /// Mean in-sample RMSE (mg) of pure noise for a design.
 pub(crate) fn expected_fit_rmse_mg(rows: &[Vec<f64>], draws: &[Vec<f64>], dropped: &[bool], gravity: f64) -> f64 {
+    let Some(design) = kept_design(rows, dropped) else { return f64::NAN };
     let v: Vec<f64> = draws
         .iter()
-        .filter_map(|e| fit_residuals(rows, e, dropped))
+        .filter_map(|e| design.residuals(rows, e))
         .map(|res| {
             let kept: Vec<f64> = res.into_iter().flatten().collect();
             rms(&kept) / gravity * 1000.0

@@ -72,9 +72,9 @@ pub(crate) fn jacobian_row(m: V3, u: V3) -> [f64; PARAM_COUNT] {
     [-u[0], -u[1], -u[2], u[0] * m[0], u[1] * m[1], u[2] * m[2], u[1] * m[0], u[2] * m[0], u[2] * m[1]]
 }
 
-/// The normal equations of `min sum over train of (r_i + rows_i . x)^2` with each column scaled to
-/// unit root mean square over `train`: the scales, the lower triangle of `X^T X` and `-X^T r` (scaled).
-fn scaled_normals(rows: &[Vec<f64>], r: &[f64], train: &[usize]) -> (Vec<f64>, Vec<Vec<f64>>, Vec<f64>) {
+/// The normal matrix of `min sum over train of (r_i + rows_i . x)^2` with each column scaled to
+/// unit root mean square over `train`: the scales and the lower triangle of `X^T X` (scaled).
+fn scaled_normals(rows: &[Vec<f64>], train: &[usize]) -> (Vec<f64>, Vec<Vec<f64>>) {
     let p = rows.first().map_or(0, Vec::len);
     let scale: Vec<f64> = (0..p)
         .map(|j| {
@@ -83,48 +83,82 @@ fn scaled_normals(rows: &[Vec<f64>], r: &[f64], train: &[usize]) -> (Vec<f64>, V
         })
         .collect();
     let mut a = vec![vec![0.0; p]; p];
-    let mut b = vec![0.0; p];
+    let mut x = vec![0.0; p];
     for &i in train {
-        for j in 0..p {
-            let xj = rows[i][j] / scale[j];
-            b[j] -= xj * r[i];
-            for k in 0..=j {
-                a[j][k] += xj * rows[i][k] / scale[k];
+        for (xj, (v, s)) in x.iter_mut().zip(rows[i].iter().zip(&scale)) {
+            *xj = v / s;
+        }
+        for (j, aj) in a.iter_mut().enumerate() {
+            for (ajk, xk) in aj[..=j].iter_mut().zip(&x) {
+                *ajk += x[j] * xk;
             }
         }
     }
-    (scale, a, b)
+    (scale, a)
 }
 
-/// A least-squares fit on some poses, kept with its factor to price predictions elsewhere.
-struct TrainedFit {
-    x: Vec<f64>,
+/// `-X^T r` over `train`, each column scaled by `scale`.
+fn scaled_rhs(rows: &[Vec<f64>], r: &[f64], train: &[usize], scale: &[f64]) -> Vec<f64> {
+    let mut b = vec![0.0; scale.len()];
+    for &i in train {
+        for (bj, (v, s)) in b.iter_mut().zip(rows[i].iter().zip(scale)) {
+            *bj -= v / s * r[i];
+        }
+    }
+    b
+}
+
+/// Attempts at a ridge that lets the scaled normal matrix factor, each 100 times the last.
+const RIDGE_ATTEMPTS: usize = 6;
+
+/// Least squares on fixed training poses, factored once: the fit of any residual vector over them
+/// costs one right-hand side and two substitutions (the noise draws share a design).
+pub(crate) struct Design {
+    train: Vec<usize>,
     scale: Vec<f64>,
-    /// Lower Cholesky factor of the scaled normal matrix (plus its ridge).
+    /// The scaled normal matrix (lower triangle), kept for a larger ridge.
+    a: Vec<Vec<f64>>,
+    /// Lower Cholesky factor of `a` plus `ridge`.
     l: Vec<Vec<f64>>,
+    ridge: f64,
+    /// Ridges tried before `ridge` factored.
+    attempt: usize,
 }
 
-impl TrainedFit {
-    /// Least squares: the `x` minimising `sum over train of (r_i + rows_i . x)^2` (columns scaled, a
-    /// tiny ridge keeps collinear columns finite).
-    fn new(rows: &[Vec<f64>], r: &[f64], train: &[usize]) -> Option<Self> {
+impl Design {
+    /// Columns scaled, a tiny ridge keeps collinear columns finite; `None` when `train` has fewer
+    /// poses than columns or no ridge tried factors.
+    pub(crate) fn new(rows: &[Vec<f64>], train: Vec<usize>) -> Option<Self> {
         let p = rows.first()?.len();
         if train.len() < p {
             return None;
         }
-        let (scale, a, b) = scaled_normals(rows, r, train);
+        let (scale, a) = scaled_normals(rows, &train);
         let trace: f64 = (0..p).map(|j| a[j][j]).sum();
         let mut ridge = 1e-11 * trace / p as f64;
-        for _ in 0..6 {
-            if let Some(l) = cholesky(&a, ridge)
-                && let Some(y) = solve_factored(&l, &b)
-            {
-                let x = y.iter().zip(&scale).map(|(v, s)| v / s).collect();
-                return Some(Self { x, scale, l });
+        for attempt in 0..RIDGE_ATTEMPTS {
+            if let Some(l) = cholesky(&a, ridge) {
+                return Some(Self { train, scale, a, l, ridge, attempt });
             }
-            ridge = ridge * 100.0 + 1e-300;
+            ridge = next_ridge(ridge);
         }
         None
+    }
+
+    /// The `x` minimising `sum over train of (r_i + rows_i . x)^2`; a solution that is not finite
+    /// tries the larger ridges left.
+    pub(crate) fn solve(&self, rows: &[Vec<f64>], r: &[f64]) -> Option<Vec<f64>> {
+        let b = scaled_rhs(rows, r, &self.train, &self.scale);
+        let mut y = solve_factored(&self.l, &b);
+        let mut ridge = self.ridge;
+        for _ in self.attempt + 1..RIDGE_ATTEMPTS {
+            if y.is_some() {
+                break;
+            }
+            ridge = next_ridge(ridge);
+            y = cholesky(&self.a, ridge).and_then(|l| solve_factored(&l, &b));
+        }
+        Some(y?.iter().zip(&self.scale).map(|(v, s)| v / s).collect())
     }
 
     /// The variance of the fit's prediction at `row` in units of one training pose's variance
@@ -133,12 +167,71 @@ impl TrainedFit {
         let scaled: Vec<f64> = row.iter().zip(&self.scale).map(|(v, s)| v / s).collect();
         forward_substitute(&self.l, &scaled).iter().map(|v| v * v).sum()
     }
+
+    /// In-sample residuals at the training poses (`None` elsewhere, and all `None` when `r` cannot
+    /// be fitted); `n` poses.
+    pub(crate) fn residuals(&self, rows: &[Vec<f64>], r: &[f64]) -> Option<Vec<Option<f64>>> {
+        let x = self.solve(rows, r)?;
+        let mut out = vec![None; r.len()];
+        for &i in &self.train {
+            out[i] = Some(predict(rows, r, &x, i));
+        }
+        Some(out)
+    }
+}
+
+fn next_ridge(ridge: f64) -> f64 {
+    ridge * 100.0 + 1e-300
+}
+
+/// The fit on every pose not dropped.
+pub(crate) fn kept_design(rows: &[Vec<f64>], dropped: &[bool]) -> Option<Design> {
+    Design::new(rows, (0..dropped.len()).filter(|&i| !dropped[i]).collect())
+}
+
+/// Cross-validation folds, each fold's fit on the others factored once: the held-out residuals of
+/// many residual vectors (noise draws) over one design.
+pub(crate) struct CvDesign {
+    /// Per fold with poses: its fit and its withheld poses with their prediction variance factor.
+    folds: Vec<(Design, Vec<(usize, f64)>)>,
+}
+
+impl CvDesign {
+    /// `None` when a fold with poses leaves too few others to fit.
+    pub(crate) fn new(rows: &[Vec<f64>], fold: &[usize], folds: usize, dropped: &[bool]) -> Option<Self> {
+        let n = fold.len();
+        let mut out = Vec::new();
+        for f in (0..folds).filter(|&f| fold.contains(&f)) {
+            let train = (0..n).filter(|&i| fold[i] != f && !dropped[i]).collect();
+            let design = Design::new(rows, train)?;
+            let withheld = (0..n)
+                .filter(|&i| fold[i] == f && !dropped[i])
+                .map(|i| (i, design.variance_factor(&rows[i])))
+                .collect();
+            out.push((design, withheld));
+        }
+        Some(Self { folds: out })
+    }
+
+    /// Each withheld pose predicted by its fold's fit of `r`; `None` for dropped poses and for one
+    /// whose prediction's variance exceeds `max_variance_factor` times one pose's (see
+    /// [`cv_residuals_predictable`]); all `None` when a fold cannot fit `r`.
+    pub(crate) fn residuals(&self, rows: &[Vec<f64>], r: &[f64], max_variance_factor: f64) -> Option<Vec<Option<f64>>> {
+        let mut out = vec![None; r.len()];
+        for (design, withheld) in &self.folds {
+            let x = design.solve(rows, r)?;
+            for &(i, _) in withheld.iter().filter(|(_, factor)| *factor <= max_variance_factor) {
+                out[i] = Some(predict(rows, r, &x, i));
+            }
+        }
+        Some(out)
+    }
 }
 
 /// Least squares: the `x` minimising `sum over train of (r_i + rows_i . x)^2` (columns scaled, a tiny
 /// ridge keeps collinear columns finite).
 pub(crate) fn lstsq(rows: &[Vec<f64>], r: &[f64], train: &[usize]) -> Option<Vec<f64>> {
-    TrainedFit::new(rows, r, train).map(|f| f.x)
+    Design::new(rows, train.to_vec())?.solve(rows, r)
 }
 
 /// `min |r + X c|` with the covariance of `c` per unit residual variance (`(X^T X)^-1`) and the
@@ -150,7 +243,8 @@ pub(crate) fn lstsq_with_covariance(rows: &[Vec<f64>], r: &[f64]) -> Option<(Vec
         return None;
     }
     let train: Vec<usize> = (0..rows.len()).collect();
-    let (scale, a, b) = scaled_normals(rows, r, &train);
+    let (scale, a) = scaled_normals(rows, &train);
+    let b = scaled_rhs(rows, r, &train, &scale);
     let unit: Vec<Vec<f64>> = (0..p).map(|j| (0..p).map(|k| f64::from(u8::from(j == k))).collect()).collect();
     let mut rhs: Vec<&[f64]> = vec![&b];
     rhs.extend(unit.iter().map(Vec::as_slice));
@@ -245,27 +339,12 @@ pub(crate) fn cv_residuals_predictable(
     max_variance_factor: f64,
 ) -> Option<Vec<Option<f64>>> {
     let n = r.len();
-    let mut out = vec![None; n];
-    for f in 0..folds {
-        let train: Vec<usize> = (0..n).filter(|&i| fold[i] != f && !dropped[i]).collect();
-        if !(0..n).any(|i| fold[i] == f) {
-            continue;
-        }
-        let fit = TrainedFit::new(rows, r, &train)?;
-        for i in (0..n).filter(|&i| fold[i] == f && !dropped[i]) {
-            if fit.variance_factor(&rows[i]) <= max_variance_factor {
-                out[i] = Some(predict(rows, r, &fit.x, i));
-            }
-        }
-    }
-    Some(out)
+    CvDesign::new(rows, &fold[..n], folds, &dropped[..n])?.residuals(rows, r, max_variance_factor)
 }
 
 /// In-sample residuals of the fit on the kept poses (`None` for dropped ones).
 pub(crate) fn fit_residuals(rows: &[Vec<f64>], r: &[f64], dropped: &[bool]) -> Option<Vec<Option<f64>>> {
-    let train: Vec<usize> = (0..r.len()).filter(|&i| !dropped[i]).collect();
-    let x = lstsq(rows, r, &train)?;
-    Some((0..r.len()).map(|i| (!dropped[i]).then(|| predict(rows, r, &x, i))).collect())
+    kept_design(rows, &dropped[..r.len()])?.residuals(rows, r)
 }
 
 pub(crate) fn sum_sq(v: &[Option<f64>]) -> (f64, usize) {

@@ -21,10 +21,10 @@ use std::ops::Range;
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
 
-use super::gap::{Measured, Noise, PoseData, expected_cv_ms, expected_fit_rmse_mg, residual_noise_draws};
+use super::gap::{Measured, Noise, PoseData, expected_fit_rmse_mg, mean_cv_ms, residual_noise_draws};
 use super::math::{
-    V3, axis, cholesky_solve, cv_residuals, cv_residuals_predictable, fit_residuals, jacobian_row,
-    lstsq_with_covariance, norm, rms, sum_sq,
+    CvDesign, V3, axis, cholesky_solve, cv_residuals_predictable, fit_residuals, jacobian_row, lstsq_with_covariance,
+    norm, rms, sum_sq,
 };
 use super::report::{Candidate, InSampleFit};
 use super::within::{Within, WithinFit, WithinVariant};
@@ -240,6 +240,8 @@ pub(crate) struct Context<'a> {
     pub(crate) base_rows: Vec<Vec<f64>>,
     pub(crate) fold: Vec<usize>,
     pub(crate) folds: usize,
+    /// The nominal design's folds, factored once (`None`: a fold leaves too few poses).
+    base_cv: Option<CvDesign>,
     pub(crate) white_draws: Vec<Vec<f64>>,
     /// Expected mean-square held-out residual of white noise with the nominal model.
     pub(crate) e_white: f64,
@@ -315,9 +317,11 @@ impl<'a> Context<'a> {
         let white_draws =
             residual_noise_draws(&m.model, &m.directions, &m.poses, &white_noise, CV_NOISE_DRAWS, opts.seed);
         let none_dropped = vec![false; n];
-        let e_white = expected_cv_ms(&base_rows, &white_draws, &fold, folds, &none_dropped);
+        let base_cv = CvDesign::new(&base_rows, &fold, folds, &none_dropped);
+        let cv_of = |r: &[f64]| base_cv.as_ref()?.residuals(&base_rows, r, f64::INFINITY);
+        let e_white = mean_cv_ms(white_draws.iter().filter_map(|e| cv_of(e)));
         // Too few poses to withhold some at the pose level: only the within-pose channel tests.
-        let nominal_cv = cv_residuals(&base_rows, &m.r, &fold, folds, &none_dropped);
+        let nominal_cv = cv_of(&m.r);
         let pose_level = nominal_cv.is_some();
         let nominal_cv = nominal_cv.unwrap_or_else(|| vec![None; n]);
         let heldout_ratio_nominal =
@@ -335,6 +339,7 @@ impl<'a> Context<'a> {
             base_rows,
             fold,
             folds,
+            base_cv,
             white_draws,
             e_white,
             none_dropped,
@@ -376,6 +381,11 @@ impl<'a> Context<'a> {
 
     pub(crate) fn calibrated(&self) -> &[V3] {
         &self.m.calibrated
+    }
+
+    /// Held-out residuals of `r` (one per pose) under the nominal design.
+    pub(crate) fn base_cv_residuals(&self, r: &[f64]) -> Option<Vec<Option<f64>>> {
+        self.base_cv.as_ref()?.residuals(&self.base_rows, r, f64::INFINITY)
     }
 
     fn rows_with(&self, extra: &[Vec<f64>]) -> Vec<Vec<f64>> {

@@ -19,7 +19,7 @@ use super::{Context, Evaluation, Family, Variant, motion, ringing, standard_eval
 use crate::diagnose::PARAMETER_PENALTY;
 use crate::diagnose::SEGMENTS;
 use crate::diagnose::locate::within_chi2_of;
-use crate::diagnose::math::{V3, axis, cv_residuals, dot, fit_residuals, mean_of, median, norm, rms, sum_sq};
+use crate::diagnose::math::{V3, axis, dot, fit_residuals, mean_of, median, norm, rms, sum_sq};
 use crate::diagnose::within::{Within, WithinVariant};
 
 /// Leading segments of each hold left out by the start-trimmed variants.
@@ -128,7 +128,7 @@ fn trimmed_start(ctx: &Context<'_>, drop: usize) -> Option<(f64, Vec<Option<f64>
     let m = ctx.m;
     let means: Vec<V3> = ctx.poses.iter().map(|p| if p.seg_n > 0 { mean_of(&p.seg[drop..]) } else { p.mean }).collect();
     let r: Vec<f64> = means.iter().map(|x| norm(m.model.apply(*x)) - m.gravity).collect();
-    let cv = cv_residuals(&ctx.base_rows, &r, &ctx.fold, ctx.folds, &ctx.none_dropped)?;
+    let cv = ctx.base_cv_residuals(&r)?;
     // Fewer samples per mean: more white noise in each.
     let more_noise = SEGMENTS as f64 / (SEGMENTS - drop) as f64;
     let expected = ctx.e_white * more_noise;

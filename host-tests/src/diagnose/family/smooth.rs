@@ -110,40 +110,45 @@ fn add_prior(a: &mut [Vec<f64>], base: usize, knots: usize, order: usize, step: 
     }
 }
 
-/// Normal equations `sum x x^T`, `sum x r` over the rows of each fold.
+/// Normal equations `sum x x^T` (lower triangle), `sum x r` over the rows of every fold but one,
+/// for each fold, and over all rows: every shape of one knot count shares them.
 struct FoldNormals {
-    a: Vec<Vec<Vec<f64>>>,
-    b: Vec<Vec<f64>>,
+    /// Index `f`: without fold `f`; the last: all folds.
+    sums: Vec<(Vec<Vec<f64>>, Vec<f64>)>,
 }
 
 impl FoldNormals {
     fn new(rows: &[Vec<f64>], r: &[f64], fold: &[usize], folds: usize) -> Self {
         let p = rows.first().map_or(0, Vec::len);
-        let mut out = Self { a: vec![vec![vec![0.0; p]; p]; folds], b: vec![vec![0.0; p]; folds] };
+        let mut per_fold = vec![(vec![vec![0.0; p]; p], vec![0.0; p]); folds];
         for ((row, ri), &f) in rows.iter().zip(r).zip(fold) {
+            let (a, b) = &mut per_fold[f];
             for j in 0..p {
-                out.b[f][j] -= row[j] * ri;
+                b[j] -= row[j] * ri;
                 for k in 0..=j {
-                    out.a[f][j][k] += row[j] * row[k];
+                    a[j][k] += row[j] * row[k];
                 }
             }
         }
-        out
+        let sum_without = |skip: Option<usize>| {
+            let (mut a, mut b) = (vec![vec![0.0; p]; p], vec![0.0; p]);
+            for (_, (fa, fb)) in per_fold.iter().enumerate().filter(|(f, _)| Some(*f) != skip) {
+                for j in 0..p {
+                    b[j] += fb[j];
+                    for k in 0..=j {
+                        a[j][k] += fa[j][k];
+                    }
+                }
+            }
+            (a, b)
+        };
+        Self { sums: (0..folds).map(Some).chain([None]).map(sum_without).collect() }
     }
 
-    /// The sums over every fold but `skip` (all of them for `None`), lower triangle.
-    fn without(&self, skip: Option<usize>) -> (Vec<Vec<f64>>, Vec<f64>) {
-        let p = self.b.first().map_or(0, Vec::len);
-        let (mut a, mut b) = (vec![vec![0.0; p]; p], vec![0.0; p]);
-        for f in (0..self.b.len()).filter(|f| Some(*f) != skip) {
-            for j in 0..p {
-                b[j] += self.b[f][j];
-                for k in 0..=j {
-                    a[j][k] += self.a[f][j][k];
-                }
-            }
-        }
-        (a, b)
+    /// The sums over every fold but `skip` (all of them for `None`).
+    fn without(&self, skip: Option<usize>) -> (Vec<Vec<f64>>, &[f64]) {
+        let (a, b) = &self.sums[skip.unwrap_or(self.sums.len() - 1)];
+        (a.clone(), b)
     }
 }
 
@@ -180,12 +185,12 @@ fn score(
     for f in 0..ctx.folds {
         let (mut a, b) = normals.without(Some(f));
         add_prior(&mut a, base, shape.knots, shape.order, shape.step, w);
-        let x = solve_scaled(&a, &[&b])?.pop()?;
+        let x = solve_scaled(&a, &[b])?.pop()?;
         ss += (0..n).filter(|&i| fold[i] == f).map(|i| predict(&x, i).powi(2)).sum::<f64>();
     }
     let (mut a, b) = normals.without(None);
     add_prior(&mut a, base, shape.knots, shape.order, shape.step, w);
-    let mut rhs: Vec<&[f64]> = vec![&b];
+    let mut rhs: Vec<&[f64]> = vec![b];
     rhs.extend(rows[..n].iter().map(Vec::as_slice));
     let solved = solve_scaled(&a, &rhs)?;
     // Effective parameters: the trace of the pose rows' hat matrix less the calibration's.

@@ -14,8 +14,7 @@ use allan::{colored_noise_estimate, pooled_estimate, pooled_markov};
 
 use super::{Candidate, Context, Evaluation, Family, Variant, periodic};
 use crate::diagnose::gap::Measured;
-use crate::diagnose::gap::{Noise, expected_cv_ms, quantisation_step, residual_noise_draws, simulate_gap};
-use crate::diagnose::math::cv_residuals;
+use crate::diagnose::gap::{Noise, mean_cv_ms, quantisation_step, residual_noise_draws, simulate_gap};
 use crate::diagnose::math::{V3, mean};
 use crate::diagnose::verdict::NOISE_LEAVES_AT_MOST;
 use crate::diagnose::within::white_from_differences;
@@ -225,15 +224,12 @@ impl ColoredNoise {
         let noise = c.noise(m);
         let draws = residual_noise_draws(&m.model, &m.directions, &m.poses, &noise, CV_NOISE_DRAWS, ctx.opts.seed);
         let observed = largest_share(&ctx.nominal_cv);
-        let as_concentrated = draws
-            .iter()
-            .filter_map(|d| cv_residuals(&ctx.base_rows, d, &ctx.fold, ctx.folds, &ctx.none_dropped))
-            .filter(|cv| largest_share(cv) >= observed)
-            .count();
+        let cvs: Vec<Vec<Option<f64>>> = draws.iter().filter_map(|d| ctx.base_cv_residuals(d)).collect();
+        let as_concentrated = cvs.iter().filter(|cv| largest_share(cv) >= observed).count();
         if as_concentrated < MIN_DRAWS_AS_CONCENTRATED {
             return None;
         }
-        let e_col = expected_cv_ms(&ctx.base_rows, &draws, &ctx.fold, ctx.folds, &ctx.none_dropped);
+        let e_col = mean_cv_ms(cvs);
         let ms = (crate::diagnose::math::sum_sq(&ctx.nominal_cv).0 + params * PARAMETER_PENALTY * ctx.e_white)
             / m.poses.len() as f64;
         Some((ms / e_col).sqrt())
