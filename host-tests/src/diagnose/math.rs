@@ -88,9 +88,9 @@ fn scaled_normals(rows: &[Vec<f64>], train: &[usize]) -> (Vec<f64>, Vec<Vec<f64>
         for (xj, (v, s)) in x.iter_mut().zip(rows[i].iter().zip(&scale)) {
             *xj = v / s;
         }
-        for (j, aj) in a.iter_mut().enumerate() {
+        for ((j, aj), xj) in a.iter_mut().enumerate().zip(&x) {
             for (ajk, xk) in aj[..=j].iter_mut().zip(&x) {
-                *ajk += x[j] * xk;
+                *ajk += xj * xk;
             }
         }
     }

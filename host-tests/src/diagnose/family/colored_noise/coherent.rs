@@ -28,6 +28,9 @@ const MAX_BLOCKS: usize = 10_000;
 /// Most frequencies scanned: beyond it the grid is coarser than [`OVERSAMPLING`] (a log of hours).
 const MAX_FREQUENCIES: f64 = 1000.0;
 
+/// Frequencies of the scan between two of its sines and cosines computed afresh ([`Blocks::scan`]).
+const EXACT_EVERY: usize = 32;
+
 /// The holds' block means about each hold's mean, per axis in white-noise standard deviations of a
 /// block mean, with their times (s) and holds.
 struct Blocks {
@@ -65,18 +68,39 @@ impl Blocks {
         out
     }
 
-    /// Chi-square the sinusoid of `f_hz` (sine and cosine per axis, each centred within its hold)
-    /// takes out of the blocks, summed over the axes. One pass: the blocks are centred within their
-    /// hold, so a centred column's products with them are the raw column's, and its squares are the
+    /// `(f, line chi-square at f)` for `f = lowest + k step` up to `highest`. From one frequency to
+    /// the next each block's sine and cosine turn by the step's angle (two products, not a
+    /// `sin_cos`), computed afresh every [`EXACT_EVERY`] steps so that rounding cannot build up.
+    fn scan(&self, lowest: f64, step: f64, highest: f64) -> Vec<(f64, f64)> {
+        let angles =
+            |f: f64| -> Vec<(f64, f64)> { self.t.iter().map(|t| (std::f64::consts::TAU * f * t).sin_cos()).collect() };
+        let turn = angles(step);
+        let (mut at, mut out) = (Vec::new(), Vec::new());
+        for k in 0.. {
+            let f = lowest + k as f64 * step;
+            if f > highest {
+                break;
+            }
+            at = if k % EXACT_EVERY == 0 {
+                angles(f)
+            } else {
+                at.iter().zip(&turn).map(|(&(s, c), &(ds, dc))| (s * dc + c * ds, c * dc - s * ds)).collect()
+            };
+            out.push((f, self.line_chi2(&at)));
+        }
+        out
+    }
+
+    /// Chi-square a sinusoid (sine and cosine per axis, each centred within its hold; `phases`: their
+    /// values at each block) takes out of the blocks, summed over the axes. One pass: the blocks are
+    /// centred within their hold, so a centred column's products with them are the raw column's, and its squares are the
     /// raw squares less each hold's `n mean^2`.
-    fn line_chi2(&self, f_hz: f64) -> f64 {
-        let w = std::f64::consts::TAU * f_hz;
+    fn line_chi2(&self, phases: &[(f64, f64)]) -> f64 {
         // Per hold: count, sum of sine, sum of cosine.
         let mut per_hold = vec![[0.0; 3]; self.holds];
         let (mut ss, mut sc, mut cc) = (0.0, 0.0, 0.0);
         let (mut sy, mut cy) = ([0.0; 3], [0.0; 3]);
-        for ((t, &h), y) in self.t.iter().zip(&self.hold).zip(&self.y) {
-            let (s, c) = (w * t).sin_cos();
+        for ((&(s, c), &h), y) in phases.iter().zip(&self.hold).zip(&self.y) {
             per_hold[h] = [per_hold[h][0] + 1.0, per_hold[h][1] + s, per_hold[h][2] + c];
             (ss, sc, cc) = (ss + s * s, sc + s * c, cc + c * c);
             for a in 0..3 {
@@ -121,11 +145,7 @@ pub(crate) fn periodic_bias(table: &Table, holds: &[Range<usize>], rate: f64, wh
     }
     let (lowest, highest) = (LOWEST_CYCLES / span, HIGHEST_HZ.min(0.25 / blocks.block_s));
     let step = (1.0 / (OVERSAMPLING * span)).max((highest - lowest) / MAX_FREQUENCIES);
-    let scan: Vec<(f64, f64)> = (0..)
-        .map(|k| lowest + k as f64 * step)
-        .take_while(|f| *f <= highest)
-        .map(|f| (f, blocks.line_chi2(f)))
-        .collect();
+    let scan = blocks.scan(lowest, step, highest);
     let &(f_hz, peak) = scan.iter().max_by(|a, b| a.1.total_cmp(&b.1))?;
     let beside: Vec<f64> = scan
         .iter()
