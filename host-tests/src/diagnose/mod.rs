@@ -32,13 +32,15 @@
 //!    penalised wander, or before a drift or temperature that misses the holds' movement when the
 //!    holds walk at the level of the pose means' spread; a noise model must also be far ahead of a
 //!    probe that explains the withheld values; a drift or temperature whose gain rests on the
-//!    worst-predicted pose alone, with no support in the holds, is not named). When the gap is significant and no family or probe explains it, the holds
+//!    worst-predicted pose alone, with no support in the holds, is not named). When the gap is
+//!    significant and no family or probe explains it, the holds
 //!    answer from how each one moves (`family::from_holds`: settling if it slows, drift if a line per
 //!    hold explains it, colored noise if every hold wanders alike and a walk at their level spreads
 //!    the pose means as much; no shrink claimed); else the value family that alone fits every pose
 //!    to white noise (gap ratio <= 1.2, a chi-square drop of 10 times the residual per column, as
-//!    many residual degrees of freedom as columns spent; no other family nor probe fitting them to
-//!    white noise: a design that few poses determine, which the withheld poses cannot test); else
+//!    many residual degrees of freedom as columns spent; its held-out evidence below [`MIN_GAIN`];
+//!    no other family nor probe fitting them to white noise: a design that few poses determine,
+//!    which the withheld poses cannot test); else
 //!    `unexplained` (with where the gap lies). `none` when there is no significant gap.
 //! 4. **How far it shrinks.** The winner is added (to the model, or to the simulator for
 //!    `colored-noise`) and step 1 redone: `shrink = (before - after) / (before - 1)`, clipped to

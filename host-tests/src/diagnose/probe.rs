@@ -73,7 +73,7 @@ const STEP_OVER_DRIFT: f64 = 0.2;
 /// it and the step's modulus change per unit direction (the columns enter as `r + rows . x`, the
 /// modulus moves by `-u . x`).
 fn fitted_step(ctx: &Context<'_>, rows: &[Vec<f64>]) -> Option<(usize, V3)> {
-    let base = ctx.base_rows.first().map_or(0, Vec::len);
+    let base = ctx.base_columns();
     let after = rows.iter().position(|r| r[base..].iter().any(|x| *x != 0.0))?;
     let (x, _, _) = lstsq_with_covariance(rows, &ctx.m.r)?;
     (after > 0 && x.len() >= base + 3).then(|| (after, std::array::from_fn(|a| -x[base + a])))

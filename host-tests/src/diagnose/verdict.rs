@@ -187,15 +187,15 @@ fn fits_every_pose<'e>(
     // A family the withheld poses support but a guard kept from the verdict (its gain resting on one
     // pose, a probe explaining more) stays kept from it.
     let untested = |e: &Evaluation| !(e.candidate.evidence() >= MIN_GAIN);
-    let explains =
-        |e: &'e Evaluation| untested(e) && in_sample(e).is_some_and(|f| f.explained_per_param >= EXPLAINED_PER_PARAM);
     let cause_over_proxy = |e: &Evaluation, o: &Evaluation| e.candidate.effect == "temperature" && slow_change(o);
     let alone = |i: usize, e: &Evaluation| {
         let rival = |(j, o): (usize, &'e Evaluation)| j != i && fits(o) && !cause_over_proxy(e, o);
         !evaluations.iter().enumerate().any(rival) && !probes.iter().any(|p| p.in_sample_ratio <= FITS_TO_NOISE)
     };
-    let (i, e) = evaluations.iter().enumerate().find(|&(i, e)| fits(e) && explains(e) && alone(i, e))?;
-    Some((i, e, in_sample(e)?))
+    evaluations.iter().enumerate().find_map(|(i, e)| {
+        let fit = in_sample(e).filter(|f| f.ratio <= FITS_TO_NOISE && f.explained_per_param >= EXPLAINED_PER_PARAM)?;
+        (untested(e) && alone(i, e)).then_some((i, e, fit))
+    })
 }
 
 /// Picks the verdict among the evaluated families and measures the shrink. `from_holds` is the

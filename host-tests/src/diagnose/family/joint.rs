@@ -26,7 +26,7 @@ pub(crate) struct JointFit {
 /// Rows of the stacked design (pose means first, weighted by `1 / sqrt(e_white)`, then the
 /// within-pose segments, already whitened), their targets and folds.
 fn stacked(ctx: &Context<'_>, w: &Within, v: &WithinVariant) -> (Vec<Vec<f64>>, Vec<f64>, Vec<usize>) {
-    let base = ctx.base_rows.first().map_or(0, Vec::len);
+    let base = ctx.base_columns();
     let (mut rows, mut r) = ctx.whitened_pose_rows(&v.pose_extra);
     let mut fold = ctx.fold.clone();
     for (i, row) in v.rows.iter().enumerate() {

@@ -72,7 +72,7 @@ const UNPREDICTABLE: f64 = 1e6;
 /// poses fits any gap, and one that spends more columns than it leaves traces most gaps (a
 /// temperature quadratic in bias and scale through a smoothed thermometer, 12 columns, left 4 poses
 /// at white noise on a sinusoidal bias of 25 poses).
-pub(crate) const IN_SAMPLE_MIN_DOF: usize = 3;
+const IN_SAMPLE_MIN_DOF: usize = 3;
 
 /// Logs of at most this many poses count a probe's residual degrees of freedom leaving one out
 /// ([`Context::leaves_residual_dof`]); longer ones as if a fold of `opts.folds` were withheld. A
@@ -383,6 +383,11 @@ impl<'a> Context<'a> {
         &self.m.calibrated
     }
 
+    /// The calibration's columns in a design (the nominal model's parameters).
+    pub(crate) fn base_columns(&self) -> usize {
+        self.base_rows.first().map_or(0, Vec::len)
+    }
+
     /// Held-out residuals of `r` (one per pose) under the nominal design.
     pub(crate) fn base_cv_residuals(&self, r: &[f64]) -> Option<Vec<Option<f64>>> {
         self.base_cv.as_ref()?.residuals(&self.base_rows, r, f64::INFINITY)
@@ -446,7 +451,7 @@ impl<'a> Context<'a> {
     /// [`MIN_RESIDUAL_DOF`]: a design that (nearly) interpolates its training poses predicts the
     /// withheld ones by chance, not by physics.
     pub(crate) fn leaves_residual_dof(&self, extra: &[Vec<f64>]) -> bool {
-        let columns = self.base_rows.first().map_or(0, Vec::len) + extra.first().map_or(0, Vec::len);
+        let columns = self.base_columns() + extra.first().map_or(0, Vec::len);
         self.probe_training_poses() >= columns + MIN_RESIDUAL_DOF
     }
 
@@ -461,7 +466,7 @@ impl<'a> Context<'a> {
 
     /// Every fold's training poses number at least the columns of the design with `extra` plus `dof`.
     fn trains_beyond(&self, extra: &[Vec<f64>], dof: usize) -> bool {
-        let columns = self.base_rows.first().map_or(0, Vec::len) + extra.first().map_or(0, Vec::len);
+        let columns = self.base_columns() + extra.first().map_or(0, Vec::len);
         let dropped = &self.none_dropped;
         (0..self.folds).all(|f| {
             let train = (0..dropped.len()).filter(|&i| self.fold[i] != f && !dropped[i]).count();
@@ -519,7 +524,7 @@ impl<'a> Context<'a> {
     /// ratio it leaves and the drop in the poses' chi-square per extra column over the chi-square
     /// left per degree of freedom.
     fn in_sample(&self, rows: &[Vec<f64>], dropped: &[bool], detail: &str) -> Option<InSampleFit> {
-        let base = self.base_rows.first().map_or(0, Vec::len);
+        let base = self.base_columns();
         let columns = rows.first().map_or(0, Vec::len);
         let kept = dropped.iter().filter(|d| !**d).count();
         let least = IN_SAMPLE_MIN_DOF.max(columns.saturating_sub(base));

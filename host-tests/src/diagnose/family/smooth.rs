@@ -66,7 +66,7 @@ pub(crate) fn bspline(j: usize, count: usize, t_end: f64, t: f64) -> f64 {
 /// when the log has the within-pose channel, its segments' rows (the wander's course during each
 /// hold, already whitened); their targets and folds (a segment in its pose's fold).
 fn design(ctx: &Context<'_>, knots: usize, t_end: f64) -> (Vec<Vec<f64>>, Vec<f64>, Vec<usize>) {
-    let base = ctx.base_rows.first().map_or(0, Vec::len);
+    let base = ctx.base_columns();
     let effect = |_: usize, t: f64, _: std::ops::Range<usize>| -> Vec<V3> {
         (0..knots).flat_map(|j| (0..3).map(move |a| axis(a, bspline(j, knots, t_end, t)))).collect()
     };
