@@ -168,8 +168,8 @@ impl Design {
         forward_substitute(&self.l, &scaled).iter().map(|v| v * v).sum()
     }
 
-    /// In-sample residuals at the training poses (`None` elsewhere, and all `None` when `r` cannot
-    /// be fitted); `n` poses.
+    /// In-sample residuals at the training poses, one per entry of `r` (`None` elsewhere); `None`
+    /// when `r` cannot be fitted.
     pub(crate) fn residuals(&self, rows: &[Vec<f64>], r: &[f64]) -> Option<Vec<Option<f64>>> {
         let x = self.solve(rows, r)?;
         let mut out = vec![None; r.len()];
@@ -359,6 +359,49 @@ pub(crate) fn mean_of(segs: &[V3]) -> V3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_design_factored_once_gives_every_draw_its_own_fits_residuals() {
+        // 10 poses, 3 columns, 4 folds, one pose dropped; residual vectors of different sizes.
+        let n = 10;
+        let rows: Vec<Vec<f64>> =
+            (0..n).map(|i| vec![1.0, i as f64 * 0.3, ((i * 7) % 5) as f64 - 2.0 + 0.1 * i as f64]).collect();
+        let fold: Vec<usize> = (0..n).map(|i| i % 4).collect();
+        let mut dropped = vec![false; n];
+        dropped[6] = true;
+        let design = CvDesign::new(&rows, &fold, 4, &dropped).unwrap();
+        let kept = kept_design(&rows, &dropped).unwrap();
+        for draw in 0..3 {
+            let r: Vec<f64> = (0..n).map(|i| ((i * 13 + draw * 5) % 11) as f64 * 0.01 * (draw + 1) as f64).collect();
+            let cv = design.residuals(&rows, &r, f64::INFINITY).unwrap();
+            // Each fold's fit by its own normal equations (unscaled, no ridge).
+            let fit = |train: &[usize]| {
+                let a: Vec<Vec<f64>> = (0..3)
+                    .map(|j| (0..3).map(|k| train.iter().map(|&t| rows[t][j] * rows[t][k]).sum()).collect())
+                    .collect();
+                let b: Vec<f64> = (0..3).map(|j| -train.iter().map(|&t| rows[t][j] * r[t]).sum::<f64>()).collect();
+                cholesky_solve(&a, &b, 0.0).unwrap()
+            };
+            for i in 0..n {
+                let train: Vec<usize> = (0..n).filter(|&j| fold[j] != fold[i] && !dropped[j]).collect();
+                let x = fit(&train);
+                let expected = (!dropped[i]).then(|| predict(&rows, &r, &x, i));
+                assert_eq!(cv[i].is_some(), expected.is_some(), "draw {draw} pose {i}");
+                if let (Some(a), Some(b)) = (cv[i], expected) {
+                    assert!((a - b).abs() <= 1e-9, "draw {draw} pose {i}: {a} vs {b}");
+                }
+            }
+            let x = fit(&(0..n).filter(|&j| !dropped[j]).collect::<Vec<_>>());
+            let fitted = kept.residuals(&rows, &r).unwrap();
+            for i in 0..n {
+                let expected = (!dropped[i]).then(|| predict(&rows, &r, &x, i));
+                assert_eq!(fitted[i].is_some(), expected.is_some(), "draw {draw} pose {i}");
+                if let (Some(a), Some(b)) = (fitted[i], expected) {
+                    assert!((a - b).abs() <= 1e-9, "draw {draw} pose {i}: {a} vs {b}");
+                }
+            }
+        }
+    }
 
     #[test]
     fn a_withheld_pose_its_fold_barely_touches_is_not_predicted() {

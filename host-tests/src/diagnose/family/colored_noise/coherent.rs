@@ -155,3 +155,32 @@ pub(crate) fn periodic_bias(table: &Table, holds: &[Range<usize>], rate: f64, wh
     let over_neighbours = if beside.is_empty() { 0.0 } else { peak / median(&beside) };
     (over_neighbours >= LINE_OVER_NEIGHBOURS).then_some(Line { f_hz, over_neighbours })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_scan_turning_each_phase_matches_a_sin_cos_at_every_frequency() {
+        // Three holds of 0.1 s blocks over 300 s, a sinusoid of 0.05 Hz plus a ramp in them.
+        let mut blocks = Blocks { t: Vec::new(), y: Vec::new(), hold: Vec::new(), holds: 3, block_s: 0.1 };
+        for (h, start) in [0.0, 120.0, 250.0].into_iter().enumerate() {
+            for k in 0..400 {
+                let t = start + 0.1 * k as f64;
+                let s = (std::f64::consts::TAU * 0.05 * t).sin();
+                blocks.t.push(t);
+                blocks.y.push([s, 0.3 * s + 0.001 * k as f64, -0.5 * s]);
+                blocks.hold.push(h);
+            }
+        }
+        let (lowest, step) = (4.0 / 290.0, 1.0 / (4.0 * 290.0));
+        let scan = blocks.scan(lowest, step, 0.5);
+        assert!(scan.len() > 10 * EXACT_EVERY, "{} frequencies", scan.len());
+        for (k, &(f, chi2)) in scan.iter().enumerate() {
+            assert!((f - (lowest + k as f64 * step)).abs() < 1e-12);
+            let phases: Vec<(f64, f64)> = blocks.t.iter().map(|t| (std::f64::consts::TAU * f * t).sin_cos()).collect();
+            let direct = blocks.line_chi2(&phases);
+            assert!((chi2 - direct).abs() <= 1e-9 * direct.max(1.0), "{f} Hz: {chi2} vs {direct}");
+        }
+    }
+}
