@@ -7,7 +7,7 @@ use accelcal::model::Params;
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
 
-use super::math::{Model, V3, dot, kept_design, mean, median, norm, rms, std_dev, sum_sq};
+use super::math::{Design, Model, V3, dot, mean, median, norm, rms, std_dev, sum_sq};
 use super::report::Gap;
 use super::{DiagnoseError, DiagnoseOptions, SEGMENTS, SIGNIFICANT_RATIO, SIGNIFICANT_Z, err};
 use crate::calib;
@@ -201,8 +201,7 @@ pub(crate) fn mean_cv_ms(cvs: impl IntoIterator<Item = Vec<Option<f64>>>) -> f64
 }
 
 /// Mean in-sample RMSE (mg) of pure noise for a design.
-pub(crate) fn expected_fit_rmse_mg(rows: &[Vec<f64>], draws: &[Vec<f64>], dropped: &[bool], gravity: f64) -> f64 {
-    let Some(design) = kept_design(rows, dropped) else { return f64::NAN };
+pub(crate) fn expected_fit_rmse_mg(design: &Design, rows: &[Vec<f64>], draws: &[Vec<f64>], gravity: f64) -> f64 {
     let v: Vec<f64> = draws
         .iter()
         .filter_map(|e| design.residuals(rows, e))

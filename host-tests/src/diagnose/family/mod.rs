@@ -23,8 +23,8 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 
 use super::gap::{Measured, Noise, PoseData, expected_fit_rmse_mg, mean_cv_ms, residual_noise_draws};
 use super::math::{
-    CvDesign, V3, axis, cholesky_solve, cv_residuals_predictable, fit_residuals, jacobian_row, lstsq_with_covariance,
-    norm, rms, sum_sq,
+    CvDesign, V3, axis, cholesky_solve, cv_residuals_predictable, fit_residuals, jacobian_row, kept_design,
+    lstsq_with_covariance, norm, rms, sum_sq,
 };
 use super::report::{Candidate, InSampleFit};
 use super::within::{Within, WithinFit, WithinVariant};
@@ -326,7 +326,8 @@ impl<'a> Context<'a> {
         let nominal_cv = nominal_cv.unwrap_or_else(|| vec![None; n]);
         let heldout_ratio_nominal =
             if pose_level { ((sum_sq(&nominal_cv).0 / n as f64) / e_white).sqrt() } else { f64::NAN };
-        let base_fit_rmse_mg = expected_fit_rmse_mg(&base_rows, &white_draws, &none_dropped, m.gravity);
+        let base_fit_rmse_mg = kept_design(&base_rows, &none_dropped)
+            .map_or(f64::NAN, |d| expected_fit_rmse_mg(&d, &base_rows, &white_draws, m.gravity));
         let within = Within::new(table, m);
         if !pose_level && within.is_none() {
             return None;
@@ -510,10 +511,11 @@ impl<'a> Context<'a> {
     /// The gap ratio a design leaves on the poses it is fitted on (against the same design fitted to
     /// white noise) and the residuals: `None` when it cannot be fitted.
     fn fit_ratio(&self, rows: &[Vec<f64>], dropped: &[bool]) -> Option<(f64, Vec<Option<f64>>)> {
-        let after = fit_residuals(rows, &self.m.r, dropped)?;
+        let design = kept_design(rows, dropped)?;
+        let after = design.residuals(rows, &self.m.r)?;
         let kept: Vec<f64> = after.iter().flatten().copied().collect();
         let real_after = self.m.to_mg(rms(&kept));
-        let sim_after = expected_fit_rmse_mg(rows, &self.white_draws, dropped, self.m.gravity);
+        let sim_after = expected_fit_rmse_mg(&design, rows, &self.white_draws, self.m.gravity);
         // The linearised sims and the library's differ slightly: scale to the library's.
         let sim_after = sim_after * self.m.gap.sim_rmse_mg / self.base_fit_rmse_mg;
         Some((real_after / sim_after, after))
