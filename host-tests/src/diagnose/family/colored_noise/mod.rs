@@ -241,16 +241,17 @@ impl ColoredNoise {
     /// ([`Colored::saturating`]; not when the holds settle: they rise with their transients):
     /// `(ratio, model)`.
     ///
-    /// An estimate pooled over the holds is checked against the holds' own movement
-    /// ([`holds_refute`]); the longest rest's reaches time scales longer than a hold, where a slow
-    /// Gauss-Markov noise has not yet reached its floor (and one rest may hold a step a walk's
-    /// level would be read from).
+    /// Every estimate is checked against the holds' own movement ([`holds_refute`]): one rest may
+    /// hold a step or a transient a walk's level would be read from, which the other holds do not
+    /// show. Only an estimate pooled over the holds is checked for smoothness ([`too_smooth`]): the
+    /// longest rest's reaches time scales longer than a hold, where a slow Gauss-Markov noise has
+    /// not yet reached its floor.
     fn best_noise(&self, ctx: &Context<'_>, estimates: &[Estimate]) -> Option<(f64, Colored)> {
         let mut best: Option<(f64, Colored)> = None;
         let settle = super::settling::settling_holds(ctx).is_some();
         for (estimate, pooled) in estimates {
             for c in estimate.parts() {
-                if !(ctx.pose_level && c.any()) || (*pooled && (holds_refute(ctx, &c) || too_smooth(ctx, &c))) {
+                if !(ctx.pose_level && c.any()) || holds_refute(ctx, &c) || (*pooled && too_smooth(ctx, &c)) {
                     continue;
                 }
                 let saturating = if *pooled && !settle { c.saturating(ctx) } else { Vec::new() };
@@ -394,7 +395,7 @@ mod tests {
     use super::{ColoredNoise, Context, Family, walk_accounts_for_poses};
     use crate::csvio::{self, AccumulateOptions, Table};
     use crate::diagnose::diagnose;
-    use crate::diagnose::{DiagnoseOptions, gap};
+    use crate::diagnose::{DiagnoseOptions, MIN_GAIN, gap};
     use crate::sim::random::{random_sign, standard_normal, uniform_in};
     use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
 
@@ -605,5 +606,31 @@ mod tests {
         let ctx = Context::new(&table, &m, &opts).unwrap();
         assert!(ctx.within.as_ref().unwrap().observed_excess().0 > 0.0);
         assert!(!ColoredNoise.evaluate(&ctx).candidate.detail.contains("no more than white"));
+    }
+
+    #[test]
+    fn a_walk_in_the_longest_rest_alone_is_refuted_by_the_other_holds() {
+        // Offsets of 1 mg per hold spread the pose means (an effect outside the catalogue) and the
+        // longest rest alone walks: a noise model read from that rest predicts the other holds would
+        // walk too, and they are white. Read from the longest rest without that check, the walk
+        // explained the pose means (held-out gain 0.85 and 0.72) and was named.
+        let opts = DiagnoseOptions::DEFAULT;
+        for (seed, walk_mg) in [(1, 0.3), (8, 0.1)] {
+            let mut table = walk_log(seed, 0.0, 1.0);
+            let acc = csvio::accumulate(&table, &AccumulateOptions::default()).unwrap();
+            let (mg, dt) = (table.median_magnitude / 1000.0, 1.0 / acc.sample_rate_hz.unwrap());
+            let longest = acc.spans.iter().max_by_key(|s| s.last_row - s.first_row).unwrap();
+            let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+            let mut walk = [0.0; 3];
+            for sample in &mut table.samples[longest.first_row..=longest.last_row] {
+                walk = walk.map(|w| w + walk_mg * mg * dt.sqrt() * standard_normal(&mut rng));
+                (0..3).for_each(|a| sample[a] += walk[a]);
+            }
+            let m = gap::measure(&table, &opts).unwrap();
+            let ctx = Context::new(&table, &m, &opts).unwrap();
+            let gain = ColoredNoise.evaluate(&ctx).candidate.heldout_gain;
+            assert!(gain < MIN_GAIN, "seed {seed}: gain {gain}");
+            assert_eq!(diagnose(&table, &opts).unwrap().verdict, "unexplained", "seed {seed}");
+        }
     }
 }
