@@ -55,7 +55,7 @@ fn bias_step(ctx: &Context<'_>) -> Vec<Variant> {
     let inside = (STEP_SIDE_POSES..n.saturating_sub(STEP_SIDE_POSES)).filter_map(|p| {
         let (y, var) = hold_deviations(ctx, p)?;
         let jump = jump_in_hold(&y, var);
-        (shape_fit(&y, var, |j| j as f64).0 - jump.chi2 >= JUMP_SEARCH_CHI2).then_some((p, jump.share_after))
+        (jump.over_line >= JUMP_SEARCH_CHI2).then_some((p, jump.share_after))
     });
     let places: Vec<(usize, f64)> = between.chain(inside).collect();
     let params = 3 + ((places.len().max(1) as f64).ln().ceil() as usize).max(1);
@@ -115,10 +115,9 @@ const JUMP_CHI2_GAIN: f64 = 9.0;
 fn jump_inside_hold(ctx: &Context<'_>, p: usize, step: V3) -> bool {
     let Some((y, var)) = hold_deviations(ctx, p) else { return false };
     let expected = dot(ctx.directions()[p], step);
-    let (line, _) = shape_fit(&y, var, |j| j as f64);
     let jump = jump_in_hold(&y, var);
     let agrees = jump.size * expected > 0.0 && (0.5..=2.0).contains(&(jump.size / expected));
-    agrees && line - jump.chi2 >= JUMP_CHI2_GAIN
+    agrees && jump.over_line >= JUMP_CHI2_GAIN
 }
 
 /// Chi-square by which a jump searched in a hold must fit its segments better than a line in time
@@ -128,8 +127,8 @@ const JUMP_SEARCH_CHI2: f64 = 6.3;
 
 /// The jump that fits a hold's segment deviations best.
 struct HoldJump {
-    /// Residual chi-square of a constant and the jump.
-    chi2: f64,
+    /// By how much less residual chi-square a constant and the jump leave than a line in time.
+    over_line: f64,
     /// The jump's size (output unit).
     size: f64,
     /// The share of the hold's samples after the jump.
@@ -140,12 +139,17 @@ struct HoldJump {
 /// the segment it falls in takes its share.
 fn jump_in_hold(y: &[f64; SEGMENTS], var: f64) -> HoldJump {
     let share = |j: usize, at: f64| (j as f64 + 1.0 - at).clamp(0.0, 1.0);
-    let first = HoldJump { chi2: f64::INFINITY, size: 0.0, share_after: 1.0 };
+    let (line, _) = shape_fit(y, var, |j| j as f64);
+    let first = HoldJump { over_line: f64::NEG_INFINITY, size: 0.0, share_after: 1.0 };
     (1..4 * SEGMENTS).fold(first, |best, q| {
         let at = q as f64 / 4.0;
         let (chi2, size) = shape_fit(y, var, |j| share(j, at));
-        let share_after = 1.0 - at / SEGMENTS as f64;
-        if chi2 < best.chi2 { HoldJump { chi2, size, share_after } } else { best }
+        let over_line = line - chi2;
+        if over_line > best.over_line {
+            HoldJump { over_line, size, share_after: 1.0 - at / SEGMENTS as f64 }
+        } else {
+            best
+        }
     })
 }
 
