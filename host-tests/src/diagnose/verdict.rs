@@ -141,13 +141,16 @@ fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation], holds_walk: bool
 }
 
 /// An out-of-catalogue probe explains the withheld poses better than the family: by its veto
-/// margin; a noise model, which predicts only the spread of the withheld poses, must also be
+/// margin (none over a penalised wander that fits every pose less closely than the probe does: the
+/// wander follows any path through the poses, a step among them too, where the probe's few
+/// parameters fit them); a noise model, which predicts only the spread of the withheld poses, must also be
 /// [`NOISE_FAR_AHEAD`] of a probe that explains their values (as of a family that does).
 fn beaten(e: &Evaluation, probes: &[Probe]) -> bool {
     let gain = e.candidate.evidence();
     probes.iter().any(|p| {
         let explains = !e.predicts_values && p.heldout_gain >= MIN_GAIN;
-        let margin = if p.jump_in_hold && slow_change(e) { 0.0 } else { p.veto_margin };
+        let dominates_wander = e.wander && p.in_sample_ratio < e.candidate.ratio_after;
+        let margin = if p.jump_in_hold && slow_change(e) || dominates_wander { 0.0 } else { p.veto_margin };
         p.heldout_gain > gain + margin || explains && p.heldout_gain + NOISE_FAR_AHEAD > gain + margin
     })
 }
@@ -374,6 +377,33 @@ mod tests {
         assert_eq!(verdict(0.80, false, 0.40), "colored-noise");
         // A family that predicts the values only needs to be ahead.
         assert_eq!(verdict(0.88, true, 0.82), "drift");
+    }
+
+    #[test]
+    fn a_step_that_fits_every_pose_closer_than_a_wander_vetoes_it_without_a_margin() {
+        let table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "sim").unwrap();
+        let mut m = gap::measure(&table, &DiagnoseOptions::DEFAULT).unwrap();
+        (m.gap.significant, m.gap.ratio_before) = (true, 10.5);
+        // A development log's offset step (32 poses): a penalised wander (8 effective parameters)
+        // gained 0.47 on the withheld poses and left 1.87 on the poses it was fitted on; the step
+        // probe gained 0.65 and fitted every pose to 1.11.
+        let named = |wander: bool, step_in_sample: f64| {
+            let mut drift = on_pose_means("drift", 3.3, 0.47, true);
+            (drift.candidate.ratio_after, drift.wander) = (1.87, wander);
+            let step = Probe {
+                shape: "bias-step",
+                heldout_gain: 0.65,
+                detail: String::new(),
+                in_sample_ratio: step_in_sample,
+                veto_margin: 0.2,
+                jump_in_hold: false,
+            };
+            decide(&m, &[drift], &[step], None, false).verdict
+        };
+        assert_eq!(named(true, 1.11), "unexplained");
+        // The wander fits the poses closer, or the drift is a fixed shape: the step needs its margin.
+        assert_eq!(named(true, 2.0), "drift");
+        assert_eq!(named(false, 1.11), "drift");
     }
 
     #[test]
