@@ -83,7 +83,8 @@ fn step_variant(ctx: &Context<'_>, first_after: usize, share: f64, params: usize
 /// Evidence by which a bias step must exceed a family to veto it: a warm-up or a wander is a smooth
 /// step, and on a few poses a step fits a slow drift nearly as well as the drift does. None over a
 /// slow change (drift, temperature) when a hold beside the step shows it as a jump
-/// ([`step_seen_in_holds`]).
+/// ([`step_seen_in_holds`]), nor over a penalised wander the step fits every pose closer than
+/// (`verdict::beaten`).
 const STEP_OVER_DRIFT: f64 = 0.2;
 
 /// The step fitted in `rows` (the calibration columns, then the step's three): the first pose after

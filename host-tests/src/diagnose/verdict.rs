@@ -143,8 +143,8 @@ fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation], holds_walk: bool
 /// An out-of-catalogue probe explains the withheld poses better than the family: by its veto
 /// margin (none over a penalised wander that fits every pose less closely than the probe does: the
 /// wander follows any path through the poses, a step among them too, where the probe's few
-/// parameters fit them); a noise model, which predicts only the spread of the withheld poses, must also be
-/// [`NOISE_FAR_AHEAD`] of a probe that explains their values (as of a family that does).
+/// parameters fit them); a noise model, which predicts only the spread of the withheld poses, must
+/// also be [`NOISE_FAR_AHEAD`] of a probe that explains their values (as of a family that does).
 fn beaten(e: &Evaluation, probes: &[Probe]) -> bool {
     let gain = e.candidate.evidence();
     probes.iter().any(|p| {
