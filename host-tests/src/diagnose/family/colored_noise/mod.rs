@@ -3,10 +3,14 @@
 //! jumps come every few seconds) measured on the whole holds (time segments, not the pose means it
 //! is judged on) and given to the simulator; judged by how well the noise model predicts the
 //! nominal model's held-out scatter. Holds that move with one sinusoid in phase over the whole log
-//! (`coherent.rs`) carry a periodic bias, not a noise.
+//! (`coherent.rs`) carry a periodic bias, not a noise. A telegraph noise whose jumps split the holds
+//! is seen in the jumps between the pieces of a hold (`telegraph.rs`).
 
 mod allan;
 pub(crate) mod coherent;
+mod telegraph;
+
+pub(crate) use telegraph::switching_holds;
 
 use std::ops::Range;
 
@@ -631,6 +635,22 @@ mod tests {
             let gain = ColoredNoise.evaluate(&ctx).candidate.heldout_gain;
             assert!(gain < MIN_GAIN, "seed {seed}: gain {gain}");
             assert_eq!(diagnose(&table, &opts).unwrap().verdict, "unexplained", "seed {seed}");
+        }
+    }
+
+    #[test]
+    fn a_telegraph_noise_that_splits_the_holds_is_named_from_its_jumps() {
+        // Jumps of 12 mg every 6 s on average per axis: the pose finder cuts the holds at the jumps
+        // (27 and 44 jumps between pieces of one hold), and the pieces' pose means spread far beyond
+        // what the holds' segments show; the noise model did not account for them (`unexplained`,
+        // the spread over the poses). The jumps between the pieces of a hold, one size per sensor
+        // axis, are the two-level noise.
+        for seed in [4, 6] {
+            let opts = DiagnoseOptions { seed, ..DiagnoseOptions::DEFAULT };
+            let d = diagnose(&telegraph_log(seed, 12.0, 6.0), &opts).unwrap();
+            assert_eq!(d.verdict, "colored-noise", "seed {seed}: {}", d.to_text());
+            let why = d.located.clone().unwrap_or_default();
+            assert!(why.contains("switches between levels inside the holds"), "seed {seed}: {why}");
         }
     }
 }

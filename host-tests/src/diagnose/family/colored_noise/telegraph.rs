@@ -1,0 +1,75 @@
+//! A telegraph (popcorn) noise seen where it switches inside a hold: the pose finder cuts a hold at
+//! a jump of the bias, and the pieces of one hold (no movement between them) differ by the jump.
+//! A two-level noise of a sensor axis jumps along that axis, by the same size each time; a part
+//! that moves or settles jumps along a change of gravity's direction, which follows the pose.
+
+use crate::diagnose::family::Context;
+use crate::diagnose::gap::PoseData;
+use crate::diagnose::math::{V3, median, norm};
+
+/// Fewest jumps inside holds the test asks for: a transient or a step splits a hold once or twice
+/// (a settling and a drift of the development sets, 3 and 4 jumps), a switching noise many times
+/// (the development sets' telegraph noises, 11-34).
+const MIN_JUMPS: usize = 6;
+
+/// Share of its size from which a jump takes part on an axis.
+const TAKES_PART: f64 = 0.3;
+
+/// Least share of an axis's jumps within [`LEVEL_BAND`] of their median size: a two-level noise
+/// jumps by one size (a jump back and forth inside one piece, or two axes switching in one piece,
+/// leaves a few others).
+const ONE_SIZE_SHARE: f64 = 0.6;
+
+/// Ratio band about the median size within which a jump is of that size.
+const LEVEL_BAND: f64 = 1.33;
+
+/// Least size of a jump in standard deviations of the difference of two pieces' means (their
+/// samples' own variance): the pose finder also cuts a hold where a block's mean moves by noise.
+const SIGNIFICANT_JUMP_Z: f64 = 10.0;
+
+/// The jumps between successive pieces of one hold ([`Context::same_hold`]) beyond
+/// [`SIGNIFICANT_JUMP_Z`], input unit.
+fn jumps_in_holds(ctx: &Context<'_>) -> Vec<V3> {
+    let jump = |q: &PoseData, p: &PoseData| -> (V3, f64) {
+        let d: V3 = std::array::from_fn(|a| p.mean[a] - q.mean[a]);
+        let z2 = (0..3).map(|a| d[a] * d[a] / (p.var[a] / p.n as f64 + q.var[a] / q.n as f64)).sum::<f64>();
+        (d, z2)
+    };
+    ctx.poses
+        .windows(2)
+        .filter(|w| ctx.same_hold(&w[0], &w[1]))
+        .map(|w| jump(&w[0], &w[1]))
+        .filter(|(_, z2)| *z2 >= SIGNIFICANT_JUMP_Z * SIGNIFICANT_JUMP_Z)
+        .map(|(d, _)| d)
+        .collect()
+}
+
+/// The holds switch between two levels: at least [`MIN_JUMPS`] jumps inside holds, and on each
+/// sensor axis the jumps that take part in it mostly of one size. The description, or `None`.
+pub(crate) fn switching_holds(ctx: &Context<'_>) -> Option<String> {
+    let jumps = jumps_in_holds(ctx);
+    if jumps.len() < MIN_JUMPS {
+        return None;
+    }
+    let sizes = |a: usize| -> Vec<f64> {
+        jumps.iter().filter(|d| d[a].abs() >= TAKES_PART * norm(**d)).map(|d| d[a].abs()).collect()
+    };
+    let one_size = |s: &[f64]| {
+        let m = median(s);
+        let of_it = s.iter().filter(|x| **x * LEVEL_BAND >= m && **x <= LEVEL_BAND * m).count();
+        s.len() < 2 || of_it as f64 >= ONE_SIZE_SHARE * s.len() as f64
+    };
+    let axes: Vec<Vec<f64>> = (0..3).map(sizes).collect();
+    let taking_part: Vec<String> = (0..3)
+        .filter(|&a| !axes[a].is_empty())
+        .map(|a| format!("{} on {}", axes[a].len(), ["x", "y", "z"][a]))
+        .collect();
+    axes.iter().all(|s| one_size(s)).then(|| {
+        format!(
+            "the bias switches between levels inside the holds: {} jumps between pieces of a hold, of one size per \
+             sensor axis ({})",
+            jumps.len(),
+            taking_part.join(", ")
+        )
+    })
+}
