@@ -23,17 +23,19 @@ const ONE_SIZE_SHARE: f64 = 0.6;
 /// Ratio band about the median size within which a jump is of that size.
 const LEVEL_BAND: f64 = 1.33;
 
-/// Least size of a jump in standard deviations of the difference of two pieces' means (their
-/// samples' own variance): the pose finder also cuts a hold where a block's mean moves by noise.
+/// Least size of a jump in standard deviations of the difference of two pieces' means (the log's
+/// white noise and the quantisation a mean keeps): the pose finder also cuts a hold where a
+/// block's mean moves by noise.
 const SIGNIFICANT_JUMP_Z: f64 = 10.0;
 
 /// The jumps between successive pieces of one hold ([`Context::same_hold`]) beyond
 /// [`SIGNIFICANT_JUMP_Z`], input unit.
 fn jumps_in_holds(ctx: &Context<'_>) -> Vec<V3> {
+    let (white, quantisation) = (ctx.m.white, ctx.m.quantisation);
     let jump = |q: &PoseData, p: &PoseData| -> (V3, f64) {
         let d: V3 = std::array::from_fn(|a| p.mean[a] - q.mean[a]);
-        let z2 = (0..3).map(|a| d[a] * d[a] / (p.var[a] / p.n as f64 + q.var[a] / q.n as f64)).sum::<f64>();
-        (d, z2)
+        let variance = |a: usize| white[a] * (1.0 / p.n as f64 + 1.0 / q.n as f64) + 2.0 * quantisation[a];
+        (d, (0..3).map(|a| d[a] * d[a] / variance(a)).sum::<f64>())
     };
     ctx.poses
         .windows(2)
