@@ -287,6 +287,11 @@ mod tests {
         Evaluation { candidate, after: Vec::new(), predicts_values: true, gain_without_worst: f64::NAN, wander: false }
     }
 
+    /// A probe (its place not seen as a jump in a hold).
+    fn probe(shape: &'static str, heldout_gain: f64, in_sample_ratio: f64, veto_margin: f64) -> Probe {
+        Probe { shape, heldout_gain, detail: String::new(), in_sample_ratio, veto_margin, jump_in_hold: false }
+    }
+
     fn on_pose_means(effect: &'static str, heldout_ratio: f64, heldout_gain: f64, predicts_values: bool) -> Evaluation {
         let mut e = holds_only(effect, 0.0, f64::NAN);
         e.candidate.heldout_ratio = heldout_ratio;
@@ -358,14 +363,7 @@ mod tests {
         let table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "sim").unwrap();
         let mut m = gap::measure(&table, &DiagnoseOptions::DEFAULT).unwrap();
         m.gap.significant = true;
-        let probe = |gain: f64| Probe {
-            shape: "rotation-direction",
-            heldout_gain: gain,
-            detail: String::new(),
-            in_sample_ratio: f64::NAN,
-            veto_margin: 0.0,
-            jump_in_hold: false,
-        };
+        let probe = |gain: f64| probe("rotation-direction", gain, f64::NAN, 0.0);
         let verdict = |gain: f64, predicts_values: bool, probe_gain: f64| {
             let effect = if predicts_values { "drift" } else { "colored-noise" };
             let e = [on_pose_means(effect, 1.2, gain, predicts_values)];
@@ -390,15 +388,7 @@ mod tests {
         let named = |wander: bool, step_in_sample: f64| {
             let mut drift = on_pose_means("drift", 3.3, 0.47, true);
             (drift.candidate.ratio_after, drift.wander) = (1.87, wander);
-            let step = Probe {
-                shape: "bias-step",
-                heldout_gain: 0.65,
-                detail: String::new(),
-                in_sample_ratio: step_in_sample,
-                veto_margin: 0.2,
-                jump_in_hold: false,
-            };
-            decide(&m, &[drift], &[step], None, false).verdict
+            decide(&m, &[drift], &[probe("bias-step", 0.65, step_in_sample, 0.2)], None, false).verdict
         };
         assert_eq!(named(true, 1.11), "unexplained");
         // The wander fits the poses closer, or the drift is a fixed shape: the step needs its margin.
@@ -476,14 +466,7 @@ mod tests {
         let table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "sim").unwrap();
         let mut m = gap::measure(&table, &DiagnoseOptions::DEFAULT).unwrap();
         (m.gap.significant, m.gap.ratio_before) = (true, 6.0);
-        let probe = |in_sample_ratio: f64| Probe {
-            shape: "cross-axis",
-            heldout_gain: 0.2,
-            detail: String::new(),
-            in_sample_ratio,
-            veto_margin: 0.0,
-            jump_in_hold: false,
-        };
+        let probe = |in_sample_ratio: f64| probe("cross-axis", 0.2, in_sample_ratio, 0.0);
         let decide_on = |e: &[Evaluation], p: &[Probe]| decide(&m, e, p, None, false);
         let probe_that_explains = |p: Probe| Probe { heldout_gain: MIN_GAIN, ..p };
         // A development log's cube terms per axis (16 poses): 1.07 with 71 per column; the withheld
