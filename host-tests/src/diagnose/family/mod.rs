@@ -543,6 +543,13 @@ impl<'a> Context<'a> {
 
     /// Poses `q` and then `p` are pieces of one hold: close in time, and no movement between them.
     pub(crate) fn same_hold(&self, q: &PoseData, p: &PoseData) -> bool {
+        self.still_between(q, p, &|near_q, near_p| near_q && near_p)
+    }
+
+    /// Poses `q` and then `p` close in time ([`SAME_HOLD_GAP_S`]), and the readings between them
+    /// averaged over [`STILL_WINDOW_S`] within [`STILL_SHARE`] of gravity of `q`'s mean, of `p`'s or
+    /// both as `still(near q, near p)` asks of every window.
+    pub(crate) fn still_between(&self, q: &PoseData, p: &PoseData, still: &dyn Fn(bool, bool) -> bool) -> bool {
         let window = ((self.m.rate * STILL_WINDOW_S) as usize).max(1);
         let limit = STILL_SHARE * norm(p.mean);
         let near = |x: V3, y: V3| norm(std::array::from_fn(|a| x[a] - y[a])) < limit;
@@ -550,7 +557,7 @@ impl<'a> Context<'a> {
         p.t_start - q.t_end < SAME_HOLD_GAP_S
             && between.chunks(window).all(|c| {
                 let mean: V3 = std::array::from_fn(|a| c.iter().map(|s| s[a]).sum::<f64>() / c.len() as f64);
-                near(mean, p.mean) && near(mean, q.mean)
+                still(near(mean, q.mean), near(mean, p.mean))
             })
     }
 

@@ -639,6 +639,21 @@ mod tests {
     }
 
     #[test]
+    fn a_telegraph_noise_whose_levels_lie_farther_apart_than_a_hold_may_move_is_named_from_its_jumps() {
+        // Jumps of 40 mg (every 6 or 12 s on average per axis): the pieces of a hold lie farther
+        // apart than `Context::same_hold` lets one hold move (2 % of g), so none were joined and the
+        // verdict was `unexplained` (16 of 16 such logs over seeds 1-8); the readings between the
+        // pieces sit at one level or the other, which joins them as a hold whose bias switched.
+        for (seed, dwell_s) in [(1, 6.0), (4, 12.0)] {
+            let opts = DiagnoseOptions { seed, ..DiagnoseOptions::DEFAULT };
+            let d = diagnose(&telegraph_log(seed, 40.0, dwell_s), &opts).unwrap();
+            assert_eq!(d.verdict, "colored-noise", "seed {seed}: {}", d.to_text());
+            let why = d.located.clone().unwrap_or_default();
+            assert!(why.contains("switches between levels inside the holds"), "seed {seed}: {why}");
+        }
+    }
+
+    #[test]
     fn a_telegraph_noise_that_splits_the_holds_is_named_from_its_jumps() {
         // Jumps of 12 mg every 6 s on average per axis: the pose finder cuts the holds at the jumps
         // (27 and 44 jumps between pieces of one hold), and the pieces' pose means spread far beyond

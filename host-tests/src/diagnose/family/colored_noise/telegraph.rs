@@ -30,6 +30,19 @@ const LEVEL_BAND: f64 = 1.33;
 /// block's mean moves by noise.
 const SIGNIFICANT_JUMP_Z: f64 = 10.0;
 
+/// Largest jump between two pieces of a hold that a switch of the bias can be, share of gravity's
+/// modulus: a telegraph noise's levels may lie farther apart than [`Context::same_hold`] lets pieces
+/// of one hold move.
+const MAX_SWITCH_SHARE: f64 = 0.1;
+
+/// Pieces `q` then `p` of one hold, or of a hold whose bias switched between them: close in time,
+/// at most [`MAX_SWITCH_SHARE`] apart, and the readings between them at the level of one piece or
+/// the other.
+fn switch_between(ctx: &Context<'_>, q: &PoseData, p: &PoseData) -> bool {
+    norm(sub(p.mean, q.mean)) < MAX_SWITCH_SHARE * norm(p.mean)
+        && ctx.still_between(q, p, &|near_q, near_p| near_q || near_p)
+}
+
 /// The jumps between successive pieces of one hold ([`Context::same_hold`]) beyond
 /// [`SIGNIFICANT_JUMP_Z`], input unit.
 fn jumps_in_holds(ctx: &Context<'_>) -> Vec<V3> {
@@ -41,7 +54,7 @@ fn jumps_in_holds(ctx: &Context<'_>) -> Vec<V3> {
     };
     ctx.poses
         .windows(2)
-        .filter(|w| ctx.same_hold(&w[0], &w[1]))
+        .filter(|w| switch_between(ctx, &w[0], &w[1]))
         .map(|w| jump(&w[0], &w[1]))
         .filter(|(_, z2)| *z2 >= SIGNIFICANT_JUMP_Z * SIGNIFICANT_JUMP_Z)
         .map(|(d, _)| d)
