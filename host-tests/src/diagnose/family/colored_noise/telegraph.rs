@@ -1,7 +1,9 @@
 //! A telegraph (popcorn) noise seen where it switches inside a hold: the pose finder cuts a hold at
 //! a jump of the bias, and the pieces of one hold (no movement between them) differ by the jump.
 //! A two-level noise of a sensor axis jumps along that axis, by the same size each time; a part
-//! that moves or settles jumps along a change of gravity's direction, which follows the pose.
+//! that moves or settles jumps along a change of gravity's direction, which follows the pose. Two
+//! pieces are of one hold when the readings between them sit at one level or the other
+//! ([`switch_between`]): a telegraph's levels may lie farther apart than one hold may move.
 
 use crate::diagnose::family::Context;
 use crate::diagnose::gap::PoseData;
@@ -31,8 +33,8 @@ const LEVEL_BAND: f64 = 1.33;
 const SIGNIFICANT_JUMP_Z: f64 = 10.0;
 
 /// Largest jump between two pieces of a hold that a switch of the bias can be, share of gravity's
-/// modulus: a telegraph noise's levels may lie farther apart than [`Context::same_hold`] lets pieces
-/// of one hold move.
+/// modulus (a turn of 6 degrees): a telegraph noise's levels may lie farther apart than
+/// [`Context::same_hold`] lets pieces of one hold move (a blindgen4 telegraph's 32 mg).
 const MAX_SWITCH_SHARE: f64 = 0.1;
 
 /// Pieces `q` then `p` of one hold, or of a hold whose bias switched between them: close in time,
@@ -43,7 +45,7 @@ fn switch_between(ctx: &Context<'_>, q: &PoseData, p: &PoseData) -> bool {
         && ctx.still_between(q, p, &|near_q, near_p| near_q || near_p)
 }
 
-/// The jumps between successive pieces of one hold ([`Context::same_hold`]) beyond
+/// The jumps between successive pieces of one hold ([`switch_between`]) beyond
 /// [`SIGNIFICANT_JUMP_Z`], input unit.
 fn jumps_in_holds(ctx: &Context<'_>) -> Vec<V3> {
     let (white, quantisation) = (ctx.m.white, ctx.m.quantisation);
