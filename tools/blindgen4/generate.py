@@ -299,6 +299,13 @@ class Sim:
                 q[i1:j1] = qmul(wob, qq)
                 lift = np.outer(np.sin(np.pi * s) ** 2, [0, 0, rng.uniform(0.0, 0.08)])
                 pos[i1:j1] = centres[i] + np.outer(s, centres[i + 1] - centres[i]) + lift
+        # the last hold ends with the session, and its slice leaves the session's last row out: that row holds
+        # the last pose too (left unset, `np.empty` gave it whatever was in memory: a NaN there, spread by the
+        # low-pass filter, made a whole log NaN on seed 115)
+        last_row = np.searchsorted(self.t, holds[-1][1])
+        q[last_row:] = quats[holds[-1][2]]
+        pos[last_row:] = centres[holds[-1][2]]
+        self.pose_idx[last_row:] = holds[-1][2]
         q[self.pose_idx == -1] /= np.linalg.norm(q[self.pose_idx == -1], axis=1, keepdims=True)
         self.q = q
         self.pos = pos + qrot(q, lever)
