@@ -552,7 +552,7 @@ impl<'a> Context<'a> {
     pub(crate) fn still_between(&self, q: &PoseData, p: &PoseData, still: &dyn Fn(bool, bool) -> bool) -> bool {
         let window = ((self.m.rate * STILL_WINDOW_S) as usize).max(1);
         let limit = STILL_SHARE * norm(p.mean);
-        let near = |x: V3, y: V3| norm(std::array::from_fn(|a| x[a] - y[a])) < limit;
+        let near = |x: V3, y: V3| norm(crate::vec3::sub(x, y)) < limit;
         let between = self.table.samples.get(q.rows.end..p.rows.start).unwrap_or_default();
         p.t_start - q.t_end < SAME_HOLD_GAP_S
             && between.chunks(window).all(|c| {
