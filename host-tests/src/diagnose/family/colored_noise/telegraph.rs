@@ -11,9 +11,9 @@ use crate::diagnose::math::{V3, median, norm};
 use crate::vec3::sub;
 
 /// Fewest jumps inside holds the test asks for: a transient or a step splits a hold once or twice, a
-/// switching noise many times (the development sets' telegraph noises whose jumps split their
-/// holds: 13-34). Asking 3, a settling and a drift (gap ratio 1.3) were named colored noise by a
-/// first version that judged the jumps against the pieces' own sample variance.
+/// switching noise many times (the telegraph noises named from their jumps on stop 46's development
+/// sets and blindgen4 115: 7-34). Asking 3, stop 45's first version (jumps judged against the
+/// pieces' own sample variance) also named a settling and a drift colored noise.
 const MIN_JUMPS: usize = 6;
 
 /// Share of its size from which a jump takes part on an axis.
