@@ -426,7 +426,7 @@ fn white_variance(table: &Table, poses: &[PoseData], rate: f64) -> Result<(V3, V
 
 /// Length of the blocks [`correlation_factor`] averages, seconds: longer than the correlation of a
 /// MEMS part's digital low-pass (bandwidths down to ~5 Hz), far shorter than a hold.
-const CORRELATION_BLOCK_S: f64 = 0.2;
+pub(crate) const CORRELATION_BLOCK_S: f64 = 0.2;
 
 /// Blocks a pose needs (in the part of the hold used) to take part in [`correlation_factor`].
 const CORRELATION_MIN_BLOCKS: usize = 4;

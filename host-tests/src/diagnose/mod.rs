@@ -66,7 +66,8 @@
 //! - `colored-noise`: a bias random walk and/or a bias-instability floor measured on the longest
 //!   rest (detrended quadratically in time and linearly in temperature) and pooled over every hold
 //!   (each cleared of its line), from the overlapping Allan variance in excess of white noise (two
-//!   white levels: successive differences, at least `q^2 / 12`, and the holds' median variance);
+//!   white levels: differences of successive blocks once a low-pass filter's correlation has died
+//!   out, at least `q^2 / 12`, and the holds' median variance);
 //!   and a random walk at the level the holds move (the method of moments on the within-pose
 //!   segments) when it accounts for the pose means' spread; the level the withheld poses' scatter
 //!   agrees with best is given to the simulator.

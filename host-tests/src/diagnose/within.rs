@@ -97,20 +97,67 @@ fn brownian_deviation_share() -> f64 {
         / s as f64
 }
 
-/// White variance per axis from successive differences (`var(x[i+1] - x[i]) / 2`), median over
-/// the poses: slow movements within a pose do not inflate it.
-pub(crate) fn white_from_differences(table: &Table, poses: &[PoseData]) -> V3 {
+/// White-equivalent variance per axis from differences of successive block means, `W(L) = L
+/// var(mean[i+L] - mean[i]) / 2` over overlapping blocks of `L` samples (median over the poses: slow
+/// movements within a pose barely reach a difference of neighbouring blocks): `W(1)` is the
+/// classic `var(x[i+1] - x[i]) / 2`. A sensor's digital low-pass filter correlates successive
+/// readings, so `W` rises with `L` until the correlation has died out and then stays level (white
+/// noise); a noise slower than the filter (a flicker) makes it rise again. `L` doubles from 1, up
+/// to [`WHITE_BLOCK_S`]: the level where `W` first grows by less than [`WHITE_PLATEAU`] is
+/// returned (`W(1)` for a sensor whose readings are not correlated), else the level where it grew
+/// least (between the filter's correlation and the slower noise). A filter's correlation decays
+/// slowly in `W`, as `1 - c / L`: the level is up to a few tenths below the white-equivalent one,
+/// as the gap's own correlation blocks are.
+pub(crate) fn white_from_differences(table: &Table, poses: &[PoseData], rate: f64) -> V3 {
+    let longest = ((WHITE_BLOCK_S * rate).round() as usize).max(1);
     std::array::from_fn(|a| {
-        let per_pose: Vec<f64> = poses
-            .iter()
-            .filter(|p| p.n >= 2)
-            .map(|p| {
-                let s = &table.samples[p.rows.clone()];
-                s.windows(2).map(|w| (w[1][a] - w[0][a]).powi(2)).sum::<f64>() / (2.0 * (s.len() - 1) as f64)
-            })
-            .collect();
-        median(&per_pose)
+        let level = |block: usize| median_block_difference(table, poses, block, a);
+        let (mut block, mut w) = (1, level(1));
+        // The level where `W` grew least, and that growth.
+        let mut knee = (w, f64::INFINITY);
+        while 2 * block <= longest {
+            let next = level(2 * block);
+            let growth = next / w;
+            if !(growth > WHITE_PLATEAU) {
+                return w;
+            }
+            if growth < knee.1 {
+                knee = (w, growth);
+            }
+            (block, w) = (2 * block, next);
+        }
+        knee.0
     })
+}
+
+/// Longest block [`white_from_differences`] tries, s: as long as the gap's correlation blocks
+/// ([`super::gap::CORRELATION_BLOCK_S`]), beyond a MEMS low-pass filter's correlation.
+const WHITE_BLOCK_S: f64 = 0.2;
+
+/// Growth of [`white_from_differences`]' level per doubling of the block below which it has
+/// levelled off.
+const WHITE_PLATEAU: f64 = 1.1;
+
+/// [`block_difference_variance`] of blocks of `block` samples on axis `a`, median over the poses of
+/// at least four blocks.
+fn median_block_difference(table: &Table, poses: &[PoseData], block: usize, a: usize) -> f64 {
+    let per_pose: Vec<f64> = poses
+        .iter()
+        .filter(|p| p.n >= 4 * block)
+        .map(|p| block_difference_variance(&table.samples[p.rows.clone()], block, a))
+        .collect();
+    median(&per_pose)
+}
+
+/// `L var(mean[i+L] - mean[i]) / 2` on axis `a` over the overlapping blocks of `L` samples.
+fn block_difference_variance(samples: &[V3], block: usize, a: usize) -> f64 {
+    let mut prefix = vec![0.0; samples.len() + 1];
+    for (i, s) in samples.iter().enumerate() {
+        prefix[i + 1] = prefix[i] + s[a];
+    }
+    let count = samples.len() + 1 - 2 * block;
+    let sum: f64 = (0..count).map(|k| (prefix[k + 2 * block] - 2.0 * prefix[k + block] + prefix[k]).powi(2)).sum();
+    sum / (2.0 * count as f64 * block as f64)
 }
 
 impl Within {
@@ -469,6 +516,41 @@ mod tests {
     use rand_core::{Rng, SeedableRng};
     use rand_distr::{Distribution, StandardNormal};
     use rand_xoshiro::Xoshiro256PlusPlus;
+
+    /// Eight holds of 2000 readings at 500 Hz, white noise of unit variance through a moving average
+    /// of `width` readings, plus a random walk of `walk` per reading.
+    fn filtered_holds(seed: u64, width: usize, walk: f64) -> (Table, Vec<PoseData>) {
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+        let raw: Vec<f64> = (0..16_000 + width).map(|_| StandardNormal.sample(&mut rng)).collect();
+        let mut level = 0.0;
+        let mut text = String::from("t,ax,ay,az\n");
+        for i in 0..16_000 {
+            let step: f64 = StandardNormal.sample(&mut rng);
+            level += walk * step;
+            let x = raw[i..i + width].iter().sum::<f64>() / width as f64 + level;
+            text += &format!("{},{x},{x},{}\n", i as f64 / 500.0, 1.0 + x);
+        }
+        let table = crate::csvio::read_csv_str("filtered", &text, &crate::csvio::ReadOptions::default()).unwrap();
+        let poses = (0..8).map(|k| super::super::gap::pose_data(&table, 2000 * k, 2000 * (k + 1), 500.0)).collect();
+        (table, poses)
+    }
+
+    #[test]
+    fn block_differences_measure_a_low_passed_sensors_white_noise_once_its_correlation_dies_out() {
+        // A moving average of 8 readings: per-reading variance 1/8, white-equivalent variance (of a
+        // mean of many readings, times their count) 1; successive differences see 1/64. The level
+        // where the differences stop growing by a tenth per doubling is 0.72-0.90 on these seeds.
+        for seed in 1..=4 {
+            let (table, poses) = filtered_holds(seed, 8, 0.0);
+            let white = white_from_differences(&table, &poses, 500.0)[0];
+            assert!((0.65..1.1).contains(&white), "seed {seed}: {white}");
+        }
+        // A walk that moves each hold by 20 times the noise of its mean (its level over a hold
+        // against a mean of 2000 readings) barely reaches it.
+        let (table, poses) = filtered_holds(5, 8, 0.01);
+        let white = white_from_differences(&table, &poses, 500.0)[0];
+        assert!((0.65..1.1).contains(&white), "walking: {white}");
+    }
 
     /// A channel of `poses` holds whose segment deviations are `path(pose, segment)` (whitened
     /// units) plus white noise whitened as the channel does it (mean square 1).
