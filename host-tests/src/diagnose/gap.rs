@@ -590,13 +590,8 @@ mod tests {
     /// digital low-pass: the noise of a mean keeps its level while the per-sample variance falls by
     /// `width`).
     fn clean_log_averaged(width: usize) -> Table {
-        let mut table = to_table(&generate(&random_scenario(EffectClass::None, 0)), "clean").unwrap();
-        let raw = table.samples.clone();
-        for (i, s) in table.samples.iter_mut().enumerate() {
-            let window = &raw[i.saturating_sub(width - 1)..=i];
-            *s = std::array::from_fn(|a| window.iter().map(|r| r[a]).sum::<f64>() / window.len() as f64);
-        }
-        table
+        let table = to_table(&generate(&random_scenario(EffectClass::None, 0)), "clean").unwrap();
+        crate::diagnose::testing::low_passed(table, width)
     }
 
     #[test]

@@ -401,6 +401,24 @@ fn unmeasured(table: &Table, opts: &DiagnoseOptions, candidates: Vec<Candidate>,
     }
 }
 
+/// Helpers the diagnosis's tests share.
+#[cfg(test)]
+pub(crate) mod testing {
+    use crate::csvio::Table;
+
+    /// `table` through a moving average of `width` readings: a digital low-pass filter of about
+    /// `rate / (2 width)` Hz (a MEMS part's, correlating successive readings; the noise of a mean
+    /// keeps its level while the per-reading variance falls by `width`).
+    pub(crate) fn low_passed(mut table: Table, width: usize) -> Table {
+        let raw = table.samples.clone();
+        for (i, s) in table.samples.iter_mut().enumerate() {
+            let window = &raw[i.saturating_sub(width - 1)..=i];
+            *s = std::array::from_fn(|a| window.iter().map(|r| r[a]).sum::<f64>() / window.len() as f64);
+        }
+        table
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::math::{Model, lstsq};

@@ -612,17 +612,6 @@ mod tests {
         assert!(!ColoredNoise.evaluate(&ctx).candidate.detail.contains("no more than white"));
     }
 
-    /// `table` through a moving average of `width` samples: a digital low-pass filter of about
-    /// `rate / (2 width)` Hz (a MEMS part's, correlating successive readings).
-    fn low_passed(mut table: Table, width: usize) -> Table {
-        let raw = table.samples.clone();
-        for (i, s) in table.samples.iter_mut().enumerate() {
-            let window = &raw[i.saturating_sub(width - 1)..=i];
-            *s = std::array::from_fn(|a| window.iter().map(|r| r[a]).sum::<f64>() / window.len() as f64);
-        }
-        table
-    }
-
     #[test]
     fn a_low_passed_sensors_white_noise_is_no_bias_noise() {
         // Offsets of 0.5 mg per hold (a hysteresis, a bad pose: outside the catalogue) on a sensor
@@ -632,7 +621,7 @@ mod tests {
         // pose means on seeds 1, 3, 4 and 6 (colored-noise); against block differences, on none.
         let opts = DiagnoseOptions::DEFAULT;
         for seed in 1..=8 {
-            let d = diagnose(&low_passed(walk_log(seed, 0.0, 0.5), 8), &opts).unwrap();
+            let d = diagnose(&crate::diagnose::testing::low_passed(walk_log(seed, 0.0, 0.5), 8), &opts).unwrap();
             assert_ne!(d.verdict, "colored-noise", "seed {seed}: {}", d.to_text());
         }
     }
