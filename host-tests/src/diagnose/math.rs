@@ -26,6 +26,35 @@ pub(crate) fn std_dev(v: &[f64]) -> f64 {
 
 pub(crate) use crate::stats::median;
 
+/// Running sums of a series, `S[0] = 0`, `S[i + 1] = S[i] + x[i]`: any block's mean in one step.
+pub(crate) struct PrefixSums(Vec<f64>);
+
+impl PrefixSums {
+    pub(crate) fn new(x: impl IntoIterator<Item = f64>) -> Self {
+        let mut sums = vec![0.0];
+        let mut total = 0.0;
+        for v in x {
+            total += v;
+            sums.push(total);
+        }
+        PrefixSums(sums)
+    }
+
+    /// Number of samples summed.
+    pub(crate) fn len(&self) -> usize {
+        self.0.len() - 1
+    }
+
+    /// Overlapping Allan variance of clusters of `m` samples, `var(mean[i + m] - mean[i]) / 2`
+    /// over every start `i`, in the series' units squared (`m` at most half the series).
+    pub(crate) fn allan_variance(&self, m: usize) -> f64 {
+        let s = &self.0;
+        let count = self.len() + 1 - 2 * m;
+        let sum: f64 = (0..count).map(|k| (s[k + 2 * m] - 2.0 * s[k + m] + s[k]).powi(2)).sum();
+        sum / (2.0 * count as f64 * (m * m) as f64)
+    }
+}
+
 pub(crate) fn correlation(x: &[f64], y: &[f64]) -> Option<f64> {
     let (mx, my) = (mean(x), mean(y));
     let sxy: f64 = x.iter().zip(y).map(|(a, b)| (a - mx) * (b - my)).sum();

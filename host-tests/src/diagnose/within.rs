@@ -14,8 +14,8 @@ use std::ops::Range;
 
 use super::PARAMETER_PENALTY;
 use super::SEGMENTS;
-use super::gap::{Measured, PoseData, row_time};
-use super::math::{V3, cv_residuals, dot, median, sum_sq};
+use super::gap::{CORRELATION_BLOCK_S, Measured, PoseData, row_time};
+use super::math::{PrefixSums, V3, cv_residuals, dot, median, sum_sq};
 use crate::csvio::Table;
 
 /// Most cross-validation folds (leave-one-pose-out up to this many poses).
@@ -103,15 +103,18 @@ fn brownian_deviation_share() -> f64 {
 /// classic `var(x[i+1] - x[i]) / 2`. A sensor's digital low-pass filter correlates successive
 /// readings, so `W` rises with `L` until the correlation has died out and then stays level (white
 /// noise); a noise slower than the filter (a flicker) makes it rise again. `L` doubles from 1, up
-/// to [`WHITE_BLOCK_S`]: the level where `W` first grows by less than [`WHITE_PLATEAU`] is
+/// to [`CORRELATION_BLOCK_S`] (the gap's correlation blocks, beyond a MEMS low-pass filter's
+/// correlation): the level where `W` first grows by less than [`WHITE_PLATEAU`] is
 /// returned (`W(1)` for a sensor whose readings are not correlated), else the level where it grew
 /// least (between the filter's correlation and the slower noise). A filter's correlation decays
 /// slowly in `W`, as `1 - c / L`: the level is up to a few tenths below the white-equivalent one,
 /// as the gap's own correlation blocks are.
 pub(crate) fn white_from_differences(table: &Table, poses: &[PoseData], rate: f64) -> V3 {
-    let longest = ((WHITE_BLOCK_S * rate).round() as usize).max(1);
+    let longest = ((CORRELATION_BLOCK_S * rate).round() as usize).max(1);
     std::array::from_fn(|a| {
-        let level = |block: usize| median_block_difference(table, poses, block, a);
+        let sums: Vec<PrefixSums> =
+            poses.iter().map(|p| PrefixSums::new(table.samples[p.rows.clone()].iter().map(|s| s[a]))).collect();
+        let level = |block: usize| median_block_difference(&sums, block);
         let (mut block, mut w) = (1, level(1));
         // The level where `W` grew least, and that growth.
         let mut knee = (w, f64::INFINITY);
@@ -130,34 +133,16 @@ pub(crate) fn white_from_differences(table: &Table, poses: &[PoseData], rate: f6
     })
 }
 
-/// Longest block [`white_from_differences`] tries, s: as long as the gap's correlation blocks
-/// ([`super::gap::CORRELATION_BLOCK_S`]), beyond a MEMS low-pass filter's correlation.
-const WHITE_BLOCK_S: f64 = 0.2;
-
 /// Growth of [`white_from_differences`]' level per doubling of the block below which it has
 /// levelled off.
 const WHITE_PLATEAU: f64 = 1.1;
 
-/// [`block_difference_variance`] of blocks of `block` samples on axis `a`, median over the poses of
-/// at least four blocks.
-fn median_block_difference(table: &Table, poses: &[PoseData], block: usize, a: usize) -> f64 {
-    let per_pose: Vec<f64> = poses
-        .iter()
-        .filter(|p| p.n >= 4 * block)
-        .map(|p| block_difference_variance(&table.samples[p.rows.clone()], block, a))
-        .collect();
+/// `L var(mean[i+L] - mean[i]) / 2` over the overlapping blocks of `L = block` samples (the Allan
+/// variance times `L`), median over the poses of at least four blocks.
+fn median_block_difference(poses: &[PrefixSums], block: usize) -> f64 {
+    let per_pose: Vec<f64> =
+        poses.iter().filter(|p| p.len() >= 4 * block).map(|p| block as f64 * p.allan_variance(block)).collect();
     median(&per_pose)
-}
-
-/// `L var(mean[i+L] - mean[i]) / 2` on axis `a` over the overlapping blocks of `L` samples.
-fn block_difference_variance(samples: &[V3], block: usize, a: usize) -> f64 {
-    let mut prefix = vec![0.0; samples.len() + 1];
-    for (i, s) in samples.iter().enumerate() {
-        prefix[i + 1] = prefix[i] + s[a];
-    }
-    let count = samples.len() + 1 - 2 * block;
-    let sum: f64 = (0..count).map(|k| (prefix[k + 2 * block] - 2.0 * prefix[k + block] + prefix[k]).powi(2)).sum();
-    sum / (2.0 * count as f64 * block as f64)
 }
 
 impl Within {

@@ -7,7 +7,7 @@ use std::ops::Range;
 use crate::csvio::Table;
 use crate::diagnose::WALK_EXCESS;
 use crate::diagnose::gap::row_time;
-use crate::diagnose::math::{V3, lstsq, mean, median, predict};
+use crate::diagnose::math::{PrefixSums, V3, lstsq, mean, median, predict};
 
 /// The noise beyond white per axis (input unit), measured on the longest rest (a time segment, not
 /// the pose means it is judged on): the rest is detrended (quadratic in time, linear in temperature
@@ -184,17 +184,12 @@ fn trend_design(table: &Table, first: usize, end: usize, rate: f64) -> Vec<Vec<f
 /// units of the white Allan variance there.
 fn allan_excess(detrended: &[f64], rate: f64, white: f64) -> (Vec<(f64, f64, f64)>, f64) {
     let n = detrended.len();
-    let mut prefix = vec![0.0; n + 1];
-    for i in 0..n {
-        prefix[i + 1] = prefix[i] + detrended[i];
-    }
+    let sums = PrefixSums::new(detrended.iter().copied());
     let mut points = Vec::new();
     let mut last_excess = 0.0;
     let mut m = ((n as f64 / 50.0) as usize).max(1);
     while 5 * m <= n {
-        let count = n - 2 * m + 1;
-        let sum: f64 = (0..count).map(|k| (prefix[k + 2 * m] - 2.0 * prefix[k + m] + prefix[k]).powi(2)).sum();
-        let avar = sum / (2.0 * count as f64 * (m * m) as f64);
+        let avar = sums.allan_variance(m);
         let white_avar = white / m as f64;
         let excess = avar - white_avar;
         // Weighted by the number of independent clusters over the relative variance.
