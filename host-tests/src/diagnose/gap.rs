@@ -216,6 +216,8 @@ pub(crate) fn expected_fit_rmse_mg(design: &Design, rows: &[Vec<f64>], draws: &[
 /// Step 1's result: the poses, the library's fit and the simulated gap.
 pub(crate) struct Measured {
     pub(crate) rate: f64,
+    /// The library's poses (as calibrated).
+    pub(crate) lib_poses: Vec<Pose>,
     pub(crate) poses: Vec<PoseData>,
     /// Still intervals left out as shorter than the least pose duration.
     pub(crate) short_poses: usize,
@@ -523,9 +525,32 @@ pub(crate) fn measure_with(
     opts: &DiagnoseOptions,
     found_with: &AccumulateOptions,
 ) -> Result<Measured, Refusal> {
+    measure_found(table, opts, read_poses(table, found_with)?)
+}
+
+/// [`measure`] on the poses of `m` but those `dropped` (the same poses, not found again).
+pub(crate) fn measure_without(
+    table: &Table,
+    opts: &DiagnoseOptions,
+    m: &Measured,
+    dropped: &[bool],
+) -> Result<Measured, Refusal> {
+    let kept = |i: &usize| !dropped.get(*i).copied().unwrap_or(false);
+    let found = Found {
+        lib_poses: (0..m.lib_poses.len()).filter(kept).map(|i| m.lib_poses[i]).collect(),
+        poses: (0..m.poses.len()).filter(kept).map(|i| m.poses[i].clone()).collect(),
+        short: m.short_poses,
+        tails_trimmed: m.tails_trimmed,
+        rate: m.rate,
+        mean_change_widened: m.mean_change_widened,
+    };
+    measure_found(table, opts, found)
+}
+
+/// Step 1 on the poses found.
+fn measure_found(table: &Table, opts: &DiagnoseOptions, found: Found) -> Result<Measured, Refusal> {
     let gravity = opts.gravity;
-    let Found { lib_poses, poses, short: short_poses, tails_trimmed, rate, mean_change_widened } =
-        read_poses(table, found_with)?;
+    let Found { lib_poses, poses, short: short_poses, tails_trimmed, rate, mean_change_widened } = found;
     let config = CalibrationConfig { gravity: gravity as f32, ..CalibrationConfig::DEFAULT };
     let cal = calib::run(&lib_poses, &config, opts.seed).map_err(|e| Refusal::NotCalibrated {
         still_poses: lib_poses.len(),
@@ -546,6 +571,7 @@ pub(crate) fn measure_with(
     let gap = gap_before(rms(&r) / gravity * 1000.0, &sims);
     Ok(Measured {
         rate,
+        lib_poses,
         poses,
         short_poses,
         tails_trimmed,

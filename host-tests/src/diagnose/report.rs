@@ -218,6 +218,9 @@ pub struct Diagnosis {
     /// Why no calibration (and so no gap) was made, when the verdict rests on the holds alone (a log
     /// whose holds move too much to keep enough still poses).
     pub not_calibrated: Option<String>,
+    /// The poses left out as moving within their holds, when the verdict comes from the others
+    /// (and the gap and verdict with them).
+    pub disturbed_left_out: Option<String>,
 }
 
 impl Diagnosis {
@@ -267,6 +270,7 @@ pub struct DiagnosisDocument<'a> {
     probes: &'a [Probe],
     verdict: VerdictSummary<'a>,
     not_calibrated: Option<&'a str>,
+    disturbed_left_out: Option<&'a str>,
 }
 
 /// `noise`: white noise per axis and the longest rest.
@@ -381,6 +385,7 @@ impl Diagnosis {
             probes: &self.probes,
             verdict: self.verdict_document(),
             not_calibrated: self.not_calibrated.as_deref(),
+            disturbed_left_out: self.disturbed_left_out.as_deref(),
         }
     }
 
@@ -505,6 +510,7 @@ mod tests {
             explained: false,
             shrink: 0.0,
             not_calibrated: None,
+            disturbed_left_out: None,
         }
     }
 

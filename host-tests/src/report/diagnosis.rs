@@ -74,8 +74,9 @@ impl Diagnosis {
         let widened = self.mean_change_widened.map_or(String::new(), |c| {
             format!(" (readings correlated: the still test's limit on a block's mean change widened {c:.1}x)")
         });
+        let disturbed = self.disturbed_left_out.as_ref().map_or(String::new(), |d| format!(" ({d})"));
         format!(
-            "{}: {} rows ({}), {} poses{short}{tails}{widened}, seed {}",
+            "{}: {} rows ({}), {} poses{short}{tails}{widened}{disturbed}, seed {}",
             self.file,
             self.samples,
             self.units,

@@ -6,7 +6,7 @@
 pub(crate) mod colored_noise;
 mod drift;
 mod joint;
-mod motion;
+pub(crate) mod motion;
 mod nonlinearity;
 pub(crate) mod periodic;
 mod ringing;

@@ -42,12 +42,16 @@ impl Family for Motion {
     }
 
     fn fit(&self, ctx: &Context<'_>) -> Option<Fitted> {
-        let dropped = disturbed(ctx)?;
-        if decays(ctx, &dropped) || ringing::rings(&ctx.table.samples, ctx.poses, &dropped, ctx.m.rate) {
-            return None;
-        }
-        without(ctx, dropped, "moving poses dropped")
+        without(ctx, moving(ctx)?, "moving poses dropped")
     }
+}
+
+/// The [`disturbed`] poses, when they move as handling does: not a transient that decays or rings
+/// after each rotation (settling).
+pub(crate) fn moving(ctx: &Context<'_>) -> Option<Vec<bool>> {
+    let dropped = disturbed(ctx)?;
+    let settles = decays(ctx, &dropped) || ringing::rings(&ctx.table.samples, ctx.poses, &dropped, ctx.m.rate);
+    (!settles).then_some(dropped)
 }
 
 /// The poses whose samples move after the first third of their hold (`None`: none, or too many to
