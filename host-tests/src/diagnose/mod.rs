@@ -230,11 +230,11 @@ fn diagnose_measured(table: &Table, opts: &DiagnoseOptions, m: &gap::Measured, s
         params: m.params,
         white_mg: std::array::from_fn(|a| m.to_mg(m.white[a].sqrt() * scale[a])),
         gap: decision.gap,
-        poses: locate::pose_reports(&m, &decision.after),
+        poses: locate::pose_reports(m, &decision.after),
         short_poses: m.short_poses,
         tails_trimmed: m.tails_trimmed,
         mean_change_widened: m.mean_change_widened,
-        allan: locate::longest_rest_allan(table, &m),
+        allan: locate::longest_rest_allan(table, m),
         candidates: evaluations.into_iter().map(|e| e.candidate).collect(),
         heldout_ratio_nominal: ctx.as_ref().map_or(f64::NAN, |c| c.heldout_ratio_nominal),
         probes,
@@ -246,16 +246,22 @@ fn diagnose_measured(table: &Table, opts: &DiagnoseOptions, m: &gap::Measured, s
         disturbed_left_out: None,
     };
     if d.verdict == "unexplained" {
-        let periodic = || ctx.as_ref().and_then(family::periodic::location);
-        d.located = Some(decision.probe_where.or_else(periodic).unwrap_or_else(|| locate::unexplained_location(&d)));
-        if ctx.is_none() {
-            let place = d.located.take().unwrap_or_default();
-            d.located = Some(format!("{place}; too few poses to test the catalogue on withheld poses"));
-        }
+        d.located = Some(unexplained_where(&d, ctx.as_ref(), decision.probe_where));
     }
     match ctx.as_ref().filter(|_| second_look) {
         Some(ctx) => without_disturbed(table, opts, ctx, &d).unwrap_or(d),
         None => d,
+    }
+}
+
+/// Where the gap of an `unexplained` verdict lies: the best probe's place, a periodic component, or
+/// the residuals' pattern (and, without a context, that the catalogue could not be tested).
+fn unexplained_where(d: &Diagnosis, ctx: Option<&family::Context<'_>>, probe_where: Option<String>) -> String {
+    let periodic = || ctx.and_then(family::periodic::location);
+    let place = probe_where.or_else(periodic).unwrap_or_else(|| locate::unexplained_location(d));
+    match ctx {
+        Some(_) => place,
+        None => format!("{place}; too few poses to test the catalogue on withheld poses"),
     }
 }
 
@@ -288,7 +294,7 @@ fn without_disturbed(
         first.gap.ratio_before,
         first.verdict
     );
-    (named && stronger).then(|| Diagnosis { disturbed_left_out: Some(note), ..second })
+    (named && stronger).then_some(Diagnosis { disturbed_left_out: Some(note), ..second })
 }
 
 /// The held-out gain of the verdict's candidate (NaN without one).
