@@ -470,6 +470,23 @@ fn unmeasured(table: &Table, opts: &DiagnoseOptions, candidates: Vec<Candidate>,
 pub(crate) mod testing {
     use crate::csvio::Table;
 
+    /// An own-simulator log (random scenario `seed`, no effect) whose z axis alone bows: k2 2 mg,
+    /// k3 -1.5 mg at 1 g.
+    pub(crate) fn z_bowed(seed: u64) -> Table {
+        use crate::sim::scenario::{EffectClass, SimLog, random_scenario, to_table};
+        let scenario = random_scenario(EffectClass::None, seed);
+        let g = scenario.sim.gravity;
+        let recording = crate::sim::simulate_with(
+            &scenario.sim,
+            &mut [&mut |_t: f64, _p: Option<usize>, r: &mut [f64; 3]| {
+                let z = r[2] / g;
+                r[2] += g * (2.0e-3 * z * z - 1.5e-3 * z * z * z);
+            }],
+        );
+        let temps_c = vec![25.0; recording.samples.len()];
+        to_table(&SimLog { recording, temps_c }, "z-only").unwrap()
+    }
+
     /// `table` through a moving average of `width` readings: a digital low-pass filter of about
     /// `rate / (2 width)` Hz (a MEMS part's, correlating successive readings; the noise of a mean
     /// keeps its level while the per-reading variance falls by `width`).
@@ -543,20 +560,8 @@ mod tests {
         // bow. Of seeds 11-16 with 5, 10 and 20 mg, the diagnosis of every pose named 15 of 18
         // right; these three it named `unexplained`, `motion` and colored-noise. With the pose left
         // out, 18 of 18.
-        use crate::sim::scenario::{EffectClass, SimLog, random_scenario, to_table};
-        use crate::sim::simulate_with;
         for (seed, lean_mg) in [(12, 10.0), (12, 20.0), (16, 10.0)] {
-            let scenario = random_scenario(EffectClass::None, seed);
-            let g = scenario.sim.gravity;
-            let recording = simulate_with(
-                &scenario.sim,
-                &mut [&mut |_t: f64, _p: Option<usize>, r: &mut [f64; 3]| {
-                    let z = r[2] / g;
-                    r[2] += g * (2.0e-3 * z * z - 1.5e-3 * z * z * z);
-                }],
-            );
-            let temps_c = vec![25.0; recording.samples.len()];
-            let mut table = to_table(&SimLog { recording, temps_c }, "z-only").unwrap();
+            let mut table = testing::z_bowed(seed);
             let opts = DiagnoseOptions { seed, ..DiagnoseOptions::DEFAULT };
             let m = gap::measure(&table, &opts).unwrap();
             let longest = (1..m.poses.len()).max_by(|a, b| m.poses[*a].duration().total_cmp(&m.poses[*b].duration()));

@@ -47,7 +47,7 @@ mod tests {
 
     use crate::csvio::Table;
     use crate::diagnose::{DiagnoseOptions, diagnose};
-    use crate::sim::scenario::{EffectClass, SimLog, random_scenario, to_table};
+    use crate::sim::scenario::{SimLog, to_table};
     use crate::sim::{Plan, SimConfig, simulate_with};
 
     #[test]
@@ -56,17 +56,7 @@ mod tests {
         // per axis cost 15 columns with the calibration; on 24-44 poses their held-out ratio stays
         // high and the two z terms alone are what explains the withheld poses.
         for seed in [11, 12, 13] {
-            let scenario = random_scenario(EffectClass::None, seed);
-            let g = scenario.sim.gravity;
-            let recording = simulate_with(
-                &scenario.sim,
-                &mut [&mut |_t: f64, _p: Option<usize>, r: &mut [f64; 3]| {
-                    let z = r[2] / g;
-                    r[2] += g * (2.0e-3 * z * z - 1.5e-3 * z * z * z);
-                }],
-            );
-            let temps_c = vec![25.0; recording.samples.len()];
-            let table = to_table(&SimLog { recording, temps_c }, "z-only").unwrap();
+            let table = crate::diagnose::testing::z_bowed(seed);
             let d = diagnose(&table, &DiagnoseOptions { seed, ..DiagnoseOptions::DEFAULT }).unwrap();
             assert_eq!(d.verdict, "scale-nonlinearity", "seed {seed}: {}", d.to_text());
             let named = d.candidates.iter().find(|c| c.effect == "scale-nonlinearity").unwrap();
