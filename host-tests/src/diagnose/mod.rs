@@ -285,18 +285,21 @@ fn without_disturbed(
     let second = diagnose_measured(table, opts, &m, false);
     let named = second.explained && !matches!(second.verdict, "none" | "unexplained" | "motion");
     let stronger = !first.explained || first.verdict == "motion" || verdict_gain(&second) > verdict_gain(first);
+    (named && stronger).then(|| Diagnosis { disturbed_left_out: Some(left_out_note(&poses, first)), ..second })
+}
+
+/// What the second look left out, and the first look's gap and verdict.
+fn left_out_note(poses: &[&gap::PoseData], first: &Diagnosis) -> String {
+    let one = poses.len() == 1;
     let spans: Vec<String> = poses.iter().map(|p| format!("{:.1}-{:.1} s", p.t_start, p.t_end)).collect();
-    let note = format!(
-        "{} moving within {} hold{} left out ({}); with {} the gap ratio is {:.2} and the verdict {}",
-        if poses.len() == 1 { "a pose" } else { "poses" },
-        if poses.len() == 1 { "its" } else { "their" },
-        if poses.len() == 1 { "" } else { "s" },
+    format!(
+        "{} left out ({}); with {} the gap ratio is {:.2} and the verdict {}",
+        if one { "a pose moving within its hold" } else { "poses moving within their holds" },
         spans.join(", "),
-        if poses.len() == 1 { "it" } else { "them" },
+        if one { "it" } else { "them" },
         first.gap.ratio_before,
         first.verdict
-    );
-    (named && stronger).then_some(Diagnosis { disturbed_left_out: Some(note), ..second })
+    )
 }
 
 /// Most poses a second look leaves out: a knock or a move begun early disturbs a pose or two; many
