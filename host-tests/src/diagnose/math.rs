@@ -101,40 +101,72 @@ pub(crate) fn jacobian_row(m: V3, u: V3) -> [f64; PARAM_COUNT] {
     [-u[0], -u[1], -u[2], u[0] * m[0], u[1] * m[1], u[2] * m[2], u[1] * m[0], u[2] * m[0], u[2] * m[1]]
 }
 
-/// The normal matrix of `min sum over train of (r_i + rows_i . x)^2` with each column scaled to
-/// unit root mean square over `train`: the scales and the lower triangle of `X^T X` (scaled).
-fn scaled_normals(rows: &[Vec<f64>], train: &[usize]) -> (Vec<f64>, Vec<Vec<f64>>) {
+/// The lower triangle of `X^T X` over `poses` (unscaled).
+fn normals(rows: &[Vec<f64>], poses: impl IntoIterator<Item = usize>) -> Vec<Vec<f64>> {
     let p = rows.first().map_or(0, Vec::len);
-    let scale: Vec<f64> = (0..p)
+    let mut a = vec![vec![0.0; p]; p];
+    for i in poses {
+        let x = &rows[i];
+        for ((j, aj), xj) in a.iter_mut().enumerate().zip(x) {
+            for (ajk, xk) in aj[..=j].iter_mut().zip(x) {
+                *ajk += xj * xk;
+            }
+        }
+    }
+    a
+}
+
+/// `-X^T r` over `poses` (unscaled).
+fn rhs(rows: &[Vec<f64>], r: &[f64], poses: impl IntoIterator<Item = usize>) -> Vec<f64> {
+    let mut b = vec![0.0; rows.first().map_or(0, Vec::len)];
+    for i in poses {
+        for (bj, v) in b.iter_mut().zip(&rows[i]) {
+            *bj -= v * r[i];
+        }
+    }
+    b
+}
+
+/// The column scales (root mean square over `count` poses, 1 for a column that is zero) of the
+/// normal matrix `a` (lower triangle, unscaled), and `a` with its columns scaled by them.
+fn scaled(mut a: Vec<Vec<f64>>, count: usize) -> (Vec<f64>, Vec<Vec<f64>>) {
+    let scale: Vec<f64> = (0..a.len())
         .map(|j| {
-            let s = (train.iter().map(|&i| rows[i][j] * rows[i][j]).sum::<f64>() / train.len() as f64).sqrt();
+            let s = (a[j][j] / count as f64).sqrt();
             if s > 0.0 && s.is_finite() { s } else { 1.0 }
         })
         .collect();
-    let mut a = vec![vec![0.0; p]; p];
-    let mut x = vec![0.0; p];
-    for &i in train {
-        for (xj, (v, s)) in x.iter_mut().zip(rows[i].iter().zip(&scale)) {
-            *xj = v / s;
-        }
-        for ((j, aj), xj) in a.iter_mut().enumerate().zip(&x) {
-            for (ajk, xk) in aj[..=j].iter_mut().zip(&x) {
-                *ajk += xj * xk;
-            }
+    for (aj, sj) in a.iter_mut().zip(&scale) {
+        for (ajk, sk) in aj.iter_mut().zip(&scale) {
+            *ajk /= sj * sk;
         }
     }
     (scale, a)
 }
 
-/// `-X^T r` over `train`, each column scaled by `scale`.
-fn scaled_rhs(rows: &[Vec<f64>], r: &[f64], train: &[usize], scale: &[f64]) -> Vec<f64> {
-    let mut b = vec![0.0; scale.len()];
-    for &i in train {
-        for (bj, (v, s)) in b.iter_mut().zip(rows[i].iter().zip(scale)) {
-            *bj -= v / s * r[i];
-        }
+/// For each part, the sum of all the others (sums of per-fold normal matrices or right-hand
+/// sides), by prefix and suffix sums: no subtraction, so a column only the left-out part holds
+/// stays exactly zero.
+fn sums_without<T: Clone>(parts: &[T], zero: T, add: impl Fn(&T, &T) -> T) -> Vec<T> {
+    let mut prefix = vec![zero.clone()];
+    for part in parts {
+        prefix.push(add(&prefix[prefix.len() - 1], part));
     }
-    b
+    let mut suffix = zero;
+    let mut out = vec![None; parts.len()];
+    for f in (0..parts.len()).rev() {
+        out[f] = Some(add(&prefix[f], &suffix));
+        suffix = add(&suffix, &parts[f]);
+    }
+    out.into_iter().flatten().collect()
+}
+
+fn add_vectors(a: &Vec<f64>, b: &Vec<f64>) -> Vec<f64> {
+    a.iter().zip(b).map(|(x, y)| x + y).collect()
+}
+
+fn add_matrices(a: &Vec<Vec<f64>>, b: &Vec<Vec<f64>>) -> Vec<Vec<f64>> {
+    a.iter().zip(b).map(|(x, y)| add_vectors(x, y)).collect()
 }
 
 /// Attempts at a ridge that lets the scaled normal matrix factor, each 100 times the last.
@@ -158,11 +190,18 @@ impl Design {
     /// Columns scaled, a tiny ridge keeps collinear columns finite; `None` when `train` has fewer
     /// poses than columns or no ridge tried factors.
     pub(crate) fn new(rows: &[Vec<f64>], train: Vec<usize>) -> Option<Self> {
-        let p = rows.first()?.len();
+        rows.first()?;
+        let a = normals(rows, train.iter().copied());
+        Self::from_normals(a, train)
+    }
+
+    /// [`Design::new`] from the training poses' normal matrix (lower triangle, unscaled).
+    fn from_normals(a: Vec<Vec<f64>>, train: Vec<usize>) -> Option<Self> {
+        let p = a.len();
         if train.len() < p {
             return None;
         }
-        let (scale, a) = scaled_normals(rows, &train);
+        let (scale, a) = scaled(a, train.len());
         let trace: f64 = (0..p).map(|j| a[j][j]).sum();
         let mut ridge = 1e-11 * trace / p as f64;
         for attempt in 0..RIDGE_ATTEMPTS {
@@ -177,7 +216,12 @@ impl Design {
     /// The `x` minimising `sum over train of (r_i + rows_i . x)^2`; a solution that is not finite
     /// tries the larger ridges left.
     pub(crate) fn solve(&self, rows: &[Vec<f64>], r: &[f64]) -> Option<Vec<f64>> {
-        let b = scaled_rhs(rows, r, &self.train, &self.scale);
+        self.solve_rhs(&rhs(rows, r, self.train.iter().copied()))
+    }
+
+    /// [`Design::solve`] from the training poses' `-X^T r` (unscaled).
+    fn solve_rhs(&self, b: &[f64]) -> Option<Vec<f64>> {
+        let b: Vec<f64> = b.iter().zip(&self.scale).map(|(v, s)| v / s).collect();
         let mut y = solve_factored(&self.l, &b);
         let mut ridge = self.ridge;
         for _ in self.attempt + 1..RIDGE_ATTEMPTS {
@@ -226,17 +270,23 @@ pub(crate) struct CvDesign {
 }
 
 impl CvDesign {
-    /// `None` when a fold with poses leaves too few others to fit.
+    /// `None` when a fold with poses leaves too few others to fit. Each fold's normal matrix is the
+    /// sum of the others' ([`sums_without`]): the poses are summed once, not once per fold.
     pub(crate) fn new(rows: &[Vec<f64>], fold: &[usize], folds: usize, dropped: &[bool]) -> Option<Self> {
+        let p = rows.first()?.len();
         let n = fold.len();
+        let mut present = vec![false; folds];
+        fold.iter().filter(|&&f| f < folds).for_each(|&f| present[f] = true);
+        let withheld: Vec<(usize, Vec<usize>)> = (0..folds)
+            .filter(|&f| present[f])
+            .map(|f| (f, (0..n).filter(|&i| fold[i] == f && !dropped[i]).collect()))
+            .collect();
+        let parts: Vec<_> = withheld.iter().map(|(_, poses)| normals(rows, poses.iter().copied())).collect();
         let mut out = Vec::new();
-        for f in (0..folds).filter(|&f| fold.contains(&f)) {
+        for (a, (f, poses)) in sums_without(&parts, vec![vec![0.0; p]; p], add_matrices).into_iter().zip(withheld) {
             let train = (0..n).filter(|&i| fold[i] != f && !dropped[i]).collect();
-            let design = Design::new(rows, train)?;
-            let withheld = (0..n)
-                .filter(|&i| fold[i] == f && !dropped[i])
-                .map(|i| (i, design.variance_factor(&rows[i])))
-                .collect();
+            let design = Design::from_normals(a, train)?;
+            let withheld = poses.into_iter().map(|i| (i, design.variance_factor(&rows[i]))).collect();
             out.push((design, withheld));
         }
         Some(Self { folds: out })
@@ -246,9 +296,12 @@ impl CvDesign {
     /// whose prediction's variance exceeds `max_variance_factor` times one pose's (see
     /// [`cv_residuals_predictable`]); all `None` when a fold cannot fit `r`.
     pub(crate) fn residuals(&self, rows: &[Vec<f64>], r: &[f64], max_variance_factor: f64) -> Option<Vec<Option<f64>>> {
+        let p = rows.first()?.len();
+        let parts: Vec<Vec<f64>> =
+            self.folds.iter().map(|(_, withheld)| rhs(rows, r, withheld.iter().map(|w| w.0))).collect();
         let mut out = vec![None; r.len()];
-        for (design, withheld) in &self.folds {
-            let x = design.solve(rows, r)?;
+        for ((design, withheld), b) in self.folds.iter().zip(sums_without(&parts, vec![0.0; p], add_vectors)) {
+            let x = design.solve_rhs(&b)?;
             for &(i, _) in withheld.iter().filter(|(_, factor)| *factor <= max_variance_factor) {
                 out[i] = Some(predict(rows, r, &x, i));
             }
@@ -271,9 +324,8 @@ pub(crate) fn lstsq_with_covariance(rows: &[Vec<f64>], r: &[f64]) -> Option<(Vec
     if rows.len() <= p {
         return None;
     }
-    let train: Vec<usize> = (0..rows.len()).collect();
-    let (scale, a) = scaled_normals(rows, &train);
-    let b = scaled_rhs(rows, r, &train, &scale);
+    let (scale, a) = scaled(normals(rows, 0..rows.len()), rows.len());
+    let b: Vec<f64> = rhs(rows, r, 0..rows.len()).iter().zip(&scale).map(|(v, s)| v / s).collect();
     let unit: Vec<Vec<f64>> = (0..p).map(|j| (0..p).map(|k| f64::from(u8::from(j == k))).collect()).collect();
     let mut rhs: Vec<&[f64]> = vec![&b];
     rhs.extend(unit.iter().map(Vec::as_slice));
