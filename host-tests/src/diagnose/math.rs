@@ -102,7 +102,7 @@ pub(crate) fn jacobian_row(m: V3, u: V3) -> [f64; PARAM_COUNT] {
 }
 
 /// The lower triangle of `X^T X` over `poses` (unscaled).
-fn normals(rows: &[Vec<f64>], poses: impl IntoIterator<Item = usize>) -> Vec<Vec<f64>> {
+pub(crate) fn normals(rows: &[Vec<f64>], poses: impl IntoIterator<Item = usize>) -> Vec<Vec<f64>> {
     let p = rows.first().map_or(0, Vec::len);
     let mut a = vec![vec![0.0; p]; p];
     for i in poses {
@@ -117,7 +117,7 @@ fn normals(rows: &[Vec<f64>], poses: impl IntoIterator<Item = usize>) -> Vec<Vec
 }
 
 /// `-X^T r` over `poses` (unscaled).
-fn rhs(rows: &[Vec<f64>], r: &[f64], poses: impl IntoIterator<Item = usize>) -> Vec<f64> {
+pub(crate) fn rhs(rows: &[Vec<f64>], r: &[f64], poses: impl IntoIterator<Item = usize>) -> Vec<f64> {
     let mut b = vec![0.0; rows.first().map_or(0, Vec::len)];
     for i in poses {
         for (bj, v) in b.iter_mut().zip(&rows[i]) {
@@ -147,7 +147,7 @@ fn scaled(mut a: Vec<Vec<f64>>, count: usize) -> (Vec<f64>, Vec<Vec<f64>>) {
 /// For each part, the sum of all the others (sums of per-fold normal matrices or right-hand
 /// sides), by prefix and suffix sums: no subtraction, so a column only the left-out part holds
 /// stays exactly zero.
-fn sums_without<T: Clone>(parts: &[T], zero: T, add: impl Fn(&T, &T) -> T) -> Vec<T> {
+pub(crate) fn sums_without<T: Clone>(parts: &[T], zero: T, add: impl Fn(&T, &T) -> T) -> Vec<T> {
     let mut prefix = vec![zero.clone()];
     for part in parts {
         prefix.push(add(&prefix[prefix.len() - 1], part));
@@ -161,11 +161,11 @@ fn sums_without<T: Clone>(parts: &[T], zero: T, add: impl Fn(&T, &T) -> T) -> Ve
     out.into_iter().flatten().collect()
 }
 
-fn add_vectors(a: &Vec<f64>, b: &Vec<f64>) -> Vec<f64> {
+pub(crate) fn add_vectors(a: &[f64], b: &[f64]) -> Vec<f64> {
     a.iter().zip(b).map(|(x, y)| x + y).collect()
 }
 
-fn add_matrices(a: &Vec<Vec<f64>>, b: &Vec<Vec<f64>>) -> Vec<Vec<f64>> {
+pub(crate) fn add_matrices(a: &[Vec<f64>], b: &[Vec<f64>]) -> Vec<Vec<f64>> {
     a.iter().zip(b).map(|(x, y)| add_vectors(x, y)).collect()
 }
 
@@ -283,7 +283,9 @@ impl CvDesign {
             .collect();
         let parts: Vec<_> = withheld.iter().map(|(_, poses)| normals(rows, poses.iter().copied())).collect();
         let mut out = Vec::new();
-        for (a, (f, poses)) in sums_without(&parts, vec![vec![0.0; p]; p], add_matrices).into_iter().zip(withheld) {
+        for (a, (f, poses)) in
+            sums_without(&parts, vec![vec![0.0; p]; p], |a, b| add_matrices(a, b)).into_iter().zip(withheld)
+        {
             let train = (0..n).filter(|&i| fold[i] != f && !dropped[i]).collect();
             let design = Design::from_normals(a, train)?;
             let withheld = poses.into_iter().map(|i| (i, design.variance_factor(&rows[i]))).collect();
@@ -300,7 +302,9 @@ impl CvDesign {
         let parts: Vec<Vec<f64>> =
             self.folds.iter().map(|(_, withheld)| rhs(rows, r, withheld.iter().map(|w| w.0))).collect();
         let mut out = vec![None; r.len()];
-        for ((design, withheld), b) in self.folds.iter().zip(sums_without(&parts, vec![0.0; p], add_vectors)) {
+        for ((design, withheld), b) in
+            self.folds.iter().zip(sums_without(&parts, vec![0.0; p], |a, b| add_vectors(a, b)))
+        {
             let x = design.solve_rhs(&b)?;
             for &(i, _) in withheld.iter().filter(|(_, factor)| *factor <= max_variance_factor) {
                 out[i] = Some(predict(rows, r, &x, i));

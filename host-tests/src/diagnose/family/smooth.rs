@@ -11,7 +11,9 @@
 
 use super::{Context, Evaluation};
 use crate::diagnose::PARAMETER_PENALTY;
-use crate::diagnose::math::{V3, axis, cholesky_solve_many, dot};
+use crate::diagnose::math::{
+    V3, add_matrices, add_vectors, axis, cholesky_solve_many, dot, normals, rhs, sums_without,
+};
 
 /// Knot counts tried.
 const KNOTS: [usize; 4] = [4, 6, 10, 18];
@@ -120,29 +122,16 @@ struct FoldNormals {
 impl FoldNormals {
     fn new(rows: &[Vec<f64>], r: &[f64], fold: &[usize], folds: usize) -> Self {
         let p = rows.first().map_or(0, Vec::len);
-        let mut per_fold = vec![(vec![vec![0.0; p]; p], vec![0.0; p]); folds];
-        for ((row, ri), &f) in rows.iter().zip(r).zip(fold) {
-            let (a, b) = &mut per_fold[f];
-            for j in 0..p {
-                b[j] -= row[j] * ri;
-                for k in 0..=j {
-                    a[j][k] += row[j] * row[k];
-                }
-            }
-        }
-        let sum_without = |skip: Option<usize>| {
-            let (mut a, mut b) = (vec![vec![0.0; p]; p], vec![0.0; p]);
-            for (_, (fa, fb)) in per_fold.iter().enumerate().filter(|(f, _)| Some(*f) != skip) {
-                for j in 0..p {
-                    b[j] += fb[j];
-                    for k in 0..=j {
-                        a[j][k] += fa[j][k];
-                    }
-                }
-            }
-            (a, b)
-        };
-        Self { sums: (0..folds).map(Some).chain([None]).map(sum_without).collect() }
+        let n = rows.len().min(r.len()).min(fold.len());
+        // Part `folds` is empty: the sum without it is the sum over all folds.
+        let parts: Vec<(Vec<Vec<f64>>, Vec<f64>)> = (0..=folds)
+            .map(|f| {
+                let poses = || (0..n).filter(move |&i| fold[i] == f);
+                (normals(rows, poses()), rhs(rows, r, poses()))
+            })
+            .collect();
+        let zero = (vec![vec![0.0; p]; p], vec![0.0; p]);
+        Self { sums: sums_without(&parts, zero, |a, b| (add_matrices(&a.0, &b.0), add_vectors(&a.1, &b.1))) }
     }
 
     /// The sums over every fold but `skip` (all of them for `None`).
