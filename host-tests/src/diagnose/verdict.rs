@@ -126,7 +126,7 @@ fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation], holds_walk: bool
     };
     let value = strongest(false).filter(|(_, e)| e.candidate.evidence() >= MIN_GAIN);
     if let (Some((_, v)), Some(noise)) = (value, strongest(true))
-        && walk_not_slow_change(v, holds_walk)
+        && walk_not_value_family(v, holds_walk)
     {
         return Some(noise);
     }
@@ -155,12 +155,18 @@ fn beaten(e: &Evaluation, probes: &[Probe]) -> bool {
     })
 }
 
-/// A slow change (a drift, or a temperature through a lagged thermometer) fitted to the pose means
-/// of a walk: the holds wander as a noise whose walk accounts for the withheld scatter (`holds_walk`,
-/// [`super::family::colored_noise::walk_accounts_closely`]), and the change does not explain the
-/// holds' movement.
-fn walk_not_slow_change(v: &Evaluation, holds_walk: bool) -> bool {
-    holds_walk && slow_change(v) && !(v.candidate.within_gain > SLOW_CHANGE_MISSES_HOLDS)
+/// A value family fitted to the pose means of a walk: the holds wander as a noise whose walk
+/// accounts for the withheld scatter (`holds_walk`,
+/// [`super::family::colored_noise::walk_accounts_closely`]), and the family does not explain the
+/// holds' movement: a slow change (a drift, or a temperature through a lagged thermometer) that
+/// misses it, or a scale non-linearity, a function of the orientation alone, which cannot move a
+/// hold. On the Python development sets (2 592 logs) the non-linearity's part turned 5 colored
+/// noises fitted by square and cube terms (held-out gains 0.36-0.57 against the noise's 0.91-0.98)
+/// to colored noise and one z-only bow of a heavily low-passed part to colored noise (0.70 against
+/// 0.98).
+fn walk_not_value_family(v: &Evaluation, holds_walk: bool) -> bool {
+    let static_fit = v.candidate.effect == "scale-nonlinearity";
+    holds_walk && (slow_change(v) && !(v.candidate.within_gain > SLOW_CHANGE_MISSES_HOLDS) || static_fit)
 }
 
 /// Gap ratio up to which a family's fit to every pose accounts for the gap on those poses
@@ -316,7 +322,7 @@ mod tests {
     }
 
     #[test]
-    fn a_drift_of_the_pose_means_is_a_walk_when_the_holds_walk_at_its_level_and_the_drift_misses_them() {
+    fn a_value_fit_of_the_pose_means_is_a_walk_when_the_holds_walk_at_its_level_and_the_fit_misses_them() {
         let table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "sim").unwrap();
         let mut m = gap::measure(&table, &DiagnoseOptions::DEFAULT).unwrap();
         (m.gap.significant, m.gap.ratio_before) = (true, 6.81);
@@ -331,7 +337,9 @@ mod tests {
         let verdict = |within_gain: f64, holds_walk: bool| named("drift", within_gain, holds_walk);
         assert_eq!(verdict(-0.05, true), "colored-noise");
         assert_eq!(named("temperature", -0.05, true), "colored-noise");
-        assert_eq!(named("scale-nonlinearity", -0.05, true), "scale-nonlinearity");
+        // A non-linearity cannot move a hold: the walk is named whatever its within-pose gain.
+        assert_eq!(named("scale-nonlinearity", 0.3, true), "colored-noise");
+        assert_eq!(named("scale-nonlinearity", -0.05, false), "scale-nonlinearity");
         // The holds do not walk at the level of the pose means, or the drift explains them too.
         assert_eq!(verdict(-0.05, false), "drift");
         assert_eq!(verdict(0.3, true), "drift");
