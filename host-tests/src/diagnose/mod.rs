@@ -30,9 +30,10 @@
 //!    at least [`MIN_GAIN`] (the thermometer named before time when both explain alike; a noise
 //!    model before a value family only when far ahead of one that leaves half the gap or is a
 //!    penalised wander, or before a drift or temperature that misses the holds' movement, or a
-//!    non-linearity, when the holds walk at the level of the pose means' spread; a noise model must also be far ahead of a
-//!    probe that explains the withheld values; a drift or temperature whose gain rests on the
-//!    worst-predicted pose alone, with no support in the holds, is not named). When the gap is
+//!    non-linearity, when the holds walk at the level of the pose means' spread; a noise model
+//!    must also be far ahead of a probe that explains the withheld values; a drift or temperature
+//!    whose gain rests on the worst-predicted pose alone, with no support in the holds, is not
+//!    named). When the gap is
 //!    significant and no family or probe explains it, the holds
 //!    answer from how each one moves (`family::from_holds`: colored noise if the bias switches
 //!    between levels inside them, splitting them; settling if it slows, drift if a line per
