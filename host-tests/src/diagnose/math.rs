@@ -129,7 +129,7 @@ pub(crate) fn rhs(rows: &[Vec<f64>], r: &[f64], poses: impl IntoIterator<Item = 
 
 /// The column scales (root mean square over `count` poses, 1 for a column that is zero) of the
 /// normal matrix `a` (lower triangle, unscaled), and `a` with its columns scaled by them.
-fn scaled(mut a: Vec<Vec<f64>>, count: usize) -> (Vec<f64>, Vec<Vec<f64>>) {
+pub(crate) fn scaled(mut a: Vec<Vec<f64>>, count: usize) -> (Vec<f64>, Vec<Vec<f64>>) {
     let scale: Vec<f64> = (0..a.len())
         .map(|j| {
             let s = (a[j][j] / count as f64).sqrt();

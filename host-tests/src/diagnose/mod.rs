@@ -33,10 +33,9 @@
 //!    non-linearity, when the holds walk at the level of the pose means' spread; a noise model
 //!    must also be far ahead of a probe that explains the withheld values; a drift or temperature
 //!    whose gain rests on the worst-predicted pose alone, with no support in the holds, is not
-//!    named). When the gap is
-//!    significant and no family or probe explains it, the holds
-//!    answer from how each one moves (`family::from_holds`: colored noise if the bias switches
-//!    between levels inside them, splitting them; settling if it slows, drift if a line per
+//!    named). When the gap is significant and no family or probe explains it, the holds answer
+//!    from how each one moves (`family::from_holds`: colored noise if the bias switches between
+//!    levels inside them, splitting them; settling if it slows, drift if a line per
 //!    hold explains it, colored noise if every hold wanders alike and a walk at their level spreads
 //!    the pose means as much; no shrink claimed); else the value family that alone fits every pose
 //!    to white noise (gap ratio <= 1.2, a chi-square drop of 10 times the residual per column, as

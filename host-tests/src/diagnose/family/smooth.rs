@@ -12,7 +12,7 @@
 use super::{Context, Evaluation};
 use crate::diagnose::PARAMETER_PENALTY;
 use crate::diagnose::math::{
-    V3, add_matrices, add_vectors, axis, cholesky_solve_many, dot, normals, rhs, sums_without,
+    V3, add_matrices, add_vectors, axis, cholesky_solve_many, dot, normals, rhs, scaled, sums_without,
 };
 
 /// Knot counts tried.
@@ -143,11 +143,9 @@ impl FoldNormals {
 
 /// A symmetric system (lower triangle given) solved with Jacobi scaling: the solution for each
 /// right-hand side.
-fn solve_scaled(a: &[Vec<f64>], rhs: &[&[f64]]) -> Option<Vec<Vec<f64>>> {
-    let p = a.len();
-    let d: Vec<f64> = (0..p).map(|j| if a[j][j] > 0.0 { a[j][j].sqrt() } else { 1.0 }).collect();
-    let scaled: Vec<Vec<f64>> =
-        (0..p).map(|j| (0..p).map(|k| a[j.max(k)][j.min(k)] / (d[j] * d[k])).collect()).collect();
+fn solve_scaled(a: Vec<Vec<f64>>, rhs: &[&[f64]]) -> Option<Vec<Vec<f64>>> {
+    // Each column scaled by the square root of its diagonal (the root mean square over one row).
+    let (d, scaled) = scaled(a, 1);
     let scaled_rhs: Vec<Vec<f64>> = rhs.iter().map(|b| b.iter().zip(&d).map(|(v, s)| v / s).collect()).collect();
     let refs: Vec<&[f64]> = scaled_rhs.iter().map(Vec::as_slice).collect();
     let solved = cholesky_solve_many(&scaled, &refs, 1e-10)?;
@@ -174,14 +172,14 @@ fn score(
     for f in 0..ctx.folds {
         let (mut a, b) = normals.without(Some(f));
         add_prior(&mut a, base, shape.knots, shape.order, shape.step, w);
-        let x = solve_scaled(&a, &[b])?.pop()?;
+        let x = solve_scaled(a, &[b])?.pop()?;
         ss += (0..n).filter(|&i| fold[i] == f).map(|i| predict(&x, i).powi(2)).sum::<f64>();
     }
     let (mut a, b) = normals.without(None);
     add_prior(&mut a, base, shape.knots, shape.order, shape.step, w);
     let mut rhs: Vec<&[f64]> = vec![b];
     rhs.extend(rows[..n].iter().map(Vec::as_slice));
-    let solved = solve_scaled(&a, &rhs)?;
+    let solved = solve_scaled(a, &rhs)?;
     // Effective parameters: the trace of the pose rows' hat matrix less the calibration's.
     let trace: f64 =
         rows[..n].iter().zip(&solved[1..]).map(|(row, y)| row.iter().zip(y).map(|(p, q)| p * q).sum::<f64>()).sum();
