@@ -80,22 +80,39 @@ fn ranking(e: &Evaluation) -> f64 {
     e.candidate.evidence() + cause
 }
 
-/// The strongest family: one that predicts the withheld values if it explains enough, else the
-/// better of those and the noise models.
-fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation], holds_walk: bool) -> Option<(usize, &'e Evaluation)> {
-    // The gap is in the pose means: when a family explains the withheld ones, a family with evidence
-    // in the holds only (a transient repeated in every hold) does not explain the gap. Among the
-    // families with evidence in the holds only, one whose fit to the holds the pose means agree with
-    // is named before one they contradict.
-    let explains_poses =
-        |e: &Evaluation| e.candidate.applicable && e.candidate.heldout_gain >= MIN_GAIN && !rests_on_one_pose(e);
-    let holds_only = |e: &Evaluation| {
-        e.predicts_values && e.candidate.applicable && !explains_poses(e) && e.candidate.within_gain >= MIN_GAIN
-    };
-    let agrees = |e: &Evaluation| e.candidate.within_disagreement <= CHANNELS_AGREE;
+/// The family explains the withheld pose means (and its gain does not rest on one pose).
+fn explains_poses(e: &Evaluation) -> bool {
+    e.candidate.applicable && e.candidate.heldout_gain >= MIN_GAIN && !rests_on_one_pose(e)
+}
+
+/// A value family with evidence in the holds only (a transient repeated in every hold).
+fn holds_only(e: &Evaluation) -> bool {
+    e.predicts_values && e.candidate.applicable && !explains_poses(e) && e.candidate.within_gain >= MIN_GAIN
+}
+
+/// The family's fit to the holds agrees with the pose means.
+fn agrees(e: &Evaluation) -> bool {
+    e.candidate.within_disagreement <= CHANNELS_AGREE
+}
+
+/// A transient repeated in every hold (settling fitted to the holds) that the pose means agree
+/// with: a transient in a fresh direction at each placement spreads the withheld pose means as a
+/// bias-instability floor would, but a floor does not decay in every hold.
+fn settles_in_holds(e: &Evaluation) -> bool {
+    e.candidate.effect == "settling" && holds_only(e) && agrees(e)
+}
+
+/// A family and its index among the evaluations.
+type Indexed<'e> = (usize, &'e Evaluation);
+
+/// The strongest usable value family and the strongest usable noise model. The gap is in the pose
+/// means: when a family explains the withheld ones, a family with evidence in the holds only does
+/// not explain the gap. Among the families with evidence in the holds only, one whose fit to the
+/// holds the pose means agree with is named before one they contradict.
+fn strongest(evaluations: &[Evaluation]) -> (Option<Indexed<'_>>, Option<Indexed<'_>>) {
     let some_explains_poses = evaluations.iter().filter(|e| e.predicts_values).any(explains_poses);
     let some_agrees = evaluations.iter().any(|e| holds_only(e) && agrees(e));
-    let usable = |e: &&Evaluation| {
+    let usable = |e: &Evaluation| {
         e.candidate.applicable
             && e.candidate.evidence().is_finite()
             && (e.predicts_values || e.candidate.heldout_ratio <= NOISE_LEAVES_AT_MOST)
@@ -103,17 +120,26 @@ fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation], holds_walk: bool
             && !rests_on_one_pose(e)
             && !(holds_only(e) && !agrees(e) && some_agrees)
     };
-    let strongest = |noise: bool| {
+    let pick = |noise: bool| {
         evaluations
             .iter()
             .enumerate()
             .filter(|(_, e)| usable(e) && e.predicts_values != noise)
             .max_by(|a, b| ranking(a.1).total_cmp(&ranking(b.1)))
     };
-    // A transient repeated in every hold (settling fitted to the holds) that the pose means agree
-    // with: a transient in a fresh direction at each placement spreads the withheld pose means as a
-    // bias-instability floor would, but a floor does not decay in every hold.
-    let settles_in_holds = |v: &Evaluation| v.candidate.effect == "settling" && holds_only(v) && agrees(v);
+    (pick(false), pick(true))
+}
+
+/// The strongest family: one that predicts the withheld values if it explains enough, else the
+/// better of those and the noise models.
+fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation], holds_walk: bool) -> Option<Indexed<'e>> {
+    let (other, noise) = strongest(evaluations);
+    let value = other.filter(|(_, e)| e.candidate.evidence() >= MIN_GAIN);
+    if let (Some((_, v)), Some(noise)) = (value, noise)
+        && walk_not_value_family(v, holds_walk)
+    {
+        return Some(noise);
+    }
     // A family that predicts the withheld values is stronger evidence than a noise model, which
     // predicts only their spread: colored noise is named only when no other family explains, or
     // when it explains far more on withheld poses while the value family does not show it fits the
@@ -122,21 +148,11 @@ fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation], holds_walk: bool
         let e = v.candidate.evidence();
         !settles_in_holds(v)
             && fit_not_shown(m, v)
-            && strongest(true).is_some_and(|(_, n)| n.candidate.evidence() >= e + NOISE_FAR_AHEAD)
+            && noise.is_some_and(|(_, n)| n.candidate.evidence() >= e + NOISE_FAR_AHEAD)
     };
-    let value = strongest(false).filter(|(_, e)| e.candidate.evidence() >= MIN_GAIN);
-    if let (Some((_, v)), Some(noise)) = (value, strongest(true))
-        && walk_not_value_family(v, holds_walk)
-    {
-        return Some(noise);
-    }
-    value.filter(|(_, e)| !noise_far_ahead(e)).or_else(|| {
-        let noise = strongest(true);
-        let other = strongest(false);
-        match (noise, other) {
-            (Some(n), Some(o)) => Some(if n.1.candidate.evidence() >= o.1.candidate.evidence() { n } else { o }),
-            (n, o) => n.or(o),
-        }
+    value.filter(|(_, e)| !noise_far_ahead(e)).or(match (noise, other) {
+        (Some(n), Some(o)) => Some(if n.1.candidate.evidence() >= o.1.candidate.evidence() { n } else { o }),
+        (n, o) => n.or(o),
     })
 }
 
