@@ -133,8 +133,8 @@ fn strongest(evaluations: &[Evaluation]) -> (Option<Indexed<'_>>, Option<Indexed
 /// The strongest family: one that predicts the withheld values if it explains enough, else the
 /// better of those and the noise models.
 fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation], holds_walk: bool) -> Option<Indexed<'e>> {
-    let (other, noise) = strongest(evaluations);
-    let value = other.filter(|(_, e)| e.candidate.evidence() >= MIN_GAIN);
+    let (strongest_value, noise) = strongest(evaluations);
+    let value = strongest_value.filter(|(_, e)| e.candidate.evidence() >= MIN_GAIN);
     if let (Some((_, v)), Some(noise)) = (value, noise)
         && walk_not_value_family(v, holds_walk)
     {
@@ -150,7 +150,7 @@ fn best_family<'e>(m: &Measured, evaluations: &'e [Evaluation], holds_walk: bool
             && fit_not_shown(m, v)
             && noise.is_some_and(|(_, n)| n.candidate.evidence() >= e + NOISE_FAR_AHEAD)
     };
-    value.filter(|(_, e)| !noise_far_ahead(e)).or(match (noise, other) {
+    value.filter(|(_, e)| !noise_far_ahead(e)).or(match (noise, strongest_value) {
         (Some(n), Some(o)) => Some(if n.1.candidate.evidence() >= o.1.candidate.evidence() { n } else { o }),
         (n, o) => n.or(o),
     })
