@@ -115,6 +115,9 @@ pub(crate) struct Evaluation {
     pub(crate) gain_without_worst: f64,
     /// The pose-level fit is a penalised wander (`smooth.rs`: its prior a random walk's steps).
     pub(crate) wander: bool,
+    /// A temperature fit whose coefficients a MEMS part can have: the thermometer is a credible
+    /// cause, named before time on a near tie ([`super::verdict`]).
+    pub(crate) credible_cause: bool,
 }
 
 /// An effect family.
@@ -604,7 +607,7 @@ impl<'a> Context<'a> {
             in_sample: f.in_sample,
         };
         let gain_without_worst = self.gain_without_worst_pose(&f.rows, &f.dropped, f.params);
-        Evaluation { candidate, after, predicts_values: true, gain_without_worst, wander: false }
+        Evaluation { candidate, after, predicts_values: true, gain_without_worst, wander: false, credible_cause: false }
     }
 
     pub(crate) fn not_testable(&self, name: &'static str) -> Evaluation {
@@ -623,7 +626,14 @@ impl<'a> Context<'a> {
             in_sample: None,
         };
         let after = self.m.r.iter().map(|v| Some(*v)).collect();
-        Evaluation { candidate, after, predicts_values: true, gain_without_worst: f64::NAN, wander: false }
+        Evaluation {
+            candidate,
+            after,
+            predicts_values: true,
+            gain_without_worst: f64::NAN,
+            wander: false,
+            credible_cause: false,
+        }
     }
 
     /// The pose rows with `extra` columns (calibration columns first) and the nominal residuals,

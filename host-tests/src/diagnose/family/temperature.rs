@@ -3,7 +3,7 @@
 //! through a first-order lag (the sensor warms later than the thermometer), with the lag's time
 //! constant from a grid, or as a smooth course in time (a coarse thermometer's staircase).
 
-use super::{Context, Family, Variant, bias_scale_effect, smooth};
+use super::{Context, Evaluation, Family, Variant, bias_scale_effect, smooth, standard_evaluation};
 use crate::diagnose::gap::row_time;
 use crate::diagnose::math::{V3, dot, lstsq, lstsq_with_covariance, mean};
 use crate::diagnose::within::{Within, WithinVariant};
@@ -213,7 +213,7 @@ const BEYOND_LIMIT_SIGMAS: f64 = 2.0;
 /// [`MAX_BIAS_MG_PER_K`], the relative scale's at most [`MAX_SCALE_PER_K`], unless within
 /// [`BEYOND_LIMIT_SIGMAS`] standard errors of them (`None` fit: plausible, the held-out test
 /// decides).
-fn plausible(ctx: &Context<'_>, extra: &[Vec<f64>], temps: &[f64], power: usize, terms: Terms) -> bool {
+fn plausible(ctx: &Context<'_>, extra: &[Vec<f64>], temps: &[f64], power: usize, terms: Terms, sigmas: f64) -> bool {
     let Some((x, cov, ms)) = lstsq_with_covariance(&ctx.rows_with(extra), &ctx.m.r) else { return true };
     let base = ctx.base_rows[0].len();
     let t0 = mean(temps);
@@ -226,7 +226,7 @@ fn plausible(ctx: &Context<'_>, extra: &[Vec<f64>], temps: &[f64], power: usize,
         let slope: f64 = slope_terms.iter().map(|&(j, w)| w * x[j]).sum();
         let var: f64 =
             slope_terms.iter().flat_map(|&(j, w)| slope_terms.iter().map(move |&(l, v)| w * v * cov[j][l])).sum();
-        slope.abs() - BEYOND_LIMIT_SIGMAS * (var * ms).max(0.0).sqrt() <= limit
+        slope.abs() - sigmas * (var * ms).max(0.0).sqrt() <= limit
     };
     let limits = terms.limits(ctx);
     temps.iter().map(|t| t - t0).all(|dt| {
@@ -244,6 +244,31 @@ impl Family for Temperature {
     }
 
     fn variants(&self, ctx: &Context<'_>) -> Vec<Variant> {
+        self.variants_within(ctx, BEYOND_LIMIT_SIGMAS)
+    }
+
+    /// The standard evaluation, the thermometer marked a credible cause when the chosen
+    /// parametrisation's fitted coefficients lie within the physical limits themselves, without
+    /// [`BEYOND_LIMIT_SIGMAS`]' allowance.
+    fn evaluate(&self, ctx: &Context<'_>) -> Evaluation {
+        let mut e = standard_evaluation(self, ctx);
+        let chosen = chosen_detail(&self.variants(ctx), &e.candidate.detail);
+        let strict = self.variants_within(ctx, 0.0);
+        e.credible_cause = e.candidate.applicable && chosen.is_some_and(|c| strict.iter().any(|v| v.detail == c));
+        e
+    }
+}
+
+/// The detail of the parametrisation a candidate line names (the longest variant detail it begins
+/// with: the line may add the channels it was fitted on).
+fn chosen_detail(variants: &[Variant], line: &str) -> Option<String> {
+    variants.iter().map(|v| &v.detail).filter(|d| line.starts_with(d.as_str())).max_by_key(|d| d.len()).cloned()
+}
+
+impl Temperature {
+    /// The parametrisations whose fitted coefficients are within the physical limits, or beyond
+    /// them by at most `sigmas` standard errors ([`plausible`]).
+    fn variants_within(&self, ctx: &Context<'_>, sigmas: f64) -> Vec<Variant> {
         let mut out = Vec::new();
         for source in Source::all() {
             let Some(temps) = pose_temps(ctx, source) else { continue };
@@ -256,7 +281,7 @@ impl Family for Temperature {
                 for (power, shape) in [(1, "linear"), (2, "quadratic")] {
                     let params = terms.per_power() * power + lag_params;
                     let extra = design(ctx, &temps, power, terms);
-                    if !plausible(ctx, &extra, &temps, power, terms) {
+                    if !plausible(ctx, &extra, &temps, power, terms, sigmas) {
                         continue;
                     }
                     let detail = format!("{} {shape} in temperature{through}", terms.what());

@@ -387,6 +387,7 @@ impl ColoredNoise {
             predicts_values: false,
             gain_without_worst: f64::NAN,
             wander: false,
+            credible_cause: false,
         }
     }
 }
