@@ -460,6 +460,25 @@ mod tests {
     }
 
     #[test]
+    fn a_credible_thermometer_is_named_before_time_within_a_tenth() {
+        let table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "sim").unwrap();
+        let mut m = gap::measure(&table, &DiagnoseOptions::DEFAULT).unwrap();
+        m.gap.significant = true;
+        let named = |temperature_gain: f64, credible: bool| {
+            let drift = on_pose_means("drift", 1.5, 0.64, true);
+            let mut temperature = on_pose_means("temperature", 1.6, temperature_gain, true);
+            temperature.credible_cause = credible;
+            decide(&m, &[drift, temperature], &[], None, false).verdict
+        };
+        // Time leads by 0.08: within a credible cause's tenth, beyond an implausible one's 0.05.
+        assert_eq!(named(0.56, true), "temperature");
+        assert_eq!(named(0.56, false), "drift");
+        assert_eq!(named(0.61, false), "temperature");
+        // Time leads by 0.12: time is named either way.
+        assert_eq!(named(0.52, true), "drift");
+    }
+
+    #[test]
     fn a_slow_change_whose_gain_rests_on_one_pose_is_not_named() {
         let table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "sim").unwrap();
         let mut m = gap::measure(&table, &DiagnoseOptions::DEFAULT).unwrap();
