@@ -72,18 +72,19 @@ pub(crate) fn best(ctx: &Context<'_>, w: &Within, variants: &[WithinVariant]) ->
 }
 
 /// Puts the stacked fit in the candidate's pose-level line when it predicts the withheld pose
-/// means better than the pose means alone.
-pub(crate) fn add(ctx: &Context<'_>, e: &mut Evaluation, fit: JointFit) {
+/// means better than the pose means alone; the parametrisation's detail when it did.
+pub(crate) fn add(ctx: &Context<'_>, e: &mut Evaluation, fit: JointFit) -> Option<String> {
     let gain = ctx.value_gain(fit.ratio);
     let c = &mut e.candidate;
     if c.applicable && c.heldout_gain >= gain {
-        return;
+        return None;
     }
-    let Some(ratio_after) = ctx.ratio_after(&fit.after) else { return };
+    let ratio_after = ctx.ratio_after(&fit.after)?;
     c.applicable = true;
     (c.heldout_ratio, c.heldout_gain, c.extra_params) = (fit.ratio, gain, fit.params);
     e.gain_without_worst = fit.gain_without_worst;
     c.ratio_after = ratio_after;
     c.detail = format!("{} (pose means and within-pose course together)", fit.detail);
     e.after = fit.after;
+    Some(fit.detail)
 }

@@ -155,11 +155,23 @@ pub(crate) trait Family {
 /// [`Family::evaluate`]'s default: the best pose-level parametrisation, then the within-pose
 /// channel's.
 pub(crate) fn standard_evaluation<F: Family + ?Sized>(family: &F, ctx: &Context<'_>) -> Evaluation {
-    let mut e = match family.fit(ctx) {
+    evaluation_of(family, ctx, family.fit(ctx)).0
+}
+
+/// [`standard_evaluation`] of the pose-level fit `fit`, with the parametrisation the candidate line
+/// names in the end: the pose-level fit's, or the stacked fit's when that predicts the withheld
+/// poses better (`None`: neither fitted).
+pub(crate) fn evaluation_of<F: Family + ?Sized>(
+    family: &F,
+    ctx: &Context<'_>,
+    fit: Option<Fitted>,
+) -> (Evaluation, Option<String>) {
+    let mut named = fit.as_ref().map(|f| f.detail.clone());
+    let mut e = match fit {
         Some(f) => ctx.evaluate_fitted(family.name(), f),
         None => ctx.not_testable(family.name()),
     };
-    let Some(w) = ctx.within.as_ref().filter(|w| w.significant) else { return e };
+    let Some(w) = ctx.within.as_ref().filter(|w| w.significant) else { return (e, named) };
     let variants = family.within_variants(ctx, w);
     let stacked = joint::best(ctx, w, &variants);
     let (variants, disagreements): (Vec<WithinVariant>, Vec<f64>) = variants
@@ -173,10 +185,12 @@ pub(crate) fn standard_evaluation<F: Family + ?Sized>(family: &F, ctx: &Context<
     if let Some((i, fit)) = w.best_of(variants) {
         ctx.add_within(&mut e, w, fit, disagreements[i]);
     }
-    if let Some(fit) = stacked {
-        joint::add(ctx, &mut e, fit);
+    if let Some(fit) = stacked
+        && let Some(detail) = joint::add(ctx, &mut e, fit)
+    {
+        named = Some(detail);
     }
-    e
+    (e, named)
 }
 
 /// The calibrated-reading change per parameter of a bias per axis and/or a relative scale per axis

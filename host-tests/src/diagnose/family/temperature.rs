@@ -3,7 +3,7 @@
 //! through a first-order lag (the sensor warms later than the thermometer), with the lag's time
 //! constant from a grid, or as a smooth course in time (a coarse thermometer's staircase).
 
-use super::{Context, Evaluation, Family, Variant, bias_scale_effect, smooth, standard_evaluation};
+use super::{Context, Evaluation, Family, Variant, bias_scale_effect, evaluation_of, smooth};
 use crate::diagnose::gap::row_time;
 use crate::diagnose::math::{V3, dot, lstsq, lstsq_with_covariance, mean};
 use crate::diagnose::within::{Within, WithinVariant};
@@ -208,30 +208,54 @@ fn design(ctx: &Context<'_>, temps: &[f64], power: usize, terms: Terms) -> Vec<V
 /// chance.
 const BEYOND_LIMIT_SIGMAS: f64 = 2.0;
 
+/// How a temperature fit's coefficients stand against a MEMS part's limits.
+#[derive(Clone, Copy, PartialEq)]
+enum Grade {
+    /// Within the limits themselves: the thermometer is a credible cause.
+    Credible,
+    /// Beyond them by at most [`BEYOND_LIMIT_SIGMAS`] standard errors: the held-out test decides.
+    Plausible,
+    /// Further beyond: the thermometer only stands in for something else.
+    Implausible,
+}
+
 /// The temperature columns `extra` (from [`design`]), fitted with the calibration to every pose,
-/// claim local coefficients a MEMS part can have over the poses' temperatures: the bias's at most
-/// [`MAX_BIAS_MG_PER_K`], the relative scale's at most [`MAX_SCALE_PER_K`], unless within
-/// [`BEYOND_LIMIT_SIGMAS`] standard errors of them (`None` fit: plausible, the held-out test
-/// decides).
-fn plausible(ctx: &Context<'_>, extra: &[Vec<f64>], temps: &[f64], power: usize, terms: Terms, sigmas: f64) -> bool {
-    let Some((x, cov, ms)) = lstsq_with_covariance(&ctx.rows_with(extra), &ctx.m.r) else { return true };
+/// graded by the local coefficients they claim over the poses' temperatures against a MEMS part's:
+/// the bias's at most [`MAX_BIAS_MG_PER_K`], the relative scale's at most [`MAX_SCALE_PER_K`]
+/// (`None` fit: credible, the held-out test decides).
+fn grade(ctx: &Context<'_>, extra: &[Vec<f64>], temps: &[f64], power: usize, terms: Terms) -> Grade {
+    let Some((x, cov, ms)) = lstsq_with_covariance(&ctx.rows_with(extra), &ctx.m.r) else { return Grade::Credible };
     let base = ctx.base_rows[0].len();
     let t0 = mean(temps);
     let per_power = terms.per_power();
     let (x, cov) = (&x, &cov);
-    let within_limit = |dt: f64, column: usize, limit: f64| {
-        // The local slope d(effect)/dT at `dt` as a combination of the coefficients, and its variance.
+    // The local slope d(effect)/dT at `dt` as a combination of the coefficients, its size, standard
+    // error and limit.
+    let slope = |dt: f64, column: usize, limit: f64| {
         let slope_terms: Vec<(usize, f64)> =
             (1..=power).map(|k| (base + (k - 1) * per_power + column, k as f64 * dt.powi(k as i32 - 1))).collect();
         let slope: f64 = slope_terms.iter().map(|&(j, w)| w * x[j]).sum();
         let var: f64 =
             slope_terms.iter().flat_map(|&(j, w)| slope_terms.iter().map(move |&(l, v)| w * v * cov[j][l])).sum();
-        slope.abs() - sigmas * (var * ms).max(0.0).sqrt() <= limit
+        (slope.abs(), (var * ms).max(0.0).sqrt(), limit)
     };
     let limits = terms.limits(ctx);
-    temps.iter().map(|t| t - t0).all(|dt| {
-        limits.iter().all(|&(offset, columns, limit)| (0..columns).all(|a| within_limit(dt, offset + a, limit)))
-    })
+    let slopes: Vec<(f64, f64, f64)> = temps
+        .iter()
+        .flat_map(|t| {
+            let dt = t - t0;
+            limits.iter().flat_map(move |&(offset, columns, limit)| (0..columns).map(move |a| (dt, offset + a, limit)))
+        })
+        .map(|(dt, column, limit)| slope(dt, column, limit))
+        .collect();
+    let within = |sigmas: f64| slopes.iter().all(|&(size, se, limit)| size - sigmas * se <= limit);
+    if within(0.0) {
+        Grade::Credible
+    } else if within(BEYOND_LIMIT_SIGMAS) {
+        Grade::Plausible
+    } else {
+        Grade::Implausible
+    }
 }
 
 impl Family for Temperature {
@@ -244,53 +268,50 @@ impl Family for Temperature {
     }
 
     fn variants(&self, ctx: &Context<'_>) -> Vec<Variant> {
-        self.variants_within(ctx, BEYOND_LIMIT_SIGMAS)
+        graded_variants(ctx).into_iter().map(|(v, _)| v).collect()
     }
 
-    /// The standard evaluation, the thermometer marked a credible cause when the chosen
-    /// parametrisation's fitted coefficients lie within the physical limits themselves, without
-    /// [`BEYOND_LIMIT_SIGMAS`]' allowance.
+    /// The standard evaluation, the thermometer marked a credible cause when the parametrisation
+    /// the candidate names has its fitted coefficients within the physical limits themselves,
+    /// without [`BEYOND_LIMIT_SIGMAS`]' allowance.
     fn evaluate(&self, ctx: &Context<'_>) -> Evaluation {
-        let mut e = standard_evaluation(self, ctx);
-        let chosen = chosen_detail(&self.variants(ctx), &e.candidate.detail);
-        let strict = self.variants_within(ctx, 0.0);
-        e.credible_cause = e.candidate.applicable && chosen.is_some_and(|c| strict.iter().any(|v| v.detail == c));
+        let (variants, grades): (Vec<Variant>, Vec<Grade>) = graded_variants(ctx).into_iter().unzip();
+        let credible: Vec<String> = variants
+            .iter()
+            .zip(&grades)
+            .filter(|(_, g)| **g == Grade::Credible)
+            .map(|(v, _)| v.detail.clone())
+            .collect();
+        let (mut e, named) = evaluation_of(self, ctx, ctx.best_of(variants));
+        e.credible_cause = e.candidate.applicable && named.is_some_and(|n| credible.contains(&n));
         e
     }
 }
 
-/// The detail of the parametrisation a candidate line names (the longest variant detail it begins
-/// with: the line may add the channels it was fitted on).
-fn chosen_detail(variants: &[Variant], line: &str) -> Option<String> {
-    variants.iter().map(|v| &v.detail).filter(|d| line.starts_with(d.as_str())).max_by_key(|d| d.len()).cloned()
-}
-
-impl Temperature {
-    /// The parametrisations whose fitted coefficients are within the physical limits, or beyond
-    /// them by at most `sigmas` standard errors ([`plausible`]).
-    fn variants_within(&self, ctx: &Context<'_>, sigmas: f64) -> Vec<Variant> {
-        let mut out = Vec::new();
-        for source in Source::all() {
-            let Some(temps) = pose_temps(ctx, source) else { continue };
-            let t0 = mean(&temps);
-            if temps.iter().map(|t| (t - t0).abs()).fold(0.0, f64::max) < 0.05 {
-                continue;
-            }
-            let (through, lag_params) = (source.detail(), source.params());
-            for terms in Terms::ALL {
-                for (power, shape) in [(1, "linear"), (2, "quadratic")] {
-                    let params = terms.per_power() * power + lag_params;
-                    let extra = design(ctx, &temps, power, terms);
-                    if !plausible(ctx, &extra, &temps, power, terms, sigmas) {
-                        continue;
-                    }
-                    let detail = format!("{} {shape} in temperature{through}", terms.what());
-                    out.push(Variant { extra, params, detail });
+/// The parametrisations whose fitted coefficients are not [`Grade::Implausible`], with their grade.
+fn graded_variants(ctx: &Context<'_>) -> Vec<(Variant, Grade)> {
+    let mut out = Vec::new();
+    for source in Source::all() {
+        let Some(temps) = pose_temps(ctx, source) else { continue };
+        let t0 = mean(&temps);
+        if temps.iter().map(|t| (t - t0).abs()).fold(0.0, f64::max) < 0.05 {
+            continue;
+        }
+        let (through, lag_params) = (source.detail(), source.params());
+        for terms in Terms::ALL {
+            for (power, shape) in [(1, "linear"), (2, "quadratic")] {
+                let params = terms.per_power() * power + lag_params;
+                let extra = design(ctx, &temps, power, terms);
+                let grade = grade(ctx, &extra, &temps, power, terms);
+                if grade == Grade::Implausible {
+                    continue;
                 }
+                let detail = format!("{} {shape} in temperature{through}", terms.what());
+                out.push((Variant { extra, params, detail }, grade));
             }
         }
-        out
     }
+    out
 }
 
 #[cfg(test)]
