@@ -194,22 +194,30 @@ fn cross_axis(ctx: &Context<'_>) -> Vec<Variant> {
 /// many g, or a rotation of `asin` of it. A pose split in two without a turn keeps its state.
 const HYSTERESIS_MOVE: f64 = 0.002;
 
-/// A hysteresis state per pose from the step from the previous pose: `sign(step(i))` when the step
-/// is at least [`HYSTERESIS_MOVE`] in size; after a smaller step, the previous pose's state if the
-/// state `persists`, else 0 (a mount that only takes an offset while it is moved).
-fn hysteresis_states(n: usize, persists: bool, step: impl Fn(usize) -> f64) -> Vec<f64> {
-    let mut state = 0.0;
+/// A hysteresis state per pose, set by the move from the previous pose: `moved(i)`, the state a
+/// move of at least [`HYSTERESIS_MOVE`] sets (`None` for a smaller step); after a smaller step, the
+/// previous pose's state if the state `persists`, else `rest` (a mount that only takes an offset
+/// while it is moved). The first pose is at `rest`.
+fn held_states<S: Copy>(n: usize, persists: bool, rest: S, moved: impl Fn(usize) -> Option<S>) -> Vec<S> {
+    let mut state = rest;
     (0..n)
         .map(|i| {
-            let s = if i == 0 { 0.0 } else { step(i) };
-            if s.abs() >= HYSTERESIS_MOVE {
-                state = s.signum();
-            } else if !persists {
-                state = 0.0;
+            match (i > 0).then(|| moved(i)).flatten() {
+                Some(s) => state = s,
+                None if !persists => state = rest,
+                None => {}
             }
             state
         })
         .collect()
+}
+
+/// [`held_states`] of one axis: `sign(step(i))` after a move, 0 at rest.
+fn hysteresis_states(n: usize, persists: bool, step: impl Fn(usize) -> f64) -> Vec<f64> {
+    held_states(n, persists, 0.0, |i| {
+        let s = step(i);
+        (s.abs() >= HYSTERESIS_MOVE).then(|| s.signum())
+    })
 }
 
 /// Hysteresis per axis: a bias on each axis with the sign of that axis' last change of reading.
@@ -236,19 +244,12 @@ fn rotation_direction(ctx: &Context<'_>) -> Vec<Variant> {
 /// previous state.
 fn approach_direction(ctx: &Context<'_>) -> [Variant; 2] {
     let (cal, dirs, g) = (ctx.calibrated(), ctx.directions(), ctx.m.gravity);
-    let mut state = [0.0; 3];
-    let per_axis: Vec<Vec<f64>> = (0..cal.len())
-        .map(|i| {
-            if i > 0 {
-                let step: V3 = std::array::from_fn(|a| (cal[i][a] - cal[i - 1][a]) / g);
-                let size = norm(step);
-                if size >= HYSTERESIS_MOVE {
-                    state = step.map(|c| c / size);
-                }
-            }
-            (0..3).map(|a| dirs[i][a] * state[a]).collect()
-        })
-        .collect();
+    let states = held_states(cal.len(), true, [0.0; 3], |i| {
+        let step: V3 = std::array::from_fn(|a| (cal[i][a] - cal[i - 1][a]) / g);
+        let size = norm(step);
+        (size >= HYSTERESIS_MOVE).then(|| step.map(|c| c / size))
+    });
+    let per_axis: Vec<Vec<f64>> = states.iter().zip(dirs).map(|(s, u)| (0..3).map(|a| u[a] * s[a]).collect()).collect();
     let common = per_axis.iter().map(|row| vec![row.iter().sum()]).collect();
     [
         Variant {
