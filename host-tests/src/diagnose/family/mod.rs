@@ -486,7 +486,7 @@ impl<'a> Context<'a> {
     }
 
     /// Every fold's training poses number at least the columns of the design with `extra` plus `dof`.
-    fn trains_beyond(&self, extra: &[Vec<f64>], dof: usize) -> bool {
+    pub(crate) fn trains_beyond(&self, extra: &[Vec<f64>], dof: usize) -> bool {
         let columns = self.base_columns() + extra.first().map_or(0, Vec::len);
         let dropped = &self.none_dropped;
         (0..self.folds).all(|f| {

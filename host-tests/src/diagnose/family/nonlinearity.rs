@@ -5,6 +5,10 @@ use super::{Context, Family, Variant};
 
 pub(crate) struct ScaleNonlinearity;
 
+/// Fewest training poses beyond the columns of a one-axis parametrisation (the axis chosen among
+/// three) in every fold.
+const AXIS_CHOICE_MIN_DOF: usize = 1;
+
 impl Family for ScaleNonlinearity {
     fn name(&self) -> &'static str {
         "scale-nonlinearity"
@@ -30,13 +34,19 @@ impl Family for ScaleNonlinearity {
             Variant { extra: design(&[3]), params: 3, detail: "k3 a^3 per axis".into() },
             Variant { extra: both.clone(), params: 6, detail: "k2 a^2 + k3 a^3 per axis".into() },
         ];
-        // One axis bowing alone (the out-of-plane axis of most parts): its square and cube terms.
+        // One axis bowing alone (the out-of-plane axis of most parts): its square and cube terms. The
+        // axis is chosen among three on the same withheld poses: where every fold's fit is exactly
+        // determined each predicts its withheld pose by chance, and the best of three chances is no
+        // evidence. On the development sets (1 536 logs) the 7 logs of 12 poses named so were right
+        // once (4 out-of-catalogue effects, a temperature, a hand); without these variants there 3
+        // of the out-of-catalogue effects are `unexplained` and the one non-linearity is too.
         let one_axis = |a: usize| -> Vec<Vec<f64>> { both.iter().map(|row| vec![row[a], row[3 + a]]).collect() };
-        variants.extend((0..3).map(|a| Variant {
+        let one_axis_variants = (0..3).map(|a| Variant {
             extra: one_axis(a),
             params: 2,
             detail: format!("k2 a^2 + k3 a^3 on {} only", ["x", "y", "z"][a]),
-        }));
+        });
+        variants.extend(one_axis_variants.filter(|v| ctx.trains_beyond(&v.extra, AXIS_CHOICE_MIN_DOF)));
         variants
     }
 }
@@ -61,6 +71,28 @@ mod tests {
             assert_eq!(d.verdict, "scale-nonlinearity", "seed {seed}: {}", d.to_text());
             let named = d.candidates.iter().find(|c| c.effect == "scale-nonlinearity").unwrap();
             assert_eq!(named.detail, "k2 a^2 + k3 a^3 on z only", "seed {seed}");
+        }
+    }
+
+    #[test]
+    fn the_bowing_axis_is_chosen_only_where_the_folds_leave_a_residual_degree_of_freedom() {
+        // Left one out, 12 poses train each fold on 11: the calibration's 9 columns and one axis's 2
+        // terms are exactly determined; 13 poses leave one degree of freedom.
+        for (poses, searched) in [(12, false), (13, true)] {
+            let cfg = SimConfig { plan: Plan::Random(poses), ..SimConfig::paper(7) };
+            let g = cfg.gravity;
+            let recording = simulate_with(
+                &cfg,
+                &mut [&mut |_t: f64, _p: Option<usize>, r: &mut [f64; 3]| r[2] += g * 3.0e-3 * (r[2] / g).powi(2)],
+            );
+            let temps_c = vec![25.0; recording.samples.len()];
+            let table = to_table(&SimLog { recording, temps_c }, "z-bow").unwrap();
+            let d = diagnose(&table, &DiagnoseOptions::DEFAULT).unwrap();
+            assert_eq!(d.poses.len(), poses);
+            let family = d.candidates.iter().find(|c| c.effect == "scale-nonlinearity").unwrap();
+            let tried: Vec<&str> = family.variants.iter().map(|(detail, _)| detail.as_str()).collect();
+            assert_eq!(tried.iter().any(|v| v.ends_with(" only")), searched, "{poses} poses: {tried:?}");
+            assert!(tried.contains(&"k2 a^2, one k2 for all axes"), "{tried:?}");
         }
     }
 
