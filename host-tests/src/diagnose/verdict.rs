@@ -231,10 +231,11 @@ const RIVAL_WITHIN: f64 = 3.0;
 const EXPLAINED_PER_PARAM: f64 = 10.0;
 
 /// When no family explains the withheld poses: the value family the withheld poses do not support
-/// (evidence below [`MIN_GAIN`]) that alone fits every pose to
-/// white noise ([`FITS_TO_NOISE`]) with a chi-square drop of [`EXPLAINED_PER_PARAM`] per column;
-/// no other family (the thermometer named before time, as on withheld poses) nor out-of-catalogue
-/// probe fits them to white noise too. The withheld poses cannot test a design that few poses
+/// (evidence below [`MIN_GAIN`]) that alone fits every pose to white noise ([`FITS_TO_NOISE`]), or
+/// takes the gap at least [`IN_SAMPLE_SHRINK`] of the way, with a chi-square drop of
+/// [`EXPLAINED_PER_PARAM`] per column; no other family (the thermometer named before time, as on
+/// withheld poses) nor out-of-catalogue probe fits them to white noise too (or, when the family
+/// leaves more, within [`RIVAL_WITHIN`] of it). The withheld poses cannot test a design that few poses
 /// determine: a cube term per axis on a log of faces and a few tilted poses, each tilted pose
 /// alone deciding a term, predicts none of them withheld although its fit to all of them leaves
 /// white noise.
