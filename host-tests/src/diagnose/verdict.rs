@@ -341,6 +341,15 @@ mod tests {
     use crate::diagnose::{DiagnoseOptions, gap};
     use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
 
+    /// A clean log's measured gap, marked significant (with the gap ratio `ratio_before` if given).
+    fn significant_gap(ratio_before: Option<f64>) -> Measured {
+        let table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "sim").unwrap();
+        let mut m = gap::measure(&table, &DiagnoseOptions::DEFAULT).unwrap();
+        m.gap.significant = true;
+        m.gap.ratio_before = ratio_before.unwrap_or(m.gap.ratio_before);
+        m
+    }
+
     fn holds_only(effect: &'static str, within_gain: f64, within_disagreement: f64) -> Evaluation {
         let candidate = Candidate {
             effect,
@@ -381,9 +390,7 @@ mod tests {
 
     #[test]
     fn a_noise_model_that_leaves_the_spread_several_times_its_prediction_is_not_named() {
-        let table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "sim").unwrap();
-        let mut m = gap::measure(&table, &DiagnoseOptions::DEFAULT).unwrap();
-        m.gap.significant = true;
+        let m = significant_gap(None);
         let verdict = |e: &[Evaluation]| decide(&m, e, &[], None, false).verdict;
         // A development log with hysteresis: a walk on one axis took the held-out ratio from 55.7 to
         // 8.8 (gain 0.46); no catalogue family explained it.
@@ -396,9 +403,7 @@ mod tests {
 
     #[test]
     fn a_value_fit_of_the_pose_means_is_a_walk_when_the_holds_walk_at_its_level_and_the_fit_misses_them() {
-        let table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "sim").unwrap();
-        let mut m = gap::measure(&table, &DiagnoseOptions::DEFAULT).unwrap();
-        (m.gap.significant, m.gap.ratio_before) = (true, 6.81);
+        let m = significant_gap(Some(6.81));
         let named = |effect: &'static str, within_gain: f64, holds_walk: bool| {
             // A development log's walk: a drift spline gained 0.34 on the withheld poses, nothing
             // in the holds (-0.05); the walk at the holds' level left the withheld scatter at 0.82.
@@ -420,9 +425,7 @@ mod tests {
 
     #[test]
     fn a_transient_in_every_hold_that_the_pose_means_agree_with_stands_before_a_noise_floor() {
-        let table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "sim").unwrap();
-        let mut m = gap::measure(&table, &DiagnoseOptions::DEFAULT).unwrap();
-        (m.gap.significant, m.gap.ratio_before) = (true, 3.35);
+        let m = significant_gap(Some(3.35));
         // A development log's offset recovery after each placement (gimbal, 50 poses): a transient
         // from each hold's start gained 0.57 in the holds, the pose means 1.8 chi-square per
         // coefficient away, nothing on the withheld poses (-0.02); a bias-instability floor left
@@ -441,9 +444,7 @@ mod tests {
 
     #[test]
     fn a_noise_model_must_be_far_ahead_of_a_probe_that_predicts_the_withheld_values() {
-        let table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "sim").unwrap();
-        let mut m = gap::measure(&table, &DiagnoseOptions::DEFAULT).unwrap();
-        m.gap.significant = true;
+        let m = significant_gap(None);
         let probe = |gain: f64| probe("rotation-direction", gain, f64::NAN, 0.0);
         let verdict = |gain: f64, predicts_values: bool, probe_gain: f64| {
             let effect = if predicts_values { "drift" } else { "colored-noise" };
@@ -460,9 +461,7 @@ mod tests {
 
     #[test]
     fn a_step_that_fits_every_pose_closer_than_a_wander_vetoes_it_without_a_margin() {
-        let table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "sim").unwrap();
-        let mut m = gap::measure(&table, &DiagnoseOptions::DEFAULT).unwrap();
-        (m.gap.significant, m.gap.ratio_before) = (true, 10.5);
+        let m = significant_gap(Some(10.5));
         // A development log's offset step (32 poses): a penalised wander (8 effective parameters)
         // gained 0.47 on the withheld poses and left 1.87 on the poses it was fitted on; the step
         // probe gained 0.65 and fitted every pose to 1.11.
@@ -479,9 +478,7 @@ mod tests {
 
     #[test]
     fn a_wander_through_the_pose_means_stands_before_a_noise_model_only_if_that_is_not_far_ahead() {
-        let table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "sim").unwrap();
-        let mut m = gap::measure(&table, &DiagnoseOptions::DEFAULT).unwrap();
-        (m.gap.significant, m.gap.ratio_before) = (true, 22.3);
+        let m = significant_gap(Some(22.3));
         // An own-simulator random walk left one out: a penalised wander (11 effective parameters)
         // gained 0.34 on the withheld poses and left 2.9 in the poses it was fitted on; the noise
         // model gained 0.63.
@@ -499,9 +496,7 @@ mod tests {
 
     #[test]
     fn a_credible_thermometer_is_named_before_time_within_a_tenth() {
-        let table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "sim").unwrap();
-        let mut m = gap::measure(&table, &DiagnoseOptions::DEFAULT).unwrap();
-        m.gap.significant = true;
+        let m = significant_gap(None);
         let named = |temperature_gain: f64, credible: bool| {
             let drift = on_pose_means("drift", 1.5, 0.64, true);
             let mut temperature = on_pose_means("temperature", 1.6, temperature_gain, true);
@@ -518,9 +513,7 @@ mod tests {
 
     #[test]
     fn a_slow_change_whose_gain_rests_on_one_pose_is_not_named() {
-        let table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "sim").unwrap();
-        let mut m = gap::measure(&table, &DiagnoseOptions::DEFAULT).unwrap();
-        m.gap.significant = true;
+        let m = significant_gap(None);
         let named = |effect: &'static str, gain_without_worst: f64| {
             let mut slow = on_pose_means(effect, 1.6, 0.35, true);
             slow.gain_without_worst = gain_without_worst;
@@ -563,9 +556,7 @@ mod tests {
 
     #[test]
     fn a_family_that_alone_fits_every_pose_to_white_noise_is_named_when_no_family_explains_withheld_ones() {
-        let table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "sim").unwrap();
-        let mut m = gap::measure(&table, &DiagnoseOptions::DEFAULT).unwrap();
-        (m.gap.significant, m.gap.ratio_before) = (true, 6.0);
+        let m = significant_gap(Some(6.0));
         let probe = |in_sample_ratio: f64| probe("cross-axis", 0.2, in_sample_ratio, 0.0);
         let decide_on = |e: &[Evaluation], p: &[Probe]| decide(&m, e, p, None, false);
         let probe_that_explains = |p: Probe| Probe { heldout_gain: MIN_GAIN, ..p };
@@ -595,9 +586,7 @@ mod tests {
 
     #[test]
     fn a_fit_to_every_pose_that_takes_a_large_gap_most_of_the_way_alone_is_named() {
-        let table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "sim").unwrap();
-        let mut m = gap::measure(&table, &DiagnoseOptions::DEFAULT).unwrap();
-        (m.gap.significant, m.gap.ratio_before) = (true, 64.4);
+        let m = significant_gap(Some(64.4));
         let decide_on = |e: &[Evaluation], p: &[Probe]| decide(&m, e, p, None, false);
         let with_dof = |mut e: Evaluation, dof: usize| {
             e.candidate.in_sample.as_mut().unwrap().residual_dof = dof;
@@ -620,9 +609,7 @@ mod tests {
 
     #[test]
     fn a_probe_that_fits_every_pose_far_less_closely_does_not_overrule_a_family_that_fits_them_to_noise() {
-        let table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "sim").unwrap();
-        let mut m = gap::measure(&table, &DiagnoseOptions::DEFAULT).unwrap();
-        (m.gap.significant, m.gap.ratio_before) = (true, 15.7);
+        let m = significant_gap(Some(15.7));
         // A development log (23 poses, square terms per axis): the square terms explained the withheld
         // poses (0.46) and fit every pose to 0.97; a periodic bias, period 40 s, explained the withheld
         // ones a little more (0.51) but left 6.26 on every pose.
