@@ -244,10 +244,8 @@ fn fits_every_pose<'e>(
     evaluations: &'e [Evaluation],
     probes: &[Probe],
 ) -> Option<(usize, &'e Evaluation, &'e InSampleFit)> {
-    let ratio_before = m.gap.ratio_before;
     let accounts = |f: &InSampleFit| {
-        let shrinks =
-            f.residual_dof >= SHRINK_MIN_DOF && ratio_before - f.ratio >= IN_SAMPLE_SHRINK * (ratio_before - 1.0);
+        let shrinks = f.residual_dof >= SHRINK_MIN_DOF && shrink(m.gap.ratio_before, f.ratio) >= IN_SAMPLE_SHRINK;
         f.ratio <= FITS_TO_NOISE || shrinks
     };
     // A family the withheld poses support but a guard kept from the verdict (its gain resting on one
@@ -315,13 +313,15 @@ pub(crate) fn decide(
         (if significant { "unexplained" } else { "none" }, None, unchanged(), None)
     };
     gap.sim_rmse_after_mg = if gap.ratio_after > 0.0 { gap.real_rmse_after_mg / gap.ratio_after } else { f64::NAN };
-    let shrink = if significant && gap.ratio_before > 1.0 {
-        ((gap.ratio_before - gap.ratio_after) / (gap.ratio_before - 1.0)).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
+    let shrink = if significant { shrink(gap.ratio_before, gap.ratio_after) } else { 0.0 };
     let probe_where = best_probe.map(|p| format!("{} (held-out gain {:.2})", p.detail, p.heldout_gain));
     Decision { verdict, winner, gap, shrink, after, probe_where, located }
+}
+
+/// The share of the gap's excess over white noise that a fit leaving `ratio_after` removes, in
+/// 0..=1 (0 when there is no excess).
+fn shrink(ratio_before: f64, ratio_after: f64) -> f64 {
+    if ratio_before > 1.0 { ((ratio_before - ratio_after) / (ratio_before - 1.0)).clamp(0.0, 1.0) } else { 0.0 }
 }
 
 /// What supports a verdict from the fit to every pose.
