@@ -77,12 +77,12 @@ pub struct AccumulateOptions {
     /// 16-sample blocks; a flicker noise on top of it: 6 in 16-sample blocks, 30 in 32). Defaults to 1;
     /// [`accumulate_holds`] tries 2, then 4 last.
     pub correlated_block_multiple: usize,
-    /// Without a sample rate (no time column, none given): the shortest pose, in blocks, instead of
-    /// the library's `min_pose_samples` (100), when it is shorter. A log of holds of 100 readings
-    /// each (logging paused while the sensor is turned) keeps at most 80-90 of each after the
-    /// still test's first block. `None` (default) keeps the library's; [`accumulate_holds`] tries
-    /// 4 last. Ignored with a sample rate ([`Self::min_pose_s`] applies).
-    pub untimed_min_pose_blocks: Option<u32>,
+    /// The shortest pose, in blocks, instead of the library's `min_pose_samples` (100), when it is
+    /// shorter. A log of holds of 100 readings each (logging paused while the sensor is turned; or
+    /// 2 s holds at 50 Hz) keeps at most 80-90 of each after the still test's first block. `None`
+    /// (default) keeps the library's; [`accumulate_holds`] tries 4 last. With a sample rate the
+    /// pose is still at least [`Self::min_pose_s`] long.
+    pub short_min_pose_blocks: Option<u32>,
 }
 
 /// Per-axis RMS scatter of a pose's readings, in units of the log's median |a| (gravity), above which
@@ -115,7 +115,7 @@ impl Default for AccumulateOptions {
             min_pose_s: MIN_POSE_S,
             correlated_readings: false,
             correlated_block_multiple: 1,
-            untimed_min_pose_blocks: None,
+            short_min_pose_blocks: None,
         }
     }
 }
@@ -214,9 +214,9 @@ pub fn choose_block_samples(sample_rate_hz: Option<f64>) -> usize {
         .unwrap_or(DEFAULT_BLOCK_SAMPLES)
 }
 
-/// Shortest pose, in blocks, of the last attempts for a log without a sample rate
-/// ([`AccumulateOptions::untimed_min_pose_blocks`]).
-pub const UNTIMED_MIN_POSE_BLOCKS: u32 = 4;
+/// Shortest pose, in blocks, of the last attempts (holds shorter than the library's shortest pose)
+/// ([`AccumulateOptions::short_min_pose_blocks`]).
+pub const SHORT_MIN_POSE_BLOCKS: u32 = 4;
 
 /// `block` times `multiple`, at most the longest of [`BLOCK_SIZES`] (a block length the detector has).
 fn longer_block(block: usize, multiple: usize) -> usize {
@@ -338,21 +338,14 @@ impl Correlated {
     }
 }
 
-/// The shortest pose, samples: `library` (the library's setting) raised to `opts.min_pose_s` of
-/// samples with a sample rate; without one, lowered to `opts.untimed_min_pose_blocks` blocks.
+/// The shortest pose, samples: `library` (the library's setting), lowered to
+/// `opts.short_min_pose_blocks` blocks, then raised to `opts.min_pose_s` of samples with a sample rate.
 fn shortest_pose(opts: &AccumulateOptions, sample_rate_hz: Option<f64>, block: usize, library: u32) -> u32 {
-    match (sample_rate_hz, opts.untimed_min_pose_blocks) {
-        (Some(rate), _) => {
-            let samples = (opts.min_pose_s * rate).ceil();
-            if samples.is_finite() && samples > f64::from(library) {
-                samples.min(f64::from(u32::MAX)) as u32
-            } else {
-                library
-            }
-        }
-        (None, Some(blocks)) => library.min(blocks.saturating_mul(u32::try_from(block).unwrap_or(u32::MAX)).max(1)),
-        (None, None) => library,
-    }
+    let block = u32::try_from(block).unwrap_or(u32::MAX);
+    let library = opts.short_min_pose_blocks.map_or(library, |blocks| library.min(blocks.saturating_mul(block).max(1)));
+    let Some(rate) = sample_rate_hz else { return library };
+    let samples = (opts.min_pose_s * rate).ceil();
+    if samples.is_finite() && samples > f64::from(library) { samples.min(f64::from(u32::MAX)) as u32 } else { library }
 }
 
 impl Detector {
@@ -405,7 +398,7 @@ impl Detector {
 /// test of a block's mean change widened for correlated readings
 /// ([`AccumulateOptions::correlated_readings`]: a heavily low-passed sensor's holds); then both with
 /// blocks twice, then four times as long as well ([`AccumulateOptions::correlated_block_multiple`]);
-/// last, for a log without a sample rate, poses of [`UNTIMED_MIN_POSE_BLOCKS`] blocks, then with the
+/// last, poses of [`SHORT_MIN_POSE_BLOCKS`] blocks (holds of 100 readings or fewer), then with the
 /// widened test as well. A log found with the first two is found as before the widened test
 /// existed, one found with the first four as before the longer blocks. Repeats left out.
 pub(crate) fn attempts(opts: &AccumulateOptions) -> Vec<AccumulateOptions> {
@@ -416,8 +409,8 @@ pub(crate) fn attempts(opts: &AccumulateOptions) -> Vec<AccumulateOptions> {
     let mut out: Vec<AccumulateOptions> = Vec::new();
     let first = [*opts, library, widened(*opts), widened(library)];
     let longer_blocks = [2, 4].into_iter().flat_map(|m| [longer(*opts, m), longer(library, m)]);
-    let untimed = AccumulateOptions { untimed_min_pose_blocks: Some(UNTIMED_MIN_POSE_BLOCKS), ..library };
-    for o in first.into_iter().chain(longer_blocks).chain([untimed, widened(untimed)]) {
+    let short = AccumulateOptions { short_min_pose_blocks: Some(SHORT_MIN_POSE_BLOCKS), ..library };
+    for o in first.into_iter().chain(longer_blocks).chain([short, widened(short)]) {
         if !out.contains(&o) {
             out.push(o);
         }
@@ -624,14 +617,15 @@ mod tests {
     fn a_log_whose_blocks_hold_few_independent_readings_is_found_in_longer_blocks() {
         // Two low-pass stages of 3.2 samples (a second-order filter at a twentieth of the rate, as an
         // MPU-6050 at 50 Hz behind its 2.5 Hz filter) read in blocks of 8: the block variances scatter
-        // so far that even the widened test finds too few poses; blocks of 16 find most.
+        // so far that even the widened test finds too few poses; blocks of 16 find most (before the
+        // short poses, tried last).
         let eight = AccumulateOptions { block_samples: Some(8), ..AccumulateOptions::default() };
         for seed in [1, 2, 3] {
             let unfiltered = accumulate(&low_passed(0.0, seed), &eight).unwrap().poses.len();
             let filtered = low_passed_stages(3.2, 2, seed);
             let widened: Vec<usize> = attempts(&eight)
                 .iter()
-                .filter(|o| o.correlated_block_multiple == 1)
+                .filter(|o| o.correlated_block_multiple == 1 && o.short_min_pose_blocks.is_none())
                 .map(|o| accumulate(&filtered, o).unwrap().poses.len())
                 .collect();
             let found = accumulate_holds(&filtered, &eight, crate::calib::MIN_POSES).unwrap();
@@ -707,24 +701,47 @@ mod tests {
         assert!(kept.poses.iter().all(|p| p.variance.iter().all(|v| f64::from(*v).sqrt() < scatter_limit)));
     }
 
-    #[test]
-    fn an_untimed_log_of_holds_of_100_readings_is_found_with_shorter_poses() {
-        // No time column; logging paused while the sensor was turned: 12 holds of 100 readings,
-        // each a jump from the last (as a public example log of 160 such holds).
-        let mut text = String::from("ax,ay,az\n");
+    /// 12 holds of 100 readings, each a jump from the last (as a public example log of 160 such
+    /// holds), with a time column at `rate_hz` between the holds' readings (a 1 s turn between
+    /// holds) or none.
+    fn holds_of_100_readings(rate_hz: Option<f64>) -> crate::csvio::Table {
+        let mut text = String::from(if rate_hz.is_some() { "t,ax,ay,az\n" } else { "ax,ay,az\n" });
         for hold in 0..12u32 {
             let a = f64::from(hold) * 0.9;
             let d = [a.cos() * (0.3 * a).cos(), a.sin() * (0.3 * a).cos(), (0.3 * a).sin()];
             for i in 0..100u32 {
+                if let Some(rate) = rate_hz {
+                    text.push_str(&format!("{:.4},", f64::from(hold) * (100.0 / rate + 1.0) + f64::from(i) / rate));
+                }
                 let e = f64::from((i * 7919 + hold * 31) % 17) * 1e-4 - 8e-4;
                 text.push_str(&format!("{:.5},{:.5},{:.5}\n", d[0] + e, d[1] - e, d[2] + 0.5 * e));
             }
         }
-        let table = crate::io::read_csv_str("blocks.csv", &text, &crate::io::ReadOptions::default()).unwrap();
+        crate::io::read_csv_str("blocks.csv", &text, &crate::io::ReadOptions::default()).unwrap()
+    }
+
+    #[test]
+    fn an_untimed_log_of_holds_of_100_readings_is_found_with_shorter_poses() {
+        // No time column; logging paused while the sensor was turned.
+        let table = holds_of_100_readings(None);
         assert_eq!(accumulate(&table, &AccumulateOptions::default()).unwrap().poses.len(), 0);
         let found = accumulate_holds(&table, &AccumulateOptions::default(), crate::calib::MIN_POSES).unwrap();
-        let shortest = UNTIMED_MIN_POSE_BLOCKS * DEFAULT_BLOCK_SAMPLES as u32;
+        let shortest = SHORT_MIN_POSE_BLOCKS * DEFAULT_BLOCK_SAMPLES as u32;
         assert_eq!(found.min_pose_samples, shortest);
+        assert!(found.poses.len() >= 10, "{} poses", found.poses.len());
+        assert!(found.poses.iter().all(|p| p.n >= shortest && p.n <= 100));
+    }
+
+    #[test]
+    fn a_timed_log_of_two_second_holds_at_50_hz_is_found_with_shorter_poses() {
+        // 2 s holds at 50 Hz: the library's shortest pose (100 readings) is the whole hold.
+        let table = holds_of_100_readings(Some(50.0));
+        let opts = AccumulateOptions::default();
+        assert_eq!(accumulate(&table, &opts).unwrap().poses.len(), 0);
+        let found = accumulate_holds(&table, &opts, crate::calib::MIN_POSES).unwrap();
+        let shortest = SHORT_MIN_POSE_BLOCKS * choose_block_samples(Some(50.0)) as u32;
+        assert_eq!(found.min_pose_samples, shortest);
+        assert!(shortest as f64 >= MIN_POSE_S * 50.0, "no shorter than the timed minimum");
         assert!(found.poses.len() >= 10, "{} poses", found.poses.len());
         assert!(found.poses.iter().all(|p| p.n >= shortest && p.n <= 100));
     }
@@ -733,7 +750,7 @@ mod tests {
     fn the_attempts_stop_at_the_first_enough_and_otherwise_keep_the_most_poses() {
         let opts = AccumulateOptions::default();
         let tried = attempts(&opts).len();
-        assert_eq!(tried, 10, "defaults, library minimum, widened, blocks 2x and 4x, each with both; untimed");
+        assert_eq!(tried, 10, "defaults, library minimum, widened, blocks 2x and 4x, each with both; short poses");
         // Poses found by each attempt in turn; "enough" is at least 9.
         let run = |found: &[usize]| {
             let mut next = found.iter().copied();
