@@ -445,31 +445,48 @@ pub fn accumulate_until(
     opts: &AccumulateOptions,
     enough: impl Fn(&[Pose]) -> bool,
 ) -> Result<Accumulation, AccumulatorError> {
-    until_enough(opts, |a: &Accumulation| enough(&a.poses), |a| a.poses.len(), |o| accumulate(table, o))
+    until_enough(
+        opts,
+        |a: &Accumulation| enough(&a.poses),
+        |a| !fragmented(a),
+        |a| a.poses.len(),
+        |o| accumulate(table, o),
+    )
 }
 
-/// `find` with each of [`attempts`] in order until what it finds is `enough`; when none is, the first
-/// of those that found the most poses (`count`).
+/// More still intervals were left out as too short than poses were found: the settings cut the
+/// holds into fragments (a low-passed sensor's block variances scatter past the still test), and
+/// later settings may find them whole.
+pub(crate) fn fragmented(acc: &Accumulation) -> bool {
+    acc.rejections.too_short as usize > acc.poses.len()
+}
+
+/// `find` with each of [`attempts`] in order until what it finds is `enough` and `whole` (not
+/// [`fragmented`]); when none is, the first that is `enough`; when none is, the first of those that
+/// found the most poses (`count`).
 pub(crate) fn until_enough<T, E>(
     opts: &AccumulateOptions,
     enough: impl Fn(&T) -> bool,
+    whole: impl Fn(&T) -> bool,
     count: impl Fn(&T) -> usize,
     mut find: impl FnMut(&AccumulateOptions) -> Result<T, E>,
 ) -> Result<T, E> {
-    let mut best = find(opts)?;
-    if enough(&best) {
-        return Ok(best);
-    }
-    for next in attempts(opts).iter().skip(1) {
-        let found = find(next)?;
-        if enough(&found) {
+    // Enough before not enough; among those not enough, the most poses; the first on a tie.
+    let rank = |t: &T| if enough(t) { (true, 0) } else { (false, count(t)) };
+    let mut best: Option<T> = None;
+    for next in attempts(opts) {
+        let found = find(&next)?;
+        if enough(&found) && whole(&found) {
             return Ok(found);
         }
-        if count(&found) > count(&best) {
-            best = found;
+        if best.as_ref().is_none_or(|b| rank(&found) > rank(b)) {
+            best = Some(found);
         }
     }
-    Ok(best)
+    match best {
+        Some(best) => Ok(best),
+        None => find(opts),
+    }
 }
 
 /// Feeds every row of `table` (as `f32`, in the table's units) through the library's
@@ -614,6 +631,26 @@ mod tests {
     }
 
     #[test]
+    fn holds_cut_into_more_fragments_than_poses_are_found_whole_by_the_widened_test() {
+        // Two low-pass stages of 2 samples: the default settings find enough poses to calibrate,
+        // among far more fragments of holds left out as too short; the widened test finds them whole.
+        for seed in [1, 3] {
+            let unfiltered = accumulate(&low_passed(0.0, seed), &AccumulateOptions::default()).unwrap();
+            let filtered = low_passed_stages(2.0, 2, seed);
+            let first = accumulate(&filtered, &AccumulateOptions::default()).unwrap();
+            assert!(first.poses.len() >= crate::calib::MIN_POSES && fragmented(&first), "seed {seed}: {first:?}");
+            let found = accumulate_holds(&filtered, &AccumulateOptions::default(), crate::calib::MIN_POSES).unwrap();
+            assert!(!fragmented(&found) && found.mean_change_widened.is_some(), "seed {seed}: {:?}", found.rejections);
+            assert!(
+                4 * found.poses.len() >= 3 * unfiltered.poses.len(),
+                "seed {seed}: {} poses, {} unfiltered",
+                found.poses.len(),
+                unfiltered.poses.len()
+            );
+        }
+    }
+
+    #[test]
     fn a_log_whose_blocks_hold_few_independent_readings_is_found_in_longer_blocks() {
         // Two low-pass stages of 3.2 samples (a second-order filter at a twentieth of the rate, as an
         // MPU-6050 at 50 Hz behind its 2.5 Hz filter) read in blocks of 8: the block variances scatter
@@ -747,29 +784,36 @@ mod tests {
     }
 
     #[test]
-    fn the_attempts_stop_at_the_first_enough_and_otherwise_keep_the_most_poses() {
+    fn the_attempts_stop_at_the_first_enough_and_whole_and_otherwise_keep_the_first_enough_or_the_most_poses() {
         let opts = AccumulateOptions::default();
         let tried = attempts(&opts).len();
         assert_eq!(tried, 10, "defaults, library minimum, widened, blocks 2x and 4x, each with both; short poses");
-        // Poses found by each attempt in turn; "enough" is at least 9.
-        let run = |found: &[usize]| {
+        // Poses found by each attempt in turn, and whether they are whole (not fragmented); "enough"
+        // is at least 9.
+        let run = |found: &[(usize, bool)]| {
             let mut next = found.iter().copied();
             let mut calls = 0;
             let got = until_enough(
                 &opts,
-                |n: &usize| *n >= 9,
-                |n: &usize| *n,
-                |_| -> Result<usize, ()> {
+                |f: &(usize, bool)| f.0 >= 9,
+                |f: &(usize, bool)| f.1,
+                |f: &(usize, bool)| f.0,
+                |_| -> Result<(usize, bool), ()> {
                     calls += 1;
-                    Ok(next.next().unwrap_or(0))
+                    Ok(next.next().unwrap_or((0, true)))
                 },
             )
             .unwrap();
-            (got, calls)
+            (got.0, calls)
         };
-        assert_eq!(run(&[12, 30]), (12, 1), "the first enough is kept: later settings are not tried");
-        assert_eq!(run(&[7, 3, 10, 40]), (10, 3), "seven poses that do not fit: the later settings are tried");
-        assert_eq!(run(&[7, 3, 8, 8, 2, 0, 1, 0]), (8, tried), "none enough: the first of the most poses");
+        let whole = |n: &[usize]| n.iter().map(|&n| (n, true)).collect::<Vec<_>>();
+        assert_eq!(run(&whole(&[12, 30])), (12, 1), "the first enough is kept: later settings are not tried");
+        assert_eq!(run(&whole(&[7, 3, 10, 40])), (10, 3), "seven poses that do not fit: the later settings are tried");
+        assert_eq!(run(&whole(&[7, 3, 8, 8, 2, 0, 1, 0])), (8, tried), "none enough: the first of the most poses");
+        let fragments = [(13, false), (13, false), (30, true), (28, true)];
+        assert_eq!(run(&fragments), (30, 3), "13 poses among fragments: the first whole settings that are enough");
+        let split = [(7, true), (149, false), (140, false), (8, true)];
+        assert_eq!(run(&split), (149, tried), "none whole: the first enough");
     }
 
     #[test]

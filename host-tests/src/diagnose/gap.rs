@@ -225,6 +225,9 @@ pub(crate) struct Measured {
     pub(crate) tails_trimmed: usize,
     /// The factor the pose finder widened its test of a block's mean change by (correlated readings).
     pub(crate) mean_change_widened: Option<f64>,
+    /// The pose finder left out more still intervals as too short than it found poses
+    /// ([`crate::poses::fragmented`]).
+    pub(crate) fragmented: bool,
     pub(crate) params: Params,
     pub(crate) model: Model,
     pub(crate) calibrated: Vec<V3>,
@@ -292,6 +295,8 @@ struct Found {
     rate: f64,
     /// The factor the test of a block's mean change was widened by (correlated readings).
     mean_change_widened: Option<f64>,
+    /// More still intervals left out as too short than poses found ([`crate::poses::fragmented`]).
+    fragmented: bool,
 }
 
 /// The still intervals of the table found with `found_with` (the CSV reader's accumulation, the
@@ -315,6 +320,7 @@ fn read_poses(table: &Table, found_with: &AccumulateOptions) -> Result<Found, Re
         0
     };
     let found = acc.poses.len();
+    let fragmented = crate::poses::fragmented(&acc);
     if found < min_poses {
         let longer = if min_pose_s > 0.0 { format!(" of at least {min_pose_s} s") } else { String::new() };
         let error =
@@ -325,7 +331,7 @@ fn read_poses(table: &Table, found_with: &AccumulateOptions) -> Result<Found, Re
         acc.spans.iter().map(|s| pose_data(table, s.first_row, s.last_row + 1, rate)).collect();
     let mut lib_poses = acc.poses;
     let tails_trimmed = trim_move_tails(table, &mut poses, &mut lib_poses, rate);
-    Ok(Found { lib_poses, poses, short, tails_trimmed, rate, mean_change_widened: acc.mean_change_widened })
+    Ok(Found { lib_poses, poses, short, tails_trimmed, rate, mean_change_widened: acc.mean_change_widened, fragmented })
 }
 
 /// Standard deviations by which the first (or last) sixth of a pose must differ from its middle two
@@ -543,6 +549,7 @@ pub(crate) fn measure_without(
         tails_trimmed: m.tails_trimmed,
         rate: m.rate,
         mean_change_widened: m.mean_change_widened,
+        fragmented: m.fragmented,
     };
     measure_found(table, opts, found)
 }
@@ -550,7 +557,7 @@ pub(crate) fn measure_without(
 /// Step 1 on the poses found.
 fn measure_found(table: &Table, opts: &DiagnoseOptions, found: Found) -> Result<Measured, Refusal> {
     let gravity = opts.gravity;
-    let Found { lib_poses, poses, short: short_poses, tails_trimmed, rate, mean_change_widened } = found;
+    let Found { lib_poses, poses, short: short_poses, tails_trimmed, rate, mean_change_widened, fragmented } = found;
     let config = CalibrationConfig { gravity: gravity as f32, ..CalibrationConfig::DEFAULT };
     let cal = calib::run(&lib_poses, &config, opts.seed).map_err(|e| Refusal::NotCalibrated {
         still_poses: lib_poses.len(),
@@ -576,6 +583,7 @@ fn measure_found(table: &Table, opts: &DiagnoseOptions, found: Found) -> Result<
         short_poses,
         tails_trimmed,
         mean_change_widened,
+        fragmented,
         params: cal.params,
         model,
         calibrated,

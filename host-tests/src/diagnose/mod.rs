@@ -329,11 +329,15 @@ enum Step1 {
 /// ([`crate::poses::attempts`]: every still interval, then the test of a block's mean change widened
 /// for correlated readings); poses that calibrate but determine no gap are answered [`undetermined`]
 /// (a log that calibrate accepts is answered); when none of those retries calibrates, a log moving in
-/// the tremor band is answered [`trembling_log`], and the others are tried in longer blocks.
+/// the tremor band is answered [`trembling_log`], and the others are tried in longer blocks. Poses
+/// found among more fragments of holds than poses ([`crate::poses::fragmented`]) are measured on the
+/// first retry that finds them whole, as `calibrate` does, and on their own when none does.
 fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Step1, DiagnoseError> {
     let mut not_calibrated = None;
+    let mut fragments = None;
     match gap::measure(table, opts) {
-        Ok(m) => return Ok(Step1::Measured(m)),
+        Ok(m) if !m.fragmented || family::tremor::in_log(table, m.rate).is_some() => return Ok(Step1::Measured(m)),
+        Ok(m) => fragments = Some(m),
         Err(gap::Refusal::NotCalibrated { still_poses, rate, .. }) => {
             if let Some(d) = moving_holds(table, opts, still_poses, rate) {
                 return Ok(Step1::Answered(d));
@@ -349,7 +353,8 @@ fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Step1, DiagnoseError
     let first_longer = usual.iter().position(|o| o.correlated_block_multiple > 1).unwrap_or(usual.len());
     let longer = usual.split_off(first_longer);
     let mut refused = None;
-    if let Some(step) = first_measured(table, opts, &usual, &mut refused) {
+    let whole_only = fragments.is_some();
+    if let Some(step) = first_measured(table, opts, &usual, &mut refused, whole_only) {
         return Ok(step);
     }
     if let Some((still_poses, rate)) = not_calibrated
@@ -357,24 +362,31 @@ fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Step1, DiagnoseError
     {
         return Ok(Step1::Answered(d));
     }
-    if let Some(step) = first_measured(table, opts, &longer, &mut refused) {
+    if let Some(step) = first_measured(table, opts, &longer, &mut refused, whole_only) {
         return Ok(step);
+    }
+    if let Some(m) = fragments {
+        return Ok(Step1::Measured(m));
     }
     Err(refused.map_or_else(|| err(format!("{}: no still poses", table.file)), |(_, error)| error))
 }
 
 /// Step 1 on the poses found with the first of `attempts` that calibrates them (or answers them
-/// [`undetermined`]); `None` when none does, with `refused` holding the refusal of the attempt that
-/// found the most still poses (the first of them; as `calibrate` reports).
+/// [`undetermined`]), only poses found whole with `whole_only`; `None` when none does, with
+/// `refused` holding the refusal of the attempt that found the most still poses (the first of them;
+/// as `calibrate` reports).
 fn first_measured(
     table: &Table,
     opts: &DiagnoseOptions,
     attempts: &[AccumulateOptions],
     refused: &mut Option<(usize, DiagnoseError)>,
+    whole_only: bool,
 ) -> Option<Step1> {
     for found_with in attempts {
         let (poses, error) = match gap::measure_with(table, opts, found_with) {
+            Ok(m) if whole_only && m.fragmented => continue,
             Ok(m) => return Some(Step1::Measured(m)),
+            Err(gap::Refusal::Undetermined { .. }) if whole_only => continue,
             Err(gap::Refusal::Undetermined { still_poses }) => {
                 return Some(Step1::Answered(undetermined(table, opts, still_poses)));
             }

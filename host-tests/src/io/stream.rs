@@ -83,6 +83,7 @@ pub fn stream_holds(
     poses::until_enough(
         acc_opts,
         |s: &Streamed| enough(&s.accumulation.poses),
+        |s: &Streamed| !poses::fragmented(&s.accumulation),
         |s: &Streamed| s.accumulation.poses.len(),
         |o| stream_poses(path, opts, o, prefix_bytes),
     )
