@@ -634,6 +634,31 @@ mod tests {
     }
 
     #[test]
+    fn holds_the_first_settings_cut_into_fragments_are_diagnosed_whole_as_calibrate_finds_them() {
+        // A clean simulated log through two low-pass stages of 2 samples (a sensor's digital filter):
+        // the default settings keep enough poses to calibrate among far more fragments of holds.
+        use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
+        let mut table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "filtered").unwrap();
+        for _ in 0..2 {
+            let mut state = table.samples[0];
+            for s in &mut table.samples {
+                state = std::array::from_fn(|a| state[a] + (s[a] - state[a]) / 3.0);
+                *s = state;
+            }
+        }
+        let opts = DiagnoseOptions::DEFAULT;
+        let first = gap::measure(&table, &opts).unwrap();
+        assert!(first.fragmented, "{} poses", first.poses.len());
+        let whole =
+            crate::poses::accumulate_holds(&table, &AccumulateOptions::default(), crate::calib::MIN_POSES).unwrap();
+        assert!(!crate::poses::fragmented(&whole) && whole.poses.len() > first.poses.len());
+        let d = diagnose(&table, &opts).unwrap();
+        assert_eq!(d.poses.len(), whole.poses.len(), "{}", d.to_text());
+        assert_eq!(d.mean_change_widened, whole.mean_change_widened);
+        assert_eq!(d.verdict, "none", "{}", d.to_text());
+    }
+
+    #[test]
     fn still_poses_that_calibrate_but_determine_no_gap_are_answered() {
         use crate::blindgen::{Family, generate, random_spec};
         use crate::csvio::{ReadOptions, read_csv_str};
