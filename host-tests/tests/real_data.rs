@@ -486,11 +486,11 @@ fn fastahrs_fxos8700_data_sample2() {
 
 #[test]
 fn ck_explorer_acc_sphere_raw() {
-    // No time column; holds of 100 readings: found with the pose finder's last attempt for untimed
-    // logs (poses of 4 blocks, 64 readings; `calibrate` reaches it through its retries).
+    // No time column; holds of 100 readings: found with the pose finder's last attempt for short
+    // holds (poses of 4 blocks, 64 readings; `calibrate` reaches it through its retries).
     let untimed = AccumulateOptions {
         min_pose_s: 0.0,
-        untimed_min_pose_blocks: Some(accelcal_host::poses::UNTIMED_MIN_POSE_BLOCKS),
+        short_min_pose_blocks: Some(accelcal_host::poses::SHORT_MIN_POSE_BLOCKS),
         ..AccumulateOptions::default()
     };
     check(&Case {
