@@ -635,17 +635,11 @@ mod tests {
 
     #[test]
     fn holds_the_first_settings_cut_into_fragments_are_diagnosed_whole_as_calibrate_finds_them() {
-        // A clean simulated log through two low-pass stages of 2 samples (a sensor's digital filter):
+        // A clean simulated log through a moving average of 8 readings (a sensor's digital filter):
         // the default settings keep enough poses to calibrate among far more fragments of holds.
         use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
-        let mut table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "filtered").unwrap();
-        for _ in 0..2 {
-            let mut state = table.samples[0];
-            for s in &mut table.samples {
-                state = std::array::from_fn(|a| state[a] + (s[a] - state[a]) / 3.0);
-                *s = state;
-            }
-        }
+        let clean = to_table(&generate(&random_scenario(EffectClass::None, 1)), "filtered").unwrap();
+        let table = testing::low_passed(clean, 8);
         let opts = DiagnoseOptions::DEFAULT;
         let first = gap::measure(&table, &opts).unwrap();
         assert!(first.fragmented, "{} poses", first.poses.len());
