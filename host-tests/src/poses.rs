@@ -473,20 +473,21 @@ pub(crate) fn until_enough<T, E>(
 ) -> Result<T, E> {
     // Enough before not enough; among those not enough, the most poses; the first on a tie.
     let rank = |t: &T| if enough(t) { (true, 0) } else { (false, count(t)) };
-    let mut best: Option<T> = None;
-    for next in attempts(opts) {
-        let found = find(&next)?;
-        if enough(&found) && whole(&found) {
+    let chosen = |t: &T| enough(t) && whole(t);
+    let mut best = find(opts)?;
+    if chosen(&best) {
+        return Ok(best);
+    }
+    for next in attempts(opts).iter().skip(1) {
+        let found = find(next)?;
+        if chosen(&found) {
             return Ok(found);
         }
-        if best.as_ref().is_none_or(|b| rank(&found) > rank(b)) {
-            best = Some(found);
+        if rank(&found) > rank(&best) {
+            best = found;
         }
     }
-    match best {
-        Some(best) => Ok(best),
-        None => find(opts),
-    }
+    Ok(best)
 }
 
 /// Feeds every row of `table` (as `f32`, in the table's units) through the library's
