@@ -42,14 +42,14 @@ fn stacked(ctx: &Context<'_>, w: &Within, v: &WithinVariant) -> (Vec<Vec<f64>>, 
 pub(crate) fn heldout_ratio(ctx: &Context<'_>, w: &Within, v: &WithinVariant) -> Option<(f64, f64)> {
     let (rows, r, fold) = stacked(ctx, w, v);
     let cv = cv_residuals(&rows, &r, &fold, ctx.folds, &vec![false; r.len()])?;
-    let n = ctx.poses.len();
-    let (ss, _) = sum_sq(&cv[..n]);
+    let scored: Vec<Option<f64>> = ctx.scored.iter().zip(&cv).map(|(s, c)| c.filter(|_| *s)).collect();
+    let (ss, n) = (sum_sq(&scored).0, ctx.n_scored);
     let penalty = PARAMETER_PENALTY * v.params as f64;
     let ratio = ((ss + penalty) / n as f64).sqrt();
     let without_worst =
         ctx.worst_nominal_pose().filter(|&(_, nominal)| nominal > 1.0).map_or(0.0, |(worst, nominal)| {
-            let left = cv[worst].map_or(0.0, |c| c * c);
-            gain_over(nominal, ((ss - left + penalty) / (n - 1) as f64).sqrt(), VALUE_OVERSHOOT_WEIGHT)
+            let left = scored[worst].map_or(0.0, |c| c * c);
+            gain_over(nominal, ((ss - left + penalty) / n.saturating_sub(1) as f64).sqrt(), VALUE_OVERSHOOT_WEIGHT)
         });
     Some((ratio, without_worst))
 }
