@@ -277,7 +277,7 @@ pub(crate) struct Context<'a> {
     /// tilted between y and z on a cube jig, for the y-z non-orthogonality) leaves its fold's fit
     /// barely determined: its prediction's noise, the same under the nominal model and every
     /// family, would hold the whole score. On the development sets (1 728 logs) scoring the others
-    /// only gained 5 answers where the gap is visible and 2 out-of-catalogue, and lost one of each.
+    /// only gained 6 answers where the gap is visible and lost 2 (out-of-catalogue: +2, -1).
     pub(crate) scored: Vec<bool>,
     /// How many poses are [`Context::scored`].
     pub(crate) n_scored: usize,
