@@ -97,10 +97,9 @@ impl Colored {
     /// A walk alone, measured over every hold or on the longest rest, as Gauss-Markov noises rising
     /// as it does within the holds (variance `K^2 tau_c / 2`) and levelling off after a correlation
     /// time `tau_c` of [`SATURATION_TAUS_S`] shorter than the log and at most `max_tau_s`, each with
-    /// the parameters it is charged (one, and
-    /// the search's `ln` of the times tried): the holds measure a noise's rise, the pose means where
-    /// it stops (a flicker or Gauss-Markov noise does; a walk at the holds' level then spreads them
-    /// far more than they are).
+    /// the parameters it is charged (one, and the search's `ln` of the times tried): the holds
+    /// measure a noise's rise, the pose means where it stops (a flicker or Gauss-Markov noise does;
+    /// a walk at the holds' level then spreads them far more than they are).
     fn saturating(&self, ctx: &Context<'_>, max_tau_s: f64) -> Vec<(Colored, f64)> {
         let t_end = ctx.poses.last().map_or(0.0, |p| p.t_end);
         let walk_alone = self.walk.iter().any(|v| *v > 0.0) && !self.floor.iter().chain(&self.markov).any(|v| *v > 0.0);
@@ -559,9 +558,10 @@ mod tests {
     fn a_telegraph_noise_on_one_axis_rising_in_the_longest_rest_levels_off_there() {
         // A telegraph noise of 1 mg on one sensor axis, dwelling 16 s (y, seed 1) or 8 s (z, seed 8):
         // its jumps split most holds, and the estimates pooled over the holds see nothing. The
-        // longest rest sees it rise as a walk, at a level over the log that spreads the withheld pose
-        // means twice as much as they are (held-out ratio 0.50), its floor alone a third as much
-        // (2.67): both `unexplained` before the rest's walk could level off within the rest.
+        // longest rest sees it rise as a walk. Before that walk could level off within the rest, the
+        // best noise model left the withheld pose means' scatter at 2.67 times its prediction (seed
+        // 1, the rest's floor alone) or at 0.50 (seed 8, the walk over the log spreading them twice
+        // as much as they are): both `unexplained`.
         let opts = DiagnoseOptions::DEFAULT;
         for (seed, dwell_s, axis) in [(1, 16.0, 1), (8, 8.0, 2)] {
             let d = diagnose(&telegraph_on(seed, 1.0, dwell_s, &[axis]), &opts).unwrap();
