@@ -42,8 +42,8 @@ fn stacked(ctx: &Context<'_>, w: &Within, v: &WithinVariant) -> (Vec<Vec<f64>>, 
 pub(crate) fn heldout_ratio(ctx: &Context<'_>, w: &Within, v: &WithinVariant) -> Option<(f64, f64)> {
     let (rows, r, fold) = stacked(ctx, w, v);
     let cv = cv_residuals(&rows, &r, &fold, ctx.folds, &vec![false; r.len()])?;
-    let scored: Vec<Option<f64>> = ctx.scored.iter().zip(&cv).map(|(s, c)| c.filter(|_| *s)).collect();
-    let (ss, n) = (sum_sq(&scored).0, ctx.n_scored);
+    let scored: Vec<Option<f64>> = (0..ctx.poses.len()).map(|i| cv[i].filter(|_| ctx.scored(i))).collect();
+    let (ss, n) = (sum_sq(&scored).0, ctx.n_scored());
     let penalty = PARAMETER_PENALTY * v.params as f64;
     let ratio = ((ss + penalty) / n as f64).sqrt();
     let without_worst =

@@ -271,16 +271,9 @@ pub(crate) struct Context<'a> {
     /// Expected mean-square held-out residual of white noise with the nominal model.
     pub(crate) e_white: f64,
     pub(crate) none_dropped: Vec<bool>,
+    /// The nominal model's held-out residuals, `None` for a pose it cannot predict
+    /// ([`Context::scored`]).
     pub(crate) nominal_cv: Vec<Option<f64>>,
-    /// The poses the nominal design predicts withheld ([`NOMINAL_UNPREDICTABLE`]): the held-out
-    /// scores are over these. A pose nearly alone in telling a calibration parameter (the one pose
-    /// tilted between y and z on a cube jig, for the y-z non-orthogonality) leaves its fold's fit
-    /// barely determined: its prediction's noise, the same under the nominal model and every
-    /// family, would hold the whole score. On the development sets (1 728 logs) scoring the others
-    /// only gained 6 answers where the gap is visible and lost 2 (out-of-catalogue: +2, -1).
-    pub(crate) scored: Vec<bool>,
-    /// How many poses are [`Context::scored`].
-    pub(crate) n_scored: usize,
     pub(crate) heldout_ratio_nominal: f64,
     base_fit_rmse_mg: f64,
     /// The within-pose channel (`None`: too few poses with enough samples).
@@ -358,10 +351,8 @@ impl<'a> Context<'a> {
         let nominal_cv = cv_of(&m.r).filter(|cv| cv.iter().flatten().count() > 0);
         let pose_level = nominal_cv.is_some();
         let nominal_cv = nominal_cv.unwrap_or_else(|| vec![None; n]);
-        let scored: Vec<bool> = nominal_cv.iter().map(Option::is_some).collect();
-        let n_scored = scored.iter().filter(|s| **s).count();
-        let heldout_ratio_nominal =
-            if pose_level { ((sum_sq(&nominal_cv).0 / n_scored as f64) / e_white).sqrt() } else { f64::NAN };
+        let (ss, n_scored) = sum_sq(&nominal_cv);
+        let heldout_ratio_nominal = if pose_level { ((ss / n_scored as f64) / e_white).sqrt() } else { f64::NAN };
         let base_fit_rmse_mg = kept_design(&base_rows, &none_dropped)
             .map_or(f64::NAN, |d| expected_fit_rmse_mg(&d, &base_rows, &white_draws, m.gravity));
         let within = Within::new(table, m);
@@ -381,8 +372,6 @@ impl<'a> Context<'a> {
             e_white,
             none_dropped,
             nominal_cv,
-            scored,
-            n_scored,
             heldout_ratio_nominal,
             base_fit_rmse_mg,
             within,
@@ -427,6 +416,21 @@ impl<'a> Context<'a> {
         self.base_rows.first().map_or(0, Vec::len)
     }
 
+    /// The nominal design predicts pose `i` withheld ([`NOMINAL_UNPREDICTABLE`]): the held-out scores
+    /// are over these poses. A pose nearly alone in telling a calibration parameter (the one pose
+    /// tilted between y and z on a cube jig, for the y-z non-orthogonality) leaves its fold's fit
+    /// barely determined: its prediction's noise, the same under the nominal model and every
+    /// family, would hold the whole score. On the development sets (1 728 logs) scoring the others
+    /// only gained 6 answers where the gap is visible and lost 2 (out-of-catalogue: +2, -1).
+    pub(crate) fn scored(&self, i: usize) -> bool {
+        self.nominal_cv[i].is_some()
+    }
+
+    /// How many poses are [`Context::scored`].
+    pub(crate) fn n_scored(&self) -> usize {
+        self.nominal_cv.iter().flatten().count()
+    }
+
     /// Held-out residuals of `r` (one per pose) under the nominal design (`None` for a pose it
     /// cannot predict).
     pub(crate) fn base_cv_residuals(&self, r: &[f64]) -> Option<Vec<Option<f64>>> {
@@ -455,7 +459,7 @@ impl<'a> Context<'a> {
     ) -> Option<f64> {
         let cv = cv_residuals_predictable(rows, &self.m.r, &self.fold, self.folds, dropped, UNPREDICTABLE)?;
         let (mut ss, mut n_dropped, mut n) = (0.0, 0.0, 0.0);
-        for i in (0..cv.len()).filter(|&i| Some(i) != left_out && self.scored[i]) {
+        for i in (0..cv.len()).filter(|&i| Some(i) != left_out && self.scored(i)) {
             n += 1.0;
             if dropped[i] {
                 n_dropped += 1.0;
@@ -484,7 +488,7 @@ impl<'a> Context<'a> {
     pub(crate) fn worst_nominal_pose(&self) -> Option<(usize, f64)> {
         let squares: Vec<f64> = self.nominal_cv.iter().map(|c| c.map_or(0.0, |c| c * c)).collect();
         let worst = (0..squares.len()).max_by(|&a, &b| squares[a].total_cmp(&squares[b]))?;
-        let others = self.n_scored.saturating_sub(1) as f64;
+        let others = self.n_scored().saturating_sub(1) as f64;
         Some((worst, ((squares.iter().sum::<f64>() - squares[worst]) / others / self.e_white).sqrt()))
     }
 
@@ -817,9 +821,9 @@ mod tests {
         let m = gap::measure(&table, &opts).unwrap();
         assert_eq!(m.poses.len(), 13);
         let ctx = Context::new(&table, &m, &opts).unwrap();
-        let unscored: Vec<usize> = (0..13).filter(|&i| !ctx.scored[i]).collect();
+        let unscored: Vec<usize> = (0..13).filter(|&i| !ctx.scored(i)).collect();
         assert_eq!(unscored, [7]);
-        assert_eq!(ctx.n_scored, 12);
+        assert_eq!(ctx.n_scored(), 12);
         let nominal = ((sum_sq(&ctx.nominal_cv).0 / 12.0) / ctx.e_white).sqrt();
         assert!((ctx.heldout_ratio_nominal - nominal).abs() < 1e-9 * nominal, "{nominal}");
         let d = crate::diagnose::diagnose(&table, &opts).unwrap();

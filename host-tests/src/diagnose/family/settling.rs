@@ -132,7 +132,7 @@ fn trimmed_start(ctx: &Context<'_>, drop: usize) -> Option<(f64, Vec<Option<f64>
     // Fewer samples per mean: more white noise in each.
     let more_noise = SEGMENTS as f64 / (SEGMENTS - drop) as f64;
     let expected = ctx.e_white * more_noise;
-    let ms = (sum_sq(&cv).0 + PARAMETER_PENALTY * expected) / ctx.n_scored as f64;
+    let ms = (sum_sq(&cv).0 + PARAMETER_PENALTY * expected) / ctx.n_scored() as f64;
     let after = fit_residuals(&ctx.base_rows, &r, &ctx.none_dropped)?;
     let kept: Vec<f64> = after.iter().flatten().copied().collect();
     let ratio_after = m.to_mg(rms(&kept)) / (m.gap.sim_rmse_mg * more_noise.sqrt());

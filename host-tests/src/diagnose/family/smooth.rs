@@ -173,7 +173,7 @@ fn score(
         let (mut a, b) = normals.without(Some(f));
         add_prior(&mut a, base, shape.knots, shape.order, shape.step, w);
         let x = solve_scaled(a, &[b])?.pop()?;
-        ss += (0..n).filter(|&i| fold[i] == f && ctx.scored[i]).map(|i| predict(&x, i).powi(2)).sum::<f64>();
+        ss += (0..n).filter(|&i| fold[i] == f && ctx.scored(i)).map(|i| predict(&x, i).powi(2)).sum::<f64>();
     }
     let (mut a, b) = normals.without(None);
     add_prior(&mut a, base, shape.knots, shape.order, shape.step, w);
@@ -184,7 +184,7 @@ fn score(
     let trace: f64 =
         rows[..n].iter().zip(&solved[1..]).map(|(row, y)| row.iter().zip(y).map(|(p, q)| p * q).sum::<f64>()).sum();
     let edf = (trace - base as f64).max(0.0);
-    let ratio = ((ss + PARAMETER_PENALTY * edf) / ctx.n_scored as f64).sqrt();
+    let ratio = ((ss + PARAMETER_PENALTY * edf) / ctx.n_scored() as f64).sqrt();
     let after = (0..n).map(|i| Some(predict(&solved[0], i) / w)).collect();
     Some((ratio, after, edf))
 }

@@ -235,7 +235,7 @@ impl ColoredNoise {
         }
         let e_col = mean_cv_ms(cvs);
         let ms = (crate::diagnose::math::sum_sq(&ctx.nominal_cv).0 + params * PARAMETER_PENALTY * ctx.e_white)
-            / ctx.n_scored as f64;
+            / ctx.n_scored() as f64;
         Some((ms / e_col).sqrt())
     }
 
