@@ -2,7 +2,7 @@
 """Score `accelcal diagnose --json` on a directory written by generate.py.
 
     python3 tools/blindgen2/score.py DIR [DIR ...] [--accelcal PATH] [--json] [--jobs N] [--timeout S]
-        [--require-right-visible F] [--max-false-alarms F] [--require-ooc-honest F] [--max-refusals N]
+        [--by-shape] [--by-poses] [--require-right-visible F] [--max-false-alarms F] [--require-ooc-honest F] [--max-refusals N]
 
 For each log in DIR/manifest.json runs the CLI, records verdict, gap.ratio_before,
 shrink and wall time (a non-zero exit is a refusal; its message is kept), writes
@@ -27,6 +27,9 @@ from concurrent.futures import ThreadPoolExecutor
 HERE = os.path.dirname(os.path.abspath(__file__))
 DEFAULT_CLI = os.path.normpath(os.path.join(HERE, "..", "..", "target", "release", "accelcal"))
 VISIBLE = 2.0
+# Bins of the poses the diagnosis found (--by-poses): a 9-parameter calibration leaves 12 poses 3
+# degrees of freedom, so a 3-parameter effect there cannot be tested on withheld poses.
+POSE_BINS = ((6, 13), (14, 16), (17, 24), (25, None))
 
 
 def get(d, path):
@@ -59,7 +62,9 @@ def run_one(cli, d, entry, timeout):
             shrink = verdict.get("shrink")
         verdict = verdict.get("effect")
     ratio = get(js, "gap.ratio_before")
-    return dict(entry, refused=False, verdict=verdict, ratio_before=ratio, shrink=shrink, seconds=secs)
+    poses = js.get("poses") if isinstance(js.get("poses"), int) else None
+    return dict(entry, refused=False, verdict=verdict, ratio_before=ratio, shrink=shrink, seconds=secs,
+                poses_found=poses)
 
 
 def is_right(r):
@@ -116,6 +121,7 @@ def main(argv=None):
     ap.add_argument("--timeout", type=float, default=600.0)
     ap.add_argument("--logs", action="store_true", help="also print one line per log")
     ap.add_argument("--by-shape", action="store_true", help="also a table per family/shape")
+    ap.add_argument("--by-poses", action="store_true", help="also a table per count of poses the diagnosis found")
     ap.add_argument("--require-right-visible", type=float, metavar="F",
                     help="fail unless at least this fraction of the clearly visible logs is right")
     ap.add_argument("--max-false-alarms", type=float, metavar="F",
@@ -199,6 +205,8 @@ def report(a, rows):
         for k in keys:
             print(fmt_row(k, summarise([r for r in rows if f"{r['family']}/{r['shape']}" == k]), 36))
         print()
+    if a.by_poses:
+        print_by_poses(rows)
     for f in fams:
         print(f"{f}: verdicts {per[f]['verdicts']}")
     if a.logs:
@@ -215,6 +223,31 @@ def report(a, rows):
         print(f"refused {r['file']}: {r['message']}")
     print(f"(visible: gap.ratio_before >= {VISIBLE:g}; per-log rows in results.json of {', '.join(a.dirs)})")
 
+
+def bin_label(lo, hi):
+    return f"{lo}-{hi} poses" if hi is not None else f"{lo}+ poses"
+
+
+def pose_bin(r):
+    """The POSE_BINS label of a log's found poses ("refused" without a diagnosis)."""
+    n = r.get("poses_found")
+    if n is None:
+        return "refused"
+    for lo, hi in POSE_BINS:
+        if n >= lo and (hi is None or n <= hi):
+            return bin_label(lo, hi)
+    return f"under {POSE_BINS[0][0]} poses"
+
+
+def print_by_poses(rows):
+    """The overall figures per bin of the poses the diagnosis found."""
+    labels = [bin_label(lo, hi) for lo, hi in POSE_BINS]
+    labels += sorted({pose_bin(r) for r in rows} - set(labels))
+    for label in labels:
+        part = [r for r in rows if pose_bin(r) == label]
+        if part:
+            print(fmt_row(label, summarise(part)))
+    print()
 
 if __name__ == "__main__":
     main()

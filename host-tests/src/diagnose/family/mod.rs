@@ -519,6 +519,15 @@ impl<'a> Context<'a> {
         })
     }
 
+    /// The most extra columns a parametrisation may have and still be fitted in every fold
+    /// ([`Self::best_of`] tries no wider one).
+    pub(crate) fn widest_testable(&self) -> usize {
+        let dropped = &self.none_dropped;
+        let train = |f: usize| (0..dropped.len()).filter(|&i| self.fold[i] != f && !dropped[i]).count();
+        let fewest = (0..self.folds).map(train).min().unwrap_or(0);
+        fewest.saturating_sub(self.base_columns() + MIN_FIT_DOF)
+    }
+
     /// The variant with the smallest penalised held-out ratio.
     pub(crate) fn best_of(&self, variants: Vec<Variant>) -> Option<Fitted> {
         if !self.pose_level {
@@ -850,6 +859,7 @@ mod tests {
         };
         let variant = |k: usize| Variant { extra: random(k), params: k, detail: String::new() };
         let widest = fewest_train - ctx.base_rows[0].len() - MIN_FIT_DOF;
+        assert_eq!(ctx.widest_testable(), widest);
         assert!(ctx.best_of(vec![variant(widest)]).is_some(), "{widest} extra columns on {n} poses");
         assert!(ctx.best_of(vec![variant(widest + 1)]).is_none(), "{} extra columns on {n} poses", widest + 1);
     }
