@@ -129,16 +129,24 @@ impl Diagnosis {
     }
 }
 
+/// Pose `i`'s modulus change from the first to the last third of its hold, and the white noise
+/// of its mean's modulus (output unit): a transient that moves the pose mean moves its first third
+/// against its last more: 1.7 (time constant a third of the hold) to 3 times the mean's shift.
+pub(crate) fn early_late(m: &Measured, i: usize) -> (f64, f64) {
+    let p = &m.poses[i];
+    let kt = m.model.kt_times(m.directions[i]);
+    let expected = (0..3).map(|a| kt[a] * kt[a] * m.white[a] / p.n as f64).sum::<f64>().sqrt();
+    let early = mean_of(&p.seg[0..2]);
+    let late = mean_of(&p.seg[SEGMENTS - 2..]);
+    (norm(m.model.apply(late)) - norm(m.model.apply(early)), expected)
+}
+
 /// Step 2 per pose; `after` holds the residuals with the winning effect (output unit).
 pub(crate) fn pose_reports(m: &Measured, after: &[Option<f64>]) -> Vec<PoseReport> {
     (0..m.poses.len())
         .map(|i| {
             let p = &m.poses[i];
-            let kt = m.model.kt_times(m.directions[i]);
-            let expected = (0..3).map(|a| kt[a] * kt[a] * m.white[a] / p.n as f64).sum::<f64>().sqrt();
-            let early = mean_of(&p.seg[0..2]);
-            let late = mean_of(&p.seg[SEGMENTS - 2..]);
-            let early_late = norm(m.model.apply(late)) - norm(m.model.apply(early));
+            let (early_late, expected) = early_late(m, i);
             PoseReport {
                 t_mid_s: p.t_mid(),
                 duration_s: p.duration(),
