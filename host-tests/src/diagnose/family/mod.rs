@@ -512,20 +512,20 @@ impl<'a> Context<'a> {
     /// Every fold's training poses number at least the columns of the design with `extra` plus `dof`.
     pub(crate) fn trains_beyond(&self, extra: &[Vec<f64>], dof: usize) -> bool {
         let columns = self.base_columns() + extra.first().map_or(0, Vec::len);
-        let dropped = &self.none_dropped;
-        (0..self.folds).all(|f| {
-            let train = (0..dropped.len()).filter(|&i| self.fold[i] != f && !dropped[i]).count();
-            train >= columns + dof
-        })
+        self.fewest_training_poses().is_none_or(|train| train >= columns + dof)
     }
 
     /// The most extra columns a parametrisation may have and still be fitted in every fold
     /// ([`Self::best_of`] tries no wider one).
     pub(crate) fn widest_testable(&self) -> usize {
+        self.fewest_training_poses().map_or(0, |train| train.saturating_sub(self.base_columns() + MIN_FIT_DOF))
+    }
+
+    /// The training poses of the fold that has fewest (`None` without folds).
+    fn fewest_training_poses(&self) -> Option<usize> {
         let dropped = &self.none_dropped;
         let train = |f: usize| (0..dropped.len()).filter(|&i| self.fold[i] != f && !dropped[i]).count();
-        let fewest = (0..self.folds).map(train).min().unwrap_or(0);
-        fewest.saturating_sub(self.base_columns() + MIN_FIT_DOF)
+        (0..self.folds).map(train).min()
     }
 
     /// The variant with the smallest penalised held-out ratio.

@@ -260,7 +260,7 @@ impl ColoredNoise {
     fn best_noise(&self, ctx: &Context<'_>, estimates: &[Estimate]) -> Option<(f64, Colored)> {
         let mut best: Option<(f64, Colored)> = None;
         let settle = super::settling::settling_holds(ctx).is_some();
-        let longest_s = ctx.poses.iter().map(|p| p.duration()).fold(0.0, f64::max);
+        let longest_s = ctx.poses.get(longest_rest(ctx)).map_or(0.0, |p| p.duration());
         for (estimate, pooled) in estimates {
             for c in estimate.parts() {
                 if !(ctx.pose_level && c.any()) || holds_refute(ctx, &c) || (*pooled && too_smooth(ctx, &c)) {
@@ -280,6 +280,11 @@ impl ColoredNoise {
     }
 }
 
+/// The longest rest: the pose of most samples (0 without poses).
+fn longest_rest(ctx: &Context<'_>) -> usize {
+    (0..ctx.poses.len()).max_by_key(|&i| ctx.poses[i].n).unwrap_or(0)
+}
+
 /// The colored noise measured in the holds: on the longest rest, and pooled over every hold
 /// (evidence from all of them, not the longest one only), each against two white levels: the
 /// noise of the differences of successive blocks once a low-pass filter's correlation has died out
@@ -292,8 +297,7 @@ fn hold_estimates(ctx: &Context<'_>) -> Vec<Estimate> {
     let q = quantisation_step(ctx.table);
     let diff = white_from_differences(ctx.table, ctx.poses, m.rate);
     let white: V3 = std::array::from_fn(|a| if diff[a] > 0.0 { diff[a].max(q[a] * q[a] / 12.0) } else { m.white[a] });
-    let longest = (0..ctx.poses.len()).max_by_key(|&i| ctx.poses[i].n).unwrap_or(0);
-    let rows = ctx.poses[longest].rows.clone();
+    let rows = ctx.poses[longest_rest(ctx)].rows.clone();
     let pieces: Vec<Range<usize>> = ctx.poses.iter().map(|p| p.rows.clone()).collect();
     let mut estimates: Vec<Estimate> = [white, m.white]
         .iter()
