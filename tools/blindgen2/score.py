@@ -2,7 +2,8 @@
 """Score `accelcal diagnose --json` on a directory written by generate.py.
 
     python3 tools/blindgen2/score.py DIR [DIR ...] [--accelcal PATH] [--json] [--jobs N] [--timeout S]
-        [--by-shape] [--by-poses] [--require-right-visible F] [--max-false-alarms F] [--require-ooc-honest F] [--max-refusals N]
+        [--by-shape] [--by-poses] [--require-right-visible F] [--max-false-alarms F]
+        [--require-ooc-honest F] [--max-refusals N]
 
 For each log in DIR/manifest.json runs the CLI, records verdict, gap.ratio_before,
 shrink and wall time (a non-zero exit is a refusal; its message is kept), writes
@@ -197,16 +198,9 @@ def report(a, rows):
     print(fmt_row("overall", overall))
     print()
     if a.by_shape:
-        keys = []
-        for r in rows:
-            k = f"{r['family']}/{r['shape']}"
-            if k not in keys:
-                keys.append(k)
-        for k in keys:
-            print(fmt_row(k, summarise([r for r in rows if f"{r['family']}/{r['shape']}" == k]), 36))
-        print()
+        print_groups(rows, lambda r: f"{r['family']}/{r['shape']}", width=36)
     if a.by_poses:
-        print_by_poses(rows)
+        print_groups(rows, pose_bin, first=[bin_label(lo, hi) for lo, hi in POSE_BINS])
     for f in fams:
         print(f"{f}: verdicts {per[f]['verdicts']}")
     if a.logs:
@@ -239,15 +233,16 @@ def pose_bin(r):
     return f"under {POSE_BINS[0][0]} poses"
 
 
-def print_by_poses(rows):
-    """The overall figures per bin of the poses the diagnosis found."""
-    labels = [bin_label(lo, hi) for lo, hi in POSE_BINS]
-    labels += sorted({pose_bin(r) for r in rows} - set(labels))
+def print_groups(rows, key, first=(), width=20):
+    """The overall figures per group of rows with the same `key(row)`: the labels `first` in their
+    order (those with rows), then the others as they first occur."""
+    labels = list(first) + list(dict.fromkeys(key(r) for r in rows if key(r) not in first))
     for label in labels:
-        part = [r for r in rows if pose_bin(r) == label]
+        part = [r for r in rows if key(r) == label]
         if part:
-            print(fmt_row(label, summarise(part)))
+            print(fmt_row(label, summarise(part), width))
     print()
+
 
 if __name__ == "__main__":
     main()
