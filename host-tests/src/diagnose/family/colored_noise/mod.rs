@@ -564,8 +564,9 @@ mod tests {
         // its jumps split most holds, and the estimates pooled over the holds see nothing. The
         // longest rest sees it rise as a walk. Before that walk could level off within the rest, the
         // best noise model left the withheld pose means' scatter at 2.67 times its prediction (seed
-        // 1, the rest's floor alone) or at 0.50 (seed 8, the walk over the log spreading them twice
-        // as much as they are): both `unexplained`.
+        // 1, a bias-instability floor alone) or at 0.50 (seed 8, a Gauss-Markov noise pooled over the
+        // holds, levelling off after 32 s, spreading them twice as much as they are): both
+        // `unexplained`.
         let opts = DiagnoseOptions::DEFAULT;
         for (seed, dwell_s, axis) in [(1, 16.0, 1), (8, 8.0, 2)] {
             let d = diagnose(&telegraph_on(seed, 1.0, dwell_s, &[axis]), &opts).unwrap();
