@@ -195,6 +195,9 @@ pub fn diagnose(table: &Table, opts: &DiagnoseOptions) -> Result<Diagnosis, Diag
     if opts.folds < 2 || opts.repeats < 2 {
         return Err(err("diagnose needs at least 2 folds and 2 repeats"));
     }
+    if !table.columns_agree() {
+        return Err(err(format!("{}: the table's columns do not all have one value per row", table.file)));
+    }
     match measure(table, opts)? {
         Step1::Measured(m) => Ok(diagnose_measured(table, opts, &m, true)),
         Step1::Answered(d) => Ok(d),
@@ -730,6 +733,20 @@ mod tests {
         let e = diagnose(&table, &DiagnoseOptions::DEFAULT).unwrap_err();
         assert!(e.to_string().contains("static poses"), "{e}");
         assert!(diagnose(&table, &DiagnoseOptions { gravity: f64::NAN, ..DiagnoseOptions::DEFAULT }).is_err());
+    }
+
+    #[test]
+    fn a_table_whose_columns_disagree_in_length_is_an_error_not_a_panic() {
+        use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
+        let mut table = to_table(&generate(&random_scenario(EffectClass::Temperature, 1)), "cut").unwrap();
+        assert!(table.temps_c.is_some() && table.times_s.is_some());
+        let rows = table.samples.len();
+        table.temps_c.as_mut().unwrap().truncate(rows / 2);
+        let e = diagnose(&table, &DiagnoseOptions::DEFAULT).unwrap_err();
+        assert!(e.to_string().contains("one value per row"), "{e}");
+        table.truncate(rows / 2);
+        assert!(table.columns_agree() && table.samples.len() == rows / 2);
+        assert!(diagnose(&table, &DiagnoseOptions::DEFAULT).is_ok());
     }
 
     #[test]

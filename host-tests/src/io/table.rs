@@ -71,6 +71,28 @@ impl Table {
         }
     }
 
+    /// Every per-row column has one value per row of [`Table::samples`] (a table read by
+    /// [`read_csv`](super::read_csv) always has; one built or cut by hand may not).
+    pub fn columns_agree(&self) -> bool {
+        let rows = self.samples.len();
+        let agrees = |len: Option<usize>| len.is_none_or(|len| len == rows);
+        self.line_of_row.len() == rows
+            && agrees(self.times_s.as_ref().map(Vec::len))
+            && agrees(self.temps_c.as_ref().map(Vec::len))
+            && agrees(self.counts_n.as_ref().map(Vec::len))
+            && agrees(self.std_devs.as_ref().map(Vec::len))
+    }
+
+    /// Keeps the first `rows` rows of every per-row column.
+    pub fn truncate(&mut self, rows: usize) {
+        self.samples.truncate(rows);
+        self.line_of_row.truncate(rows);
+        self.times_s.iter_mut().for_each(|c| c.truncate(rows));
+        self.temps_c.iter_mut().for_each(|c| c.truncate(rows));
+        self.counts_n.iter_mut().for_each(|c| c.truncate(rows));
+        self.std_devs.iter_mut().for_each(|c| c.truncate(rows));
+    }
+
     /// What the units are and why, e.g. `g (detected: median |a| = 0.998)`.
     pub fn units_summary(&self) -> String {
         let how = match &self.units_header {
