@@ -241,6 +241,11 @@ impl Design {
         forward_substitute(&self.l, &scaled).iter().map(|v| v * v).sum()
     }
 
+    /// The residual of the fit's prediction at pose `i`, a training pose or not.
+    pub(crate) fn residual_at(&self, rows: &[Vec<f64>], r: &[f64], i: usize) -> Option<f64> {
+        Some(predict(rows, r, &self.solve(rows, r)?, i))
+    }
+
     /// In-sample residuals at the training poses, one per entry of `r` (`None` elsewhere); `None`
     /// when `r` cannot be fitted.
     pub(crate) fn residuals(&self, rows: &[Vec<f64>], r: &[f64]) -> Option<Vec<Option<f64>>> {

@@ -1,13 +1,13 @@
 //! Probes for gaps outside the catalogue: shapes no physical family of the catalogue has (a
-//! periodic bias, a bias step at one time, cross-axis products, a bias following the direction of the last rotation),
-//! judged by the same held-out criterion. A probe never becomes a verdict: when one explains the
+//! periodic bias, a bias step at one time, cross-axis products, a bias following the direction of the last rotation,
+//! one pose far off the others), judged by the same held-out criterion. A probe never becomes a verdict: when one explains the
 //! withheld poses better than every family, the verdict is `unexplained` and the probe says where
 //! the gap lies.
 
 use super::SEGMENTS;
 use super::family::{Context, Variant};
 use super::gap::PoseData;
-use super::math::{V3, dot, lstsq_with_covariance};
+use super::math::{V3, dot, kept_design, lstsq_with_covariance, sum_sq};
 use super::report::Probe;
 use crate::vec3::{cross, norm};
 
@@ -297,6 +297,55 @@ fn rotation_sense(ctx: &Context<'_>) -> Vec<Variant> {
         .collect()
 }
 
+/// One bad pose (a knock, a clamp, a hold misread): the nominal model without the pose that lies
+/// furthest off the fit to the others (in units of their scatter, at least white noise), charged
+/// that pose and its choice among the poses (`ln` of their number, as a step's places), when it
+/// lies [`GROSS_OFF`] times the others' held-out scatter off that fit. A slow change can take such a
+/// pose with the calibration it spoils (a warm-up of a few seconds on the early poses): it then
+/// predicts the other poses better without explaining them. (The pose the nominal model predicts
+/// worst withheld is not always the bad one: on 12-14 poses the bad pose, among the training poses,
+/// moves the calibration so that others are predicted worse; a 13-pose log's was the fourth worst.)
+fn one_pose(ctx: &Context<'_>) -> Option<Probe> {
+    let n = ctx.poses.len();
+    let without = |i: usize| {
+        let mut dropped = ctx.none_dropped.clone();
+        dropped[i] = true;
+        dropped
+    };
+    let (bad, _) =
+        (0..n).filter_map(|i| Some((i, off_the_others(ctx, &without(i), i)?))).max_by(|a, b| a.1.total_cmp(&b.1))?;
+    let dropped = without(bad);
+    let params = 1 + (n as f64).ln().ceil() as usize;
+    let ratio = ctx.heldout_ratio(&ctx.base_rows, &dropped, params)?;
+    let off = kept_design(&ctx.base_rows, &dropped)?.residual_at(&ctx.base_rows, &ctx.m.r, bad)?;
+    // The others' scatter no less than white noise (a held-out ratio below 1 on few poses is chance).
+    let off_sigmas = off.abs() / ctx.e_white.sqrt() / ratio.max(1.0);
+    (off_sigmas >= GROSS_OFF).then(|| Probe {
+        shape: "one-pose",
+        heldout_gain: ctx.value_gain(ratio),
+        detail: format!("one pose, #{bad}, {off_sigmas:.0} times the others' scatter off them"),
+        in_sample_ratio: ctx.fit_ratio(&ctx.base_rows, &dropped).map_or(f64::NAN, |(r, _)| r),
+        veto_margin: 0.0,
+        jump_in_hold: false,
+    })
+}
+
+/// How far pose `i` lies off the nominal fit to the poses not `dropped`, in units of their residual
+/// scatter (per residual degree of freedom, at least the white noise of a withheld pose).
+fn off_the_others(ctx: &Context<'_>, dropped: &[bool], i: usize) -> Option<f64> {
+    let design = kept_design(&ctx.base_rows, dropped)?;
+    let residuals = design.residuals(&ctx.base_rows, &ctx.m.r)?;
+    let (ss, kept) = sum_sq(&residuals);
+    let dof = kept.checked_sub(ctx.base_columns()).filter(|&d| d > 0)?;
+    let scatter = (ss / dof as f64).max(ctx.e_white).sqrt();
+    Some(design.residual_at(&ctx.base_rows, &ctx.m.r, i)?.abs() / scatter)
+}
+
+/// How many standard deviations of the other poses' held-out scatter the pose must lie off the fit
+/// to them ([`one_pose`]): a gross error, not the tail of the poses' spread (colored noises and
+/// non-linearities on the development sets reached 14 with their worst pose).
+const GROSS_OFF: f64 = 20.0;
+
 /// A probe's parametrisations for the data. Only those that leave every fold enough training poses
 /// beyond their columns are judged: a probe that interpolates its training poses could veto a
 /// family (`unexplained`) by chance.
@@ -334,6 +383,7 @@ pub(crate) fn run(ctx: &Context<'_>) -> Vec<Probe> {
             let in_sample_ratio = f.in_sample.map_or(f64::NAN, |fit| fit.ratio);
             Some(Probe { shape, heldout_gain, detail: f.detail, in_sample_ratio, veto_margin, jump_in_hold })
         })
+        .chain(one_pose(ctx))
         .collect()
 }
 
@@ -415,6 +465,34 @@ mod tests {
             assert_eq!(d.verdict, "unexplained", "{holds} holds: {}", d.to_text());
             let located = d.located.clone().unwrap_or_default();
             assert!(located.contains("a bias step"), "{holds} holds: {located}");
+        }
+    }
+
+    /// A clean simulated log of `holds` holds whose hold `bad` reads `size_mg` off along one
+    /// direction (a knocked sensor, a hold misread).
+    fn bad_pose_log(seed: u64, holds: usize, bad: usize, size_mg: f64) -> Table {
+        let mut table =
+            first_holds(to_table(&generate(&random_scenario(EffectClass::None, seed)), "bad").unwrap(), holds);
+        let hold = csvio::accumulate(&table, &AccumulateOptions::default()).unwrap().spans[bad];
+        let mg = table.median_magnitude / 1000.0;
+        for sample in &mut table.samples[hold.first_row..=hold.last_row] {
+            (0..3).for_each(|a| sample[a] += size_mg * mg * [0.48, -0.6, 0.64][a]);
+        }
+        table
+    }
+
+    #[test]
+    fn one_bad_pose_among_thirteen_is_located_not_named_a_drift() {
+        // 40 mg off along one direction on the third of 13 poses (seed 7). A warm-up's exponential
+        // took it with the calibration it spoils (verdict drift); the nominal model without it
+        // predicts the others to white noise, the pose 31 times their scatter off them. On 12 poses
+        // (seed 2) the pose predicted worst withheld was another one (the bad pose, trained on, moved
+        // the calibration), so every pose is tried.
+        for (seed, holds) in [(7, 13), (2, 12)] {
+            let d = diagnose(&bad_pose_log(seed, holds, 2, 40.0), &DiagnoseOptions::DEFAULT).unwrap();
+            assert_eq!(d.verdict, "unexplained", "seed {seed}: {}", d.to_text());
+            let located = d.located.clone().unwrap_or_default();
+            assert!(located.starts_with("one pose, #2,"), "seed {seed}: {located}");
         }
     }
 

@@ -603,7 +603,7 @@ impl<'a> Context<'a> {
 
     /// The gap ratio a design leaves on the poses it is fitted on (against the same design fitted to
     /// white noise) and the residuals: `None` when it cannot be fitted.
-    fn fit_ratio(&self, rows: &[Vec<f64>], dropped: &[bool]) -> Option<(f64, Vec<Option<f64>>)> {
+    pub(crate) fn fit_ratio(&self, rows: &[Vec<f64>], dropped: &[bool]) -> Option<(f64, Vec<Option<f64>>)> {
         let design = kept_design(rows, dropped)?;
         let after = design.residuals(rows, &self.m.r)?;
         let kept: Vec<f64> = after.iter().flatten().copied().collect();
