@@ -105,9 +105,10 @@ const PROBE_LEAVE_ONE_OUT_UP_TO: usize = 16;
 /// those of the families. A step has three columns and its places are charged as a search
 /// (`probe::bias_step`); counted as for the other probes ([`MIN_RESIDUAL_DOF`] as if a fifth were
 /// withheld), it was not tested on logs of 15, 17 or 18 poses, where a drift's wander then followed
-/// it; counted on the folds its fit is judged on, it is from 15 poses. On the development and validation sets (1 728 logs) the change turned a bias step,
-/// an offset step and a flexed board from drift or settling to `unexplained` and changed no other
-/// answer where visible; counting the other probes the same way lost 12 right answers.
+/// it; counted on the folds its fit is judged on, it is from 15 poses. On the development and
+/// validation sets (1 728 logs) the change turned a bias step, an offset step and a flexed board
+/// from drift or settling to `unexplained` and changed no other answer where visible; counting the
+/// other probes the same way lost 12 right answers.
 const STEP_RESIDUAL_DOF: usize = 2;
 
 /// A withheld pose whose prediction by the nominal model's fold has more than this many times one
