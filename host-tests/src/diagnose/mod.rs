@@ -8,7 +8,8 @@
 //!    white noise measured within the poses) is simulated `repeats` times and refitted by the
 //!    library (LM); the gap is the real modulus RMSE over the mean simulated RMSE (1 = no gap),
 //!    significant when the real RMSE is at least [`SIGNIFICANT_Z`] simulated standard deviations
-//!    above the simulated mean.
+//!    above the simulated mean and the ratio at least [`SIGNIFICANT_RATIO`] (the noise model's own
+//!    error on logs from other generators).
 //! 2. **Where it lies.** Residual per pose and per orientation, against time and temperature, within
 //!    each pose (first third against last third), and in the noise (Allan deviation of the longest
 //!    rest against white noise).
@@ -107,8 +108,14 @@ pub const EFFECT_NAMES: [&str; 6] =
 /// standard deviations (and by [`SIGNIFICANT_RATIO`]).
 pub const SIGNIFICANT_Z: f64 = 3.0;
 
-/// ... and when the ratio is at least this.
-pub const SIGNIFICANT_RATIO: f64 = 1.2;
+/// ... and when the ratio is at least this: below it the noise model's own error on logs it was
+/// not made with is as large. On the development, validation and fresh logs of the independent
+/// generators (2 304 logs) the 288 clean logs' ratios reached 1.3 on 16 % of them and 1.5 on 4 %;
+/// four clean logs of 1.2-1.5 were `unexplained` (significant by `z`), and of the 23 effects
+/// significant at 1.2-1.5 three were named right. From 1.2 to 1.5: false alarms on
+/// the development and validation sets 4 -> 2 of 216, out-of-catalogue honest 197 -> 198, right
+/// where visible (ratio >= 2) unchanged; three right answers at 1.4 are `none` now.
+pub const SIGNIFICANT_RATIO: f64 = 1.5;
 
 /// Expected noise variances charged per extra parameter in the held-out score (AIC-like).
 pub const PARAMETER_PENALTY: f64 = 2.0;
@@ -733,6 +740,29 @@ mod tests {
         let e = diagnose(&table, &DiagnoseOptions::DEFAULT).unwrap_err();
         assert!(e.to_string().contains("static poses"), "{e}");
         assert!(diagnose(&table, &DiagnoseOptions { gravity: f64::NAN, ..DiagnoseOptions::DEFAULT }).is_err());
+    }
+
+    #[test]
+    fn a_certain_gap_within_the_noise_models_own_error_is_not_significant() {
+        // Every hold of a clean simulated log (seed 1) offset along its reading by 1.4 times the
+        // simulated pose scatter, up or down in a fixed pattern: ratio 1.47 at z 3.9, certain but
+        // within the 1.5 the noise model errs by on other generators' clean logs.
+        use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
+        let mut table = to_table(&generate(&random_scenario(EffectClass::None, 1)), "scattered").unwrap();
+        let sim_rmse_mg = diagnose(&table, &DiagnoseOptions::DEFAULT).unwrap().gap.sim_rmse_mg;
+        let spans = crate::csvio::accumulate(&table, &crate::csvio::AccumulateOptions::default()).unwrap().spans;
+        let mg = table.median_magnitude / 1000.0;
+        for (i, h) in spans.iter().enumerate() {
+            let offset = if (i * 7 + 3) % 5 < 2 { -1.4 } else { 1.4 } * sim_rmse_mg * mg;
+            for sample in &mut table.samples[h.first_row..=h.last_row] {
+                let along = crate::vec3::norm(*sample);
+                (0..3).for_each(|a| sample[a] += offset * sample[a] / along);
+            }
+        }
+        let d = diagnose(&table, &DiagnoseOptions::DEFAULT).unwrap();
+        assert!(d.gap.z >= SIGNIFICANT_Z && d.gap.ratio_before < SIGNIFICANT_RATIO, "{:?}", d.gap);
+        assert_eq!(d.verdict, "none", "{}", d.to_text());
+        assert!(d.to_text().contains("not significant (ratio below 1.5"), "{}", d.to_text());
     }
 
     #[test]

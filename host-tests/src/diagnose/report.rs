@@ -34,6 +34,21 @@ pub struct Gap {
 }
 
 impl Gap {
+    /// `significant`, or why not: too few simulated standard deviations, or a ratio below
+    /// [`SIGNIFICANT_RATIO`](super::SIGNIFICANT_RATIO) (the noise model's own error).
+    pub fn significance(&self) -> String {
+        if self.significant {
+            "significant".to_string()
+        } else if self.z >= super::SIGNIFICANT_Z {
+            format!(
+                "not significant (ratio below {}: the noise model's own error on logs from other generators)",
+                super::SIGNIFICANT_RATIO
+            )
+        } else {
+            "not significant".to_string()
+        }
+    }
+
     /// No gap measured (no calibration could be made): every figure NaN, not significant.
     pub const UNMEASURED: Self = Self {
         real_rmse_mg: f64::NAN,

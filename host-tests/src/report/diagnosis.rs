@@ -111,7 +111,7 @@ impl Diagnosis {
             self.white_mg[2],
             g.ratio_before,
             g.z,
-            if g.significant { "significant" } else { "not significant" }
+            g.significance()
         );
         self.write_where(&mut s);
         let _ = writeln!(s, "3. candidates (held-out ratio of the nominal model {:.2}):", self.heldout_ratio_nominal);
