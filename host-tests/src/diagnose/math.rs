@@ -241,9 +241,11 @@ impl Design {
         forward_substitute(&self.l, &scaled).iter().map(|v| v * v).sum()
     }
 
-    /// The residual of the fit's prediction at pose `i`, a training pose or not.
-    pub(crate) fn residual_at(&self, rows: &[Vec<f64>], r: &[f64], i: usize) -> Option<f64> {
-        Some(predict(rows, r, &self.solve(rows, r)?, i))
+    /// The residuals of the fit at every pose, a training pose or not; `None` when `r` cannot be
+    /// fitted.
+    pub(crate) fn residuals_everywhere(&self, rows: &[Vec<f64>], r: &[f64]) -> Option<Vec<f64>> {
+        let x = self.solve(rows, r)?;
+        Some((0..r.len()).map(|i| predict(rows, r, &x, i)).collect())
     }
 
     /// In-sample residuals at the training poses, one per entry of `r` (`None` elsewhere); `None`

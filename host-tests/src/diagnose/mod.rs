@@ -276,11 +276,9 @@ const WIDEST_SHAPE_PARAMS: usize = 6;
 fn unexplained_where(d: &Diagnosis, ctx: Option<&family::Context<'_>>, probe_where: Option<String>) -> String {
     let periodic = || ctx.and_then(family::periodic::location);
     let place = probe_where.or_else(periodic).unwrap_or_else(|| locate::unexplained_location(d));
-    match ctx {
-        Some(ctx) if ctx.widest_testable() < WIDEST_SHAPE_PARAMS => format!(
-            "{place}; with {} poses no shape of more than {} parameters could be tested on withheld poses (the catalogue's terms per axis take 3-6; more poses in varied directions test them)",
-            ctx.poses.len(),
-            ctx.widest_testable()
+    match ctx.map(|ctx| (ctx.poses.len(), ctx.widest_testable())) {
+        Some((poses, widest)) if widest < WIDEST_SHAPE_PARAMS => format!(
+            "{place}; with {poses} poses no shape of more than {widest} parameters could be tested on withheld poses (the catalogue's terms per axis take 3-6; more poses in varied directions test them)"
         ),
         Some(_) => place,
         None => format!("{place}; too few poses to test the catalogue on withheld poses"),

@@ -7,7 +7,7 @@
 use super::SEGMENTS;
 use super::family::{Context, Variant};
 use super::gap::PoseData;
-use super::math::{V3, dot, kept_design, lstsq_with_covariance, sum_sq};
+use super::math::{V3, dot, kept_design, lstsq_with_covariance};
 use super::report::Probe;
 use crate::vec3::{cross, norm};
 
@@ -312,14 +312,13 @@ fn one_pose(ctx: &Context<'_>) -> Option<Probe> {
         dropped[i] = true;
         dropped
     };
-    let (bad, _) =
-        (0..n).filter_map(|i| Some((i, off_the_others(ctx, &without(i), i)?))).max_by(|a, b| a.1.total_cmp(&b.1))?;
+    let offs = (0..n).filter_map(|i| Some((i, off_the_others(ctx, &without(i), i)?)));
+    let (bad, (off, _)) = offs.max_by(|a, b| (a.1.0 / a.1.1).total_cmp(&(b.1.0 / b.1.1)))?;
     let dropped = without(bad);
     let params = 1 + (n as f64).ln().ceil() as usize;
     let ratio = ctx.heldout_ratio(&ctx.base_rows, &dropped, params)?;
-    let off = kept_design(&ctx.base_rows, &dropped)?.residual_at(&ctx.base_rows, &ctx.m.r, bad)?;
     // The others' scatter no less than white noise (a held-out ratio below 1 on few poses is chance).
-    let off_sigmas = off.abs() / ctx.e_white.sqrt() / ratio.max(1.0);
+    let off_sigmas = off / ctx.e_white.sqrt() / ratio.max(1.0);
     (off_sigmas >= GROSS_OFF).then(|| Probe {
         shape: "one-pose",
         heldout_gain: ctx.value_gain(ratio),
@@ -330,15 +329,14 @@ fn one_pose(ctx: &Context<'_>) -> Option<Probe> {
     })
 }
 
-/// How far pose `i` lies off the nominal fit to the poses not `dropped`, in units of their residual
-/// scatter (per residual degree of freedom, at least the white noise of a withheld pose).
-fn off_the_others(ctx: &Context<'_>, dropped: &[bool], i: usize) -> Option<f64> {
-    let design = kept_design(&ctx.base_rows, dropped)?;
-    let residuals = design.residuals(&ctx.base_rows, &ctx.m.r)?;
-    let (ss, kept) = sum_sq(&residuals);
-    let dof = kept.checked_sub(ctx.base_columns()).filter(|&d| d > 0)?;
-    let scatter = (ss / dof as f64).max(ctx.e_white).sqrt();
-    Some(design.residual_at(&ctx.base_rows, &ctx.m.r, i)?.abs() / scatter)
+/// How far pose `i` lies off the nominal fit to the poses not `dropped` (output unit) and their
+/// residual scatter (per residual degree of freedom, at least the white noise of a withheld pose).
+fn off_the_others(ctx: &Context<'_>, dropped: &[bool], i: usize) -> Option<(f64, f64)> {
+    let residuals = kept_design(&ctx.base_rows, dropped)?.residuals_everywhere(&ctx.base_rows, &ctx.m.r)?;
+    let kept = || residuals.iter().zip(dropped).filter(|(_, d)| !**d).map(|(r, _)| r);
+    let dof = kept().count().checked_sub(ctx.base_columns()).filter(|&d| d > 0)?;
+    let scatter = (kept().map(|r| r * r).sum::<f64>() / dof as f64).max(ctx.e_white).sqrt();
+    Some((residuals[i].abs(), scatter))
 }
 
 /// How many standard deviations of the other poses' held-out scatter the pose must lie off the fit
@@ -358,26 +356,26 @@ type MakeVariants = fn(&Context<'_>) -> Vec<Variant>;
 /// A probe's test that a design leaves its folds enough training poses beyond its columns.
 type LeavesDof = fn(&Context<'_>, &[Vec<f64>]) -> bool;
 
-/// [`Context::leaves_residual_dof`].
-fn residual_dof(ctx: &Context<'_>, extra: &[Vec<f64>]) -> bool {
-    ctx.leaves_residual_dof(extra)
-}
-
-/// [`Context::leaves_step_dof`].
-fn step_dof(ctx: &Context<'_>, extra: &[Vec<f64>]) -> bool {
-    ctx.leaves_step_dof(extra)
-}
+/// Fewest training poses beyond a bias step's columns on the families' own folds
+/// ([`Context::trains_beyond`]). A step has three columns and its places are charged as a search
+/// ([`bias_step`]); counted as for the other probes ([`Context::leaves_residual_dof`]: 3, as if a
+/// fifth were withheld), it was not tested on logs of 15, 17 or 18 poses, where a drift's wander then followed
+/// it; counted on the folds its fit is judged on, it is from 15 poses. On the development and
+/// validation sets (1 728 logs) the change turned a bias step, an offset step and a flexed board
+/// from drift or settling to `unexplained` and changed no other answer where visible; counting the
+/// other probes the same way lost 12 right answers.
+const STEP_RESIDUAL_DOF: usize = 2;
 
 /// Every probe with its held-out gain.
 pub(crate) fn run(ctx: &Context<'_>) -> Vec<Probe> {
     // Each with the evidence by which it must exceed a family to veto it and the test of its
     // residual degrees of freedom.
     let probes: [(&'static str, MakeVariants, f64, LeavesDof); 5] = [
-        ("periodic", periodic, 0.0, residual_dof),
-        ("bias-step", bias_step, STEP_OVER_DRIFT, step_dof),
-        ("cross-axis", cross_axis, 0.0, residual_dof),
-        ("rotation-direction", rotation_direction, 0.0, residual_dof),
-        ("rotation-sense", rotation_sense, TURN_OVER_FAMILY, residual_dof),
+        ("periodic", periodic, 0.0, |c, e| c.leaves_residual_dof(e)),
+        ("bias-step", bias_step, STEP_OVER_DRIFT, |c, e| c.trains_beyond(e, STEP_RESIDUAL_DOF)),
+        ("cross-axis", cross_axis, 0.0, |c, e| c.leaves_residual_dof(e)),
+        ("rotation-direction", rotation_direction, 0.0, |c, e| c.leaves_residual_dof(e)),
+        ("rotation-sense", rotation_sense, TURN_OVER_FAMILY, |c, e| c.leaves_residual_dof(e)),
     ];
     probes
         .iter()

@@ -101,16 +101,6 @@ const IN_SAMPLE_MIN_DOF: usize = 3;
 /// freedom on a 21-pose flicker log) and the verdict was `unexplained`.
 const PROBE_LEAVE_ONE_OUT_UP_TO: usize = 16;
 
-/// Fewest training poses beyond a bias step's columns ([`Context::leaves_step_dof`]), its folds
-/// those of the families. A step has three columns and its places are charged as a search
-/// (`probe::bias_step`); counted as for the other probes ([`MIN_RESIDUAL_DOF`] as if a fifth were
-/// withheld), it was not tested on logs of 15, 17 or 18 poses, where a drift's wander then followed
-/// it; counted on the folds its fit is judged on, it is from 15 poses. On the development and
-/// validation sets (1 728 logs) the change turned a bias step, an offset step and a flexed board
-/// from drift or settling to `unexplained` and changed no other answer where visible; counting the
-/// other probes the same way lost 12 right answers.
-const STEP_RESIDUAL_DOF: usize = 2;
-
 /// A withheld pose whose prediction by the nominal model's fold has more than this many times one
 /// pose's variance is not scored ([`Context::scored`]): its prediction's noise alone would be ten
 /// times a pose's, and its squared residual most of the score.
@@ -525,16 +515,12 @@ impl<'a> Context<'a> {
     /// [`MIN_RESIDUAL_DOF`]: a design that (nearly) interpolates its training poses predicts the
     /// withheld ones by chance, not by physics.
     pub(crate) fn leaves_residual_dof(&self, extra: &[Vec<f64>]) -> bool {
-        let columns = self.base_columns() + extra.first().map_or(0, Vec::len);
-        self.probe_training_poses() >= columns + MIN_RESIDUAL_DOF
+        self.probe_training_poses() >= self.columns_with(extra) + MIN_RESIDUAL_DOF
     }
 
-    /// A bias step's design leaves every fold of the families' own cross-validation (leave one out
-    /// up to [`LEAVE_ONE_OUT_UP_TO`] poses) [`STEP_RESIDUAL_DOF`] training poses beyond its columns.
-    pub(crate) fn leaves_step_dof(&self, extra: &[Vec<f64>]) -> bool {
-        let columns = self.base_columns() + extra.first().map_or(0, Vec::len);
-        let n = self.fold.len();
-        n - n.div_ceil(fold_count(n, LEAVE_ONE_OUT_UP_TO, self.opts.folds)) >= columns + STEP_RESIDUAL_DOF
+    /// The design's columns: the nominal model's and `extra`'s.
+    fn columns_with(&self, extra: &[Vec<f64>]) -> usize {
+        self.base_columns() + extra.first().map_or(0, Vec::len)
     }
 
     /// The training poses a probe's residual degrees of freedom are counted on: those of the
@@ -548,8 +534,7 @@ impl<'a> Context<'a> {
 
     /// Every fold's training poses number at least the columns of the design with `extra` plus `dof`.
     pub(crate) fn trains_beyond(&self, extra: &[Vec<f64>], dof: usize) -> bool {
-        let columns = self.base_columns() + extra.first().map_or(0, Vec::len);
-        self.fewest_training_poses().is_none_or(|train| train >= columns + dof)
+        self.fewest_training_poses().is_none_or(|train| train >= self.columns_with(extra) + dof)
     }
 
     /// The most extra columns a parametrisation may have and still be fitted in every fold
