@@ -11,6 +11,11 @@ use crate::diagnose::within::{Within, WithinVariant};
 /// Lag time constants tried, s (0 = no lag).
 const LAGS_S: [f64; 5] = [0.0, 30.0, 100.0, 300.0, 1000.0];
 
+/// Time constants by which the thermometer may lag the sensor, s: a thermometer on the board beside
+/// the part (not the die's own) sees the die's temperature through the board's thermal lag, tens of
+/// seconds, so the die runs ahead of it by about `tau` times its rate of change.
+const LEADS_S: [f64; 2] = [10.0, 30.0];
+
 /// Knot spacing of the smooth course through which the thermometer is also read, s: a coarse
 /// thermometer (1 degC steps) is a staircase whose steps misplace a pose's temperature by up to half
 /// a step; the die's own temperature moves smoothly (its thermal time constants are minutes).
@@ -26,17 +31,22 @@ const MAX_BIAS_MG_PER_K: f64 = 3.0;
 /// datasheet range (sensitivity change 0.01-0.05 %/K).
 const MAX_SCALE_PER_K: f64 = 5e-3;
 
-/// The thermometer as read: through a first-order lag of so many seconds (0: as it reads), or as a
-/// smooth course in time (knots [`SMOOTH_S`] apart, no lag).
+/// The thermometer as read: through a first-order lag of so many seconds (0: as it reads), as a
+/// smooth course in time (knots [`SMOOTH_S`] apart, no lag), or that course run ahead by so many
+/// seconds (the thermometer lags the sensor: its course plus `tau` times its rate of change, the
+/// first-order lag undone).
 #[derive(Clone, Copy)]
 enum Source {
     Lagged(f64),
     Smoothed,
+    Leading(f64),
 }
 
 impl Source {
     fn all() -> impl Iterator<Item = Source> {
-        std::iter::once(Source::Smoothed).chain(LAGS_S.iter().map(|&lag| Source::Lagged(lag)))
+        std::iter::once(Source::Smoothed)
+            .chain(LAGS_S.iter().map(|&lag| Source::Lagged(lag)))
+            .chain(LEADS_S.iter().map(|&lead| Source::Leading(lead)))
     }
 
     /// The extra parameter a lag or a smoothing costs.
@@ -44,6 +54,7 @@ impl Source {
         match self {
             Source::Smoothed => 1,
             Source::Lagged(lag) => usize::from(*lag > 0.0),
+            Source::Leading(_) => 2,
         }
     }
 
@@ -52,6 +63,7 @@ impl Source {
             Source::Smoothed => format!(" (thermometer smoothed, knots {SMOOTH_S:.0} s apart)"),
             Source::Lagged(lag) if *lag > 0.0 => format!(" (thermometer lagged {lag:.0} s)"),
             Source::Lagged(_) => String::new(),
+            Source::Leading(lead) => format!(" (thermometer smoothed, lagging the sensor by {lead:.0} s)"),
         }
     }
 
@@ -60,8 +72,33 @@ impl Source {
         match self {
             Source::Smoothed => smoothed_temps(ctx, SMOOTH_S),
             Source::Lagged(lag) => lagged_temps(ctx, *lag),
+            Source::Leading(lead) => leading_temps(ctx, *lead),
         }
     }
+}
+
+/// Seconds over which the smoothed thermometer's rate of change is taken ([`leading_temps`]).
+const RATE_WINDOW_S: f64 = 2.0;
+
+/// The sensor's temperature when the thermometer lags it by a first-order lag of `tau` seconds:
+/// the smoothed course ([`smoothed_temps`]) plus `tau` times its rate of change, per row.
+fn leading_temps(ctx: &Context<'_>, tau: f64) -> Option<Vec<f64>> {
+    let course = smoothed_temps(ctx, SMOOTH_S)?;
+    let times: Vec<f64> = (0..course.len()).map(|i| row_time(ctx.table, i, ctx.m.rate)).collect();
+    let (mut lo, mut hi) = (0, 0);
+    let mut out = Vec::with_capacity(course.len());
+    for (i, t) in times.iter().enumerate() {
+        while times[lo] < t - RATE_WINDOW_S / 2.0 {
+            lo += 1;
+        }
+        while hi + 1 < times.len() && times[hi + 1] <= t + RATE_WINDOW_S / 2.0 {
+            hi += 1;
+        }
+        let span = times[hi] - times[lo];
+        let rate = if span > 0.0 { (course[hi] - course[lo]) / span } else { 0.0 };
+        out.push(course[i] + tau * rate);
+    }
+    Some(out)
 }
 
 /// The temperature column smoothed in time, per row: a least-squares cubic spline with knots
@@ -338,6 +375,36 @@ mod tests {
             table.temps_c = Some(times.iter().map(|t| ((27.8 + 0.2 * t / end) * 16.0).round() / 16.0).collect());
             let d = diagnose(&table, &DiagnoseOptions::DEFAULT).unwrap();
             assert_eq!(d.verdict, "drift", "seed {seed}: {}", d.to_text());
+        }
+    }
+
+    #[test]
+    fn a_warm_up_read_by_a_board_thermometer_lagging_the_die_is_temperature() {
+        // A part taken from the cold warms by 10 K (time constant 200 s); its bias follows the die
+        // at 0.4 mg/K along one sensor direction. The thermometer on the board sees the die through
+        // a 25 s lag (1/16 K steps): the die runs ahead of it.
+        for seed in [5, 8] {
+            let mut table = to_table(&generate(&random_scenario(EffectClass::None, seed)), "sim").unwrap();
+            let mg = table.median_magnitude * 1e-3;
+            let die = |t: f64| 20.0 - 10.0 * (-t / 200.0).exp();
+            let direction = [0.48, -0.6, 0.64];
+            let times: Vec<f64> = (0..table.samples.len()).map(|i| gap::row_time(&table, i, 100.0)).collect();
+            for (sample, t) in table.samples.iter_mut().zip(&times) {
+                let bias = 0.4 * (die(*t) - 10.0) * mg;
+                *sample = std::array::from_fn(|a| sample[a] + direction[a] * bias);
+            }
+            let (mut board, mut last_t) = (die(0.0), 0.0);
+            let mut thermometer = Vec::with_capacity(times.len());
+            for t in &times {
+                board += (1.0 - (-(t - last_t) / 25.0).exp()) * (die(*t) - board);
+                last_t = *t;
+                thermometer.push((board * 16.0).round() / 16.0);
+            }
+            table.temps_c = Some(thermometer);
+            let d = diagnose(&table, &DiagnoseOptions::DEFAULT).unwrap();
+            let temperature = d.candidates.iter().find(|c| c.effect == "temperature").unwrap();
+            assert_eq!(d.verdict, "temperature", "seed {seed}: {}", d.to_text());
+            assert!(temperature.detail.contains("lagging the sensor"), "seed {seed}: {}", temperature.detail);
         }
     }
 
