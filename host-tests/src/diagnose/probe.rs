@@ -331,22 +331,16 @@ fn one_pose(ctx: &Context<'_>) -> Option<Probe> {
     })
 }
 
-/// Largest angle between the gravity directions of consecutive poses that are pieces of one hold
-/// ([`same_hold`]), degrees: the pose finder cuts a hold into pieces where a block's mean jumps (a
-/// clamp's creep, a low-passed part's wander); their directions agree to the noise of a mean.
-const SAME_HOLD_DEG: f64 = 0.5;
-
-/// The poses around pose `i` that are consecutive pieces of its hold: the run of neighbours in time
-/// whose gravity directions lie within [`SAME_HOLD_DEG`] of each other. (A turn about the vertical
-/// keeps the direction too: its poses are then taken as one orientation.)
+/// The poses around pose `i` that are consecutive pieces of its hold ([`Context::same_hold`]: close
+/// in time, no movement between them): the pose finder cuts a hold where a block's mean jumps (a
+/// clamp's creep, a low-passed part's wander).
 fn same_hold(ctx: &Context<'_>, i: usize) -> std::ops::Range<usize> {
-    let d = ctx.directions();
-    let close = |a: usize, b: usize| dot(d[a], d[b]) >= SAME_HOLD_DEG.to_radians().cos();
+    let pieces = |a: usize, b: usize| ctx.same_hold(&ctx.poses[a], &ctx.poses[b]);
     let (mut first, mut last) = (i, i);
-    while first > 0 && close(first - 1, first) {
+    while first > 0 && pieces(first - 1, first) {
         first -= 1;
     }
-    while last + 1 < d.len() && close(last, last + 1) {
+    while last + 1 < ctx.poses.len() && pieces(last, last + 1) {
         last += 1;
     }
     first..last + 1

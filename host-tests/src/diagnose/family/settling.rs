@@ -68,12 +68,17 @@ pub(crate) struct Settling;
 pub(crate) fn settling_holds(ctx: &Context<'_>) -> Option<String> {
     let within = ctx.within.as_ref().filter(|w| w.significant)?;
     let slowing = within.slowing();
-    (slowing <= -SLOWING_Z || transient_decays(ctx)).then(|| {
-        format!(
-            "the holds settle: their movement ({:.1}x white) slows down within each hold (pooled slowing {slowing:.1} sigma), in a direction that does not carry to the withheld poses",
-            within.nominal_ratio
-        )
-    })
+    let how = if slowing <= -SLOWING_Z {
+        format!("pooled slowing {slowing:.1} sigma")
+    } else if transient_decays(ctx) {
+        format!("their first halves move more than {DECAY_RATIO} times their second halves beyond white noise")
+    } else {
+        return None;
+    };
+    Some(format!(
+        "the holds settle: their movement ({:.1}x white) slows down within each hold ({how}), in a direction that does not carry to the withheld poses",
+        within.nominal_ratio
+    ))
 }
 
 /// When each pose's hold was set down, s: the start of the first of the poses the pose finder cut
