@@ -307,15 +307,16 @@ fn rotation_sense(ctx: &Context<'_>) -> Vec<Variant> {
 /// moves the calibration so that others are predicted worse; a 13-pose log's was the fourth worst.)
 fn one_pose(ctx: &Context<'_>) -> Option<Probe> {
     let n = ctx.poses.len();
+    let holds = hold_pieces(ctx);
     let without = |i: usize| {
         let mut dropped = ctx.none_dropped.clone();
-        dropped[same_hold(ctx, i)].iter_mut().for_each(|d| *d = true);
+        dropped[holds[i].clone()].iter_mut().for_each(|d| *d = true);
         dropped
     };
     let offs = (0..n).filter_map(|i| Some((i, off_the_others(ctx, &without(i), i)?)));
     let (bad, (off, _)) = offs.max_by(|a, b| (a.1.0 / a.1.1).total_cmp(&(b.1.0 / b.1.1)))?;
     let dropped = without(bad);
-    let pieces = same_hold(ctx, bad).len();
+    let pieces = holds[bad].len();
     let params = pieces + (n as f64).ln().ceil() as usize;
     let ratio = ctx.heldout_ratio(&ctx.base_rows, &dropped, params)?;
     // The others' scatter no less than white noise (a held-out ratio below 1 on few poses is chance).
@@ -331,19 +332,20 @@ fn one_pose(ctx: &Context<'_>) -> Option<Probe> {
     })
 }
 
-/// The poses around pose `i` that are consecutive pieces of its hold ([`Context::same_hold`]: close
+/// For each pose, the poses that are consecutive pieces of its hold ([`Context::same_hold`]: close
 /// in time, no movement between them): the pose finder cuts a hold where a block's mean jumps (a
 /// clamp's creep, a low-passed part's wander).
-fn same_hold(ctx: &Context<'_>, i: usize) -> std::ops::Range<usize> {
-    let pieces = |a: usize, b: usize| ctx.same_hold(&ctx.poses[a], &ctx.poses[b]);
-    let (mut first, mut last) = (i, i);
-    while first > 0 && pieces(first - 1, first) {
-        first -= 1;
+fn hold_pieces(ctx: &Context<'_>) -> Vec<std::ops::Range<usize>> {
+    let n = ctx.poses.len();
+    let mut out = Vec::with_capacity(n);
+    let mut first = 0;
+    for i in 0..n {
+        if i + 1 == n || !ctx.same_hold(&ctx.poses[i], &ctx.poses[i + 1]) {
+            out.extend(std::iter::repeat_n(first..i + 1, i + 1 - first));
+            first = i + 1;
+        }
     }
-    while last + 1 < ctx.poses.len() && pieces(last, last + 1) {
-        last += 1;
-    }
-    first..last + 1
+    out
 }
 
 /// How far pose `i` lies off the nominal fit to the poses not `dropped` (output unit) and their
