@@ -67,12 +67,12 @@ impl Source {
         }
     }
 
-    /// The temperature per row.
-    fn temps(&self, ctx: &Context<'_>) -> Option<Vec<f64>> {
+    /// The temperature per row, `smoothed` the smooth course ([`smoothed_temps`], fitted once).
+    fn temps(&self, ctx: &Context<'_>, smoothed: Option<&[f64]>) -> Option<Vec<f64>> {
         match self {
-            Source::Smoothed => smoothed_temps(ctx, SMOOTH_S),
+            Source::Smoothed => smoothed.map(<[f64]>::to_vec),
             Source::Lagged(lag) => lagged_temps(ctx, *lag),
-            Source::Leading(lead) => leading_temps(ctx, *lead),
+            Source::Leading(lead) => leading_temps(ctx, smoothed?, *lead),
         }
     }
 }
@@ -82,8 +82,7 @@ const RATE_WINDOW_S: f64 = 2.0;
 
 /// The sensor's temperature when the thermometer lags it by a first-order lag of `tau` seconds:
 /// the smoothed course ([`smoothed_temps`]) plus `tau` times its rate of change, per row.
-fn leading_temps(ctx: &Context<'_>, tau: f64) -> Option<Vec<f64>> {
-    let course = smoothed_temps(ctx, SMOOTH_S)?;
+fn leading_temps(ctx: &Context<'_>, course: &[f64], tau: f64) -> Option<Vec<f64>> {
     let times: Vec<f64> = (0..course.len()).map(|i| row_time(ctx.table, i, ctx.m.rate)).collect();
     let (mut lo, mut hi) = (0, 0);
     let mut out = Vec::with_capacity(course.len());
@@ -180,8 +179,8 @@ impl Terms {
 }
 
 /// The temperature as read through `source`, averaged over each pose.
-fn pose_temps(ctx: &Context<'_>, source: Source) -> Option<Vec<f64>> {
-    let temps = source.temps(ctx)?;
+fn pose_temps(ctx: &Context<'_>, source: Source, smoothed: Option<&[f64]>) -> Option<Vec<f64>> {
+    let temps = source.temps(ctx, smoothed)?;
     Some(ctx.poses.iter().map(|p| mean(&temps[p.rows.clone()])).collect())
 }
 
@@ -205,8 +204,9 @@ fn lagged_temps(ctx: &Context<'_>, tau: f64) -> Option<Vec<f64>> {
 /// quadratic in the (lagged) temperature of each segment.
 fn within_variants(ctx: &Context<'_>, w: &Within) -> Vec<WithinVariant> {
     let mut out = Vec::new();
+    let smoothed = smoothed_temps(ctx, SMOOTH_S);
     for source in Source::all() {
-        let Some(lagged) = source.temps(ctx) else { continue };
+        let Some(lagged) = source.temps(ctx, smoothed.as_deref()) else { continue };
         let temps: Vec<f64> = w.rows.iter().map(|r| mean(&lagged[r.clone()])).collect();
         let t0 = mean(&temps);
         let lagged = &lagged;
@@ -328,8 +328,9 @@ impl Family for Temperature {
 /// The parametrisations whose fitted coefficients are not [`Grade::Implausible`], with their grade.
 fn graded_variants(ctx: &Context<'_>) -> Vec<(Variant, Grade)> {
     let mut out = Vec::new();
+    let smoothed = smoothed_temps(ctx, SMOOTH_S);
     for source in Source::all() {
-        let Some(temps) = pose_temps(ctx, source) else { continue };
+        let Some(temps) = pose_temps(ctx, source, smoothed.as_deref()) else { continue };
         let t0 = mean(&temps);
         if temps.iter().map(|t| (t - t0).abs()).fold(0.0, f64::max) < 0.05 {
             continue;
