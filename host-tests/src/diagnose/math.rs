@@ -251,10 +251,10 @@ impl Design {
     /// In-sample residuals at the training poses, one per entry of `r` (`None` elsewhere); `None`
     /// when `r` cannot be fitted.
     pub(crate) fn residuals(&self, rows: &[Vec<f64>], r: &[f64]) -> Option<Vec<Option<f64>>> {
-        let x = self.solve(rows, r)?;
+        let everywhere = self.residuals_everywhere(rows, r)?;
         let mut out = vec![None; r.len()];
         for &i in &self.train {
-            out[i] = Some(predict(rows, r, &x, i));
+            out[i] = Some(everywhere[i]);
         }
         Some(out)
     }

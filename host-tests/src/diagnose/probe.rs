@@ -4,6 +4,8 @@
 //! never becomes a verdict: when one explains the withheld poses better than every family, the
 //! verdict is `unexplained` and the probe says where the gap lies.
 
+use std::ops::Range;
+
 use super::SEGMENTS;
 use super::family::{Context, Variant};
 use super::gap::PoseData;
@@ -298,30 +300,30 @@ fn rotation_sense(ctx: &Context<'_>) -> Vec<Variant> {
 }
 
 /// One bad pose (a knock, a clamp, a hold misread): the nominal model without the pose that lies
-/// furthest off the fit to the others (in units of their scatter, at least white noise), charged
-/// that pose and its choice among the poses (`ln` of their number, as a step's places), when it
-/// lies [`GROSS_OFF`] times the others' held-out scatter off that fit. A slow change can take such a
+/// furthest off the fit to the others (in units of their scatter, at least white noise), with the
+/// other pieces of its hold the pose finder cut it into ([`hold_pieces`]), charged a parameter per
+/// piece and its choice among the poses (`ln` of their number, as a step's places), when it lies
+/// [`GROSS_OFF`] times the others' held-out scatter off that fit. A slow change can take such a
 /// pose with the calibration it spoils (a warm-up of a few seconds on the early poses): it then
 /// predicts the other poses better without explaining them. (The pose the nominal model predicts
 /// worst withheld is not always the bad one: on 12-14 poses the bad pose, among the training poses,
 /// moves the calibration so that others are predicted worse; a 13-pose log's was the fourth worst.)
 fn one_pose(ctx: &Context<'_>) -> Option<Probe> {
     let n = ctx.poses.len();
-    let holds = hold_pieces(ctx);
-    let without = |i: usize| {
+    let without = |hold: &Range<usize>| {
         let mut dropped = ctx.none_dropped.clone();
-        dropped[holds[i].clone()].iter_mut().for_each(|d| *d = true);
+        dropped[hold.clone()].iter_mut().for_each(|d| *d = true);
         dropped
     };
-    let offs = (0..n).filter_map(|i| Some((i, off_the_others(ctx, &without(i), i)?)));
-    let (bad, (off, _)) = offs.max_by(|a, b| (a.1.0 / a.1.1).total_cmp(&(b.1.0 / b.1.1)))?;
-    let dropped = without(bad);
-    let pieces = holds[bad].len();
-    let params = pieces + (n as f64).ln().ceil() as usize;
+    let offs =
+        hold_pieces(ctx).into_iter().filter_map(|hold| Some((off_the_others(ctx, &without(&hold), &hold)?, hold)));
+    let ((bad, off, _), hold) = offs.max_by(|a, b| (a.0.1 / a.0.2).total_cmp(&(b.0.1 / b.0.2)))?;
+    let dropped = without(&hold);
+    let params = hold.len() + (n as f64).ln().ceil() as usize;
     let ratio = ctx.heldout_ratio(&ctx.base_rows, &dropped, params)?;
     // The others' scatter no less than white noise (a held-out ratio below 1 on few poses is chance).
     let off_sigmas = off / ctx.e_white.sqrt() / ratio.max(1.0);
-    let with = if pieces > 1 { format!(" (a hold cut into {pieces} poses)") } else { String::new() };
+    let with = if hold.len() > 1 { format!(" (a hold cut into {} poses)", hold.len()) } else { String::new() };
     (off_sigmas >= GROSS_OFF).then(|| Probe {
         shape: "one-pose",
         heldout_gain: ctx.value_gain(ratio),
@@ -332,30 +334,32 @@ fn one_pose(ctx: &Context<'_>) -> Option<Probe> {
     })
 }
 
-/// For each pose, the poses that are consecutive pieces of its hold ([`Context::same_hold`]: close
+/// The holds as runs of consecutive poses that are pieces of one hold ([`Context::same_hold`]: close
 /// in time, no movement between them): the pose finder cuts a hold where a block's mean jumps (a
 /// clamp's creep, a low-passed part's wander).
-fn hold_pieces(ctx: &Context<'_>) -> Vec<std::ops::Range<usize>> {
+fn hold_pieces(ctx: &Context<'_>) -> Vec<Range<usize>> {
     let n = ctx.poses.len();
-    let mut out = Vec::with_capacity(n);
+    let mut out = Vec::new();
     let mut first = 0;
     for i in 0..n {
         if i + 1 == n || !ctx.same_hold(&ctx.poses[i], &ctx.poses[i + 1]) {
-            out.extend(std::iter::repeat_n(first..i + 1, i + 1 - first));
+            out.push(first..i + 1);
             first = i + 1;
         }
     }
     out
 }
 
-/// How far pose `i` lies off the nominal fit to the poses not `dropped` (output unit) and their
-/// residual scatter (per residual degree of freedom, at least the white noise of a withheld pose).
-fn off_the_others(ctx: &Context<'_>, dropped: &[bool], i: usize) -> Option<(f64, f64)> {
+/// The pose of `hold` furthest off the nominal fit to the poses not `dropped`, how far (output
+/// unit), and their residual scatter (per residual degree of freedom, at least the white noise of a
+/// withheld pose).
+fn off_the_others(ctx: &Context<'_>, dropped: &[bool], hold: &Range<usize>) -> Option<(usize, f64, f64)> {
     let residuals = kept_design(&ctx.base_rows, dropped)?.residuals_everywhere(&ctx.base_rows, &ctx.m.r)?;
     let kept = || residuals.iter().zip(dropped).filter(|(_, d)| !**d).map(|(r, _)| r);
     let dof = kept().count().checked_sub(ctx.base_columns()).filter(|&d| d > 0)?;
     let scatter = (kept().map(|r| r * r).sum::<f64>() / dof as f64).max(ctx.e_white).sqrt();
-    Some((residuals[i].abs(), scatter))
+    let worst = hold.clone().max_by(|&a, &b| residuals[a].abs().total_cmp(&residuals[b].abs()))?;
+    Some((worst, residuals[worst].abs(), scatter))
 }
 
 /// How many standard deviations of the other poses' held-out scatter the pose must lie off the fit

@@ -67,37 +67,49 @@ impl Source {
         }
     }
 
-    /// The temperature per row, `smoothed` the smooth course ([`smoothed_temps`], fitted once).
-    fn temps(&self, ctx: &Context<'_>, smoothed: Option<&[f64]>) -> Option<Vec<f64>> {
+    /// The temperature per row, `course` the thermometer's smooth course ([`Course::fit`], once per
+    /// search).
+    fn temps(&self, ctx: &Context<'_>, course: Option<&Course>) -> Option<Vec<f64>> {
         match self {
-            Source::Smoothed => smoothed.map(<[f64]>::to_vec),
+            Source::Smoothed => Some(course?.temps.clone()),
             Source::Lagged(lag) => lagged_temps(ctx, *lag),
-            Source::Leading(lead) => leading_temps(ctx, smoothed?, *lead),
+            Source::Leading(lead) => {
+                let course = course?;
+                Some(course.temps.iter().zip(&course.rate).map(|(t, r)| t + lead * r).collect())
+            }
         }
     }
 }
 
-/// Seconds over which the smoothed thermometer's rate of change is taken ([`leading_temps`]).
+/// Seconds over which the smooth course's rate of change is taken ([`Course::fit`]).
 const RATE_WINDOW_S: f64 = 2.0;
 
-/// The sensor's temperature when the thermometer lags it by a first-order lag of `tau` seconds:
-/// the smoothed course ([`smoothed_temps`]) plus `tau` times its rate of change, per row.
-fn leading_temps(ctx: &Context<'_>, course: &[f64], tau: f64) -> Option<Vec<f64>> {
-    let times: Vec<f64> = (0..course.len()).map(|i| row_time(ctx.table, i, ctx.m.rate)).collect();
-    let (mut lo, mut hi) = (0, 0);
-    let mut out = Vec::with_capacity(course.len());
-    for (i, t) in times.iter().enumerate() {
-        while times[lo] < t - RATE_WINDOW_S / 2.0 {
-            lo += 1;
+/// The thermometer's smooth course ([`smoothed_temps`], knots [`SMOOTH_S`] apart) and its rate of
+/// change over [`RATE_WINDOW_S`], per row, K/s: a thermometer lagging the sensor by `tau` reads the
+/// course the sensor was at about `tau` times the rate earlier.
+struct Course {
+    temps: Vec<f64>,
+    rate: Vec<f64>,
+}
+
+impl Course {
+    fn fit(ctx: &Context<'_>) -> Option<Self> {
+        let temps = smoothed_temps(ctx, SMOOTH_S)?;
+        let times: Vec<f64> = (0..temps.len()).map(|i| row_time(ctx.table, i, ctx.m.rate)).collect();
+        let (mut lo, mut hi) = (0, 0);
+        let mut rate = Vec::with_capacity(temps.len());
+        for t in &times {
+            while times[lo] < t - RATE_WINDOW_S / 2.0 {
+                lo += 1;
+            }
+            while hi + 1 < times.len() && times[hi + 1] <= t + RATE_WINDOW_S / 2.0 {
+                hi += 1;
+            }
+            let span = times[hi] - times[lo];
+            rate.push(if span > 0.0 { (temps[hi] - temps[lo]) / span } else { 0.0 });
         }
-        while hi + 1 < times.len() && times[hi + 1] <= t + RATE_WINDOW_S / 2.0 {
-            hi += 1;
-        }
-        let span = times[hi] - times[lo];
-        let rate = if span > 0.0 { (course[hi] - course[lo]) / span } else { 0.0 };
-        out.push(course[i] + tau * rate);
+        Some(Self { temps, rate })
     }
-    Some(out)
 }
 
 /// The temperature column smoothed in time, per row: a least-squares cubic spline with knots
@@ -179,8 +191,8 @@ impl Terms {
 }
 
 /// The temperature as read through `source`, averaged over each pose.
-fn pose_temps(ctx: &Context<'_>, source: Source, smoothed: Option<&[f64]>) -> Option<Vec<f64>> {
-    let temps = source.temps(ctx, smoothed)?;
+fn pose_temps(ctx: &Context<'_>, source: Source, course: Option<&Course>) -> Option<Vec<f64>> {
+    let temps = source.temps(ctx, course)?;
     Some(ctx.poses.iter().map(|p| mean(&temps[p.rows.clone()])).collect())
 }
 
@@ -204,9 +216,9 @@ fn lagged_temps(ctx: &Context<'_>, tau: f64) -> Option<Vec<f64>> {
 /// quadratic in the (lagged) temperature of each segment.
 fn within_variants(ctx: &Context<'_>, w: &Within) -> Vec<WithinVariant> {
     let mut out = Vec::new();
-    let smoothed = smoothed_temps(ctx, SMOOTH_S);
+    let course = Course::fit(ctx);
     for source in Source::all() {
-        let Some(lagged) = source.temps(ctx, smoothed.as_deref()) else { continue };
+        let Some(lagged) = source.temps(ctx, course.as_ref()) else { continue };
         let temps: Vec<f64> = w.rows.iter().map(|r| mean(&lagged[r.clone()])).collect();
         let t0 = mean(&temps);
         let lagged = &lagged;
@@ -328,9 +340,9 @@ impl Family for Temperature {
 /// The parametrisations whose fitted coefficients are not [`Grade::Implausible`], with their grade.
 fn graded_variants(ctx: &Context<'_>) -> Vec<(Variant, Grade)> {
     let mut out = Vec::new();
-    let smoothed = smoothed_temps(ctx, SMOOTH_S);
+    let course = Course::fit(ctx);
     for source in Source::all() {
-        let Some(temps) = pose_temps(ctx, source, smoothed.as_deref()) else { continue };
+        let Some(temps) = pose_temps(ctx, source, course.as_ref()) else { continue };
         let t0 = mean(&temps);
         if temps.iter().map(|t| (t - t0).abs()).fold(0.0, f64::max) < 0.05 {
             continue;
