@@ -250,7 +250,7 @@ pub(crate) fn common_scale_effect(f: V3, x: f64, power: usize) -> Vec<V3> {
 pub(crate) fn from_holds(ctx: &Context<'_>) -> Option<(&'static str, String)> {
     colored_noise::switching_holds(ctx)
         .map(|d| ("colored-noise", d))
-        .or_else(|| settling::settling_holds(ctx).map(|d| ("settling", d)))
+        .or_else(|| settling::settling_holds(ctx, settling::Decay::Significant).map(|d| ("settling", d)))
         .or_else(|| drift::drifting_holds(ctx).map(|d| ("drift", d)))
         .or_else(|| {
             let Some(wander) = colored_noise::wandering_holds(ctx) else {

@@ -259,7 +259,7 @@ impl ColoredNoise {
     /// not yet reached its floor.
     fn best_noise(&self, ctx: &Context<'_>, estimates: &[Estimate]) -> Option<(f64, Colored)> {
         let mut best: Option<(f64, Colored)> = None;
-        let settle = super::settling::settling_holds(ctx).is_some();
+        let settle = super::settling::settling_holds(ctx, super::settling::Decay::Ratio).is_some();
         let longest_s = ctx.poses.get(longest_rest(ctx)).map_or(0.0, |p| p.duration());
         for (estimate, pooled) in estimates {
             for c in estimate.parts() {
