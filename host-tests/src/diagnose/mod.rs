@@ -522,6 +522,27 @@ pub(crate) mod testing {
         to_table(&SimLog { recording, temps_c }, "z-only").unwrap()
     }
 
+    /// A clean simulated log with a first-order Gauss-Markov bias noise on every axis (standard
+    /// deviation `sigma_mg`, correlation time `tau_s`, independent between the axes).
+    pub(crate) fn markov_log(seed: u64, sigma_mg: f64, tau_s: f64) -> Table {
+        use crate::sim::random::standard_normal;
+        use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
+        use rand_core::SeedableRng;
+        let mut table = to_table(&generate(&random_scenario(EffectClass::None, seed)), "markov").unwrap();
+        let acc = crate::csvio::accumulate(&table, &Default::default()).unwrap();
+        let (mg, dt) = (table.median_magnitude / 1000.0, 1.0 / acc.sample_rate_hz.unwrap());
+        let phi = (-dt / tau_s).exp();
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x6a55);
+        let mut bias: [f64; 3] = std::array::from_fn(|_| standard_normal(&mut rng));
+        for sample in &mut table.samples {
+            for a in 0..3 {
+                bias[a] = phi * bias[a] + (1.0 - phi * phi).sqrt() * standard_normal(&mut rng);
+                sample[a] += sigma_mg * mg * bias[a];
+            }
+        }
+        table
+    }
+
     /// `table` through a moving average of `width` readings: a digital low-pass filter of about
     /// `rate / (2 width)` Hz (a MEMS part's, correlating successive readings; the noise of a mean
     /// keeps its level while the per-reading variance falls by `width`).

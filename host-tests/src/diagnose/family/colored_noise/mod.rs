@@ -440,24 +440,6 @@ mod tests {
         table
     }
 
-    /// A clean simulated log with a first-order Gauss-Markov bias noise on every axis (standard
-    /// deviation `sigma_mg`, correlation time `tau_s`, independent between the axes).
-    fn markov_log(seed: u64, sigma_mg: f64, tau_s: f64) -> Table {
-        let mut table = to_table(&generate(&random_scenario(EffectClass::None, seed)), "markov").unwrap();
-        let acc = csvio::accumulate(&table, &AccumulateOptions::default()).unwrap();
-        let (mg, dt) = (table.median_magnitude / 1000.0, 1.0 / acc.sample_rate_hz.unwrap());
-        let phi = (-dt / tau_s).exp();
-        let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x6a55);
-        let mut bias: [f64; 3] = std::array::from_fn(|_| standard_normal(&mut rng));
-        for sample in &mut table.samples {
-            for a in 0..3 {
-                bias[a] = phi * bias[a] + (1.0 - phi * phi).sqrt() * standard_normal(&mut rng);
-                sample[a] += sigma_mg * mg * bias[a];
-            }
-        }
-        table
-    }
-
     /// A clean simulated log with a telegraph (popcorn) bias noise on every axis: each axis' bias
     /// jumps between `-amp_mg / 2` and `+amp_mg / 2` at random times (a Poisson process, mean dwell
     /// `dwell_s`), independent between the axes.
@@ -536,7 +518,7 @@ mod tests {
         // than a random walk or a bias-instability floor measured in them predicts.
         let opts = DiagnoseOptions::DEFAULT;
         for (seed, tau_s) in [(3, 2.0), (4, 3.0), (5, 1.5)] {
-            let table = markov_log(seed, 2.0, tau_s);
+            let table = crate::diagnose::testing::markov_log(seed, 2.0, tau_s);
             let d = diagnose(&table, &opts).unwrap();
             assert_eq!(d.verdict, "colored-noise", "seed {seed}: {}", d.to_text());
         }
@@ -550,7 +532,7 @@ mod tests {
         // off after a correlation time chosen on the withheld poses predicts it.
         let opts = DiagnoseOptions::DEFAULT;
         for (seed, sigma_mg, tau_s) in [(4, 0.5, 20.0), (1, 0.5, 40.0), (5, 1.0, 40.0)] {
-            let d = diagnose(&markov_log(seed, sigma_mg, tau_s), &opts).unwrap();
+            let d = diagnose(&crate::diagnose::testing::markov_log(seed, sigma_mg, tau_s), &opts).unwrap();
             assert_eq!(d.verdict, "colored-noise", "seed {seed}: {}", d.to_text());
             let noise = d.candidates.iter().find(|c| c.effect == "colored-noise").unwrap();
             assert!((0.85..=1.15).contains(&noise.heldout_ratio), "seed {seed}: {}", d.to_text());
@@ -602,7 +584,7 @@ mod tests {
             assert_eq!(d.verdict, "unexplained", "seed {seed}: {}", d.to_text());
             let noise = d.candidates.iter().find(|c| c.effect == "colored-noise").unwrap();
             assert!(noise.detail.contains("period 7.0 s"), "seed {seed}: {}", noise.detail);
-            let d = diagnose(&markov_log(seed, 1.5, 6.0), &opts).unwrap();
+            let d = diagnose(&crate::diagnose::testing::markov_log(seed, 1.5, 6.0), &opts).unwrap();
             assert_eq!(d.verdict, "colored-noise", "seed {seed}: {}", d.to_text());
         }
     }
