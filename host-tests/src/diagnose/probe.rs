@@ -301,7 +301,7 @@ fn rotation_sense(ctx: &Context<'_>) -> Vec<Variant> {
 
 /// One bad pose (a knock, a clamp, a hold misread): the nominal model without the pose that lies
 /// furthest off the fit to the others (in units of their scatter, at least white noise), with the
-/// other pieces of its hold the pose finder cut it into ([`hold_pieces`]), charged a parameter per
+/// other pieces of its hold the pose finder cut it into ([`Context::hold_runs`]), charged a parameter per
 /// piece and its choice among the poses (`ln` of their number, as a step's places), when it lies
 /// [`GROSS_OFF`] times the others' held-out scatter off that fit. A slow change can take such a
 /// pose with the calibration it spoils (a warm-up of a few seconds on the early poses): it then
@@ -316,7 +316,7 @@ fn one_pose(ctx: &Context<'_>) -> Option<Probe> {
         dropped
     };
     let offs =
-        hold_pieces(ctx).into_iter().filter_map(|hold| Some((off_the_others(ctx, &without(&hold), &hold)?, hold)));
+        ctx.hold_runs().into_iter().filter_map(|hold| Some((off_the_others(ctx, &without(&hold), &hold)?, hold)));
     let ((bad, off, _), hold) = offs.max_by(|a, b| (a.0.1 / a.0.2).total_cmp(&(b.0.1 / b.0.2)))?;
     let dropped = without(&hold);
     let params = hold.len() + (n as f64).ln().ceil() as usize;
@@ -332,22 +332,6 @@ fn one_pose(ctx: &Context<'_>) -> Option<Probe> {
         veto_margin: 0.0,
         jump_in_hold: false,
     })
-}
-
-/// The holds as runs of consecutive poses that are pieces of one hold ([`Context::same_hold`]: close
-/// in time, no movement between them): the pose finder cuts a hold where a block's mean jumps (a
-/// clamp's creep, a low-passed part's wander).
-fn hold_pieces(ctx: &Context<'_>) -> Vec<Range<usize>> {
-    let n = ctx.poses.len();
-    let mut out = Vec::new();
-    let mut first = 0;
-    for i in 0..n {
-        if i + 1 == n || !ctx.same_hold(&ctx.poses[i], &ctx.poses[i + 1]) {
-            out.push(first..i + 1);
-            first = i + 1;
-        }
-    }
-    out
 }
 
 /// The pose of `hold` furthest off the nominal fit to the poses not `dropped`, how far (output

@@ -637,17 +637,26 @@ impl<'a> Context<'a> {
             })
     }
 
-    /// The table rows of each hold: successive poses that are pieces of one hold ([`Self::same_hold`])
-    /// joined with the rows between them.
-    pub(crate) fn hold_rows(&self) -> Vec<Range<usize>> {
-        let mut holds: Vec<Range<usize>> = Vec::new();
-        for (i, p) in self.poses.iter().enumerate() {
-            match holds.last_mut() {
-                Some(last) if self.same_hold(&self.poses[i - 1], p) => last.end = p.rows.end,
-                _ => holds.push(p.rows.clone()),
+    /// The holds as runs of consecutive poses that are pieces of one hold ([`Self::same_hold`]: close
+    /// in time, no movement between them): the pose finder cuts a hold where a block's mean jumps (a
+    /// clamp's creep, a low-passed part's wander).
+    pub(crate) fn hold_runs(&self) -> Vec<Range<usize>> {
+        let n = self.poses.len();
+        let mut out = Vec::new();
+        let mut first = 0;
+        for i in 0..n {
+            if i + 1 == n || !self.same_hold(&self.poses[i], &self.poses[i + 1]) {
+                out.push(first..i + 1);
+                first = i + 1;
             }
         }
-        holds
+        out
+    }
+
+    /// The table rows of each hold ([`Self::hold_runs`]), with the rows between its pieces.
+    pub(crate) fn hold_rows(&self) -> Vec<Range<usize>> {
+        let rows = |run: Range<usize>| self.poses[run.start].rows.start..self.poses[run.end - 1].rows.end;
+        self.hold_runs().into_iter().map(rows).collect()
     }
 
     /// `1 - ln(ratio) / ln(nominal ratio)` of a noise model; predicting more scatter than there is

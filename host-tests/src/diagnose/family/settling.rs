@@ -62,7 +62,7 @@ const SLOWING_Z: f64 = 2.0;
 pub(crate) struct Settling;
 
 /// How firmly the decay test ([`decays`]) must pass.
-#[derive(Clone, Copy, PartialEq, Eq)]
+#[derive(Clone, Copy)]
 pub(crate) enum Decay {
     /// The first halves' excess movement at least [`DECAY_RATIO`] times the second halves' and
     /// [`DECAY_Z`] standard deviations beyond white noise: the pose-level families' test
