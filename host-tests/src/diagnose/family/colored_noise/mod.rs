@@ -18,7 +18,9 @@ use allan::{colored_noise_estimate, pooled_estimate, pooled_markov};
 
 use super::{Candidate, Context, Evaluation, Family, Variant, periodic};
 use crate::diagnose::gap::Measured;
-use crate::diagnose::gap::{Noise, mean_cv_ms, quantisation_step, residual_noise_draws, simulate_gap};
+use crate::diagnose::gap::{
+    Noise, correlation_factor, mean_cv_ms, quantisation_step, residual_noise_draws, simulate_gap,
+};
 use crate::diagnose::math::{V3, mean};
 use crate::diagnose::verdict::NOISE_LEAVES_AT_MOST;
 use crate::diagnose::within::white_from_differences;
@@ -186,6 +188,53 @@ const WALK_ACCOUNTS: f64 = 1.2;
 /// walk's path.
 pub(crate) fn walk_accounts_closely(ctx: &Context<'_>) -> bool {
     wander_alike(ctx) && holds_walk(ctx).and_then(|(_, ratio)| ratio).is_some_and(|ratio| ratio <= WALK_ACCOUNTS)
+}
+
+/// Standard deviations (under white noise) by which quiet holds move beyond white noise for a walk
+/// at their level to be read from them ([`quiet_walk`]): at least the first, less than the second.
+/// Holds moving more are judged by their own tests ([`wandering_holds`]: alike, not along a line):
+/// on the model's own logs a low-passed white noise (its holds 1.09 times white, 3.2 standard
+/// deviations) and a slow beat over the log (1.15 times, 3.1) were otherwise read as walks.
+const QUIET_WALK_Z: Range<f64> = 1.0..3.0;
+
+/// Correlation factor of a pose mean's noise ([`correlation_factor`]) above which a sensor's
+/// readings are taken as low-passed.
+const LOW_PASSED_FACTOR: f64 = 1.5;
+
+/// The sensor's readings are correlated by a digital low-pass filter ([`LOW_PASSED_FACTOR`] on some
+/// axis). The holds' segments are then whitened to about a fifth in variance (a filter's correlation
+/// fades from the 0.2 s blocks' level as `1 - c / L`): an 8-reading moving average of white noise
+/// left the segments of 12 simulated logs 1.0-1.3 times white on average, a quiet hold's whole
+/// excess.
+fn low_passed(ctx: &Context<'_>) -> bool {
+    correlation_factor(ctx.table, &ctx.m.poses, ctx.m.rate).iter().any(|f| *f > LOW_PASSED_FACTOR)
+}
+
+/// A random walk at the holds' level ([`walk_from_holds`]) that accounts for the withheld pose
+/// means' scatter within [`WALK_ACCOUNTS`], the holds moving beyond white noise by a few standard
+/// deviations ([`QUIET_WALK_Z`]; not significantly): the verdict's last answer before
+/// `unexplained`, asked only when no family and no out-of-catalogue probe explains the withheld
+/// poses. A walk a few times white noise over the log spreads the pose means several times their
+/// white scatter while moving each hold of a few seconds by less than its own noise. The
+/// description, or `None`.
+pub(crate) fn quiet_walk(ctx: &Context<'_>) -> Option<String> {
+    if !ctx.pose_level || ctx.tremor().is_some() || ctx.periodic_line().is_some() {
+        return None;
+    }
+    let within = ctx.within.as_ref()?;
+    let (excess, sigma) = within.observed_excess();
+    if !QUIET_WALK_Z.contains(&(excess / sigma)) || low_passed(ctx) {
+        return None;
+    }
+    let (walk, ratio) = holds_walk(ctx)?;
+    let ratio = ratio.filter(|r| *r <= WALK_ACCOUNTS)?;
+    let m = ctx.m;
+    let mg = m.to_mg(walk[0].sqrt() * m.model.ka[0][0]);
+    Some(format!(
+        "the holds move {:.2}x white ({:.1} sigma); a random walk at their level ({mg:.3} mg/sqrt(s)) spreads the withheld pose means as they are (held-out ratio {ratio:.2})",
+        within.nominal_ratio,
+        excess / sigma
+    ))
 }
 
 /// Share of the squared held-out residual in the largest pose (0 without residuals).
@@ -497,6 +546,27 @@ mod tests {
             }
         }
         table
+    }
+
+    #[test]
+    fn a_walk_that_barely_moves_the_holds_is_read_from_them_when_nothing_else_explains_the_poses() {
+        // A walk of 0.03 mg per sqrt(s): on this seed the holds move 1.12 times white noise (2.0
+        // standard deviations, not significant), the pose means spread 2.7 times their white scatter,
+        // and no family or probe explains the withheld ones (`unexplained` before the quiet walk).
+        let opts = DiagnoseOptions::DEFAULT;
+        let table = walk_log(4, 0.03, 0.0);
+        let d = diagnose(&table, &opts).unwrap();
+        assert_eq!(d.verdict, "colored-noise", "{}", d.to_text());
+        assert!(d.located.as_deref().is_some_and(|w| w.contains("random walk at their level")), "{}", d.to_text());
+        let m = gap::measure(&table, &opts).unwrap();
+        let ctx = Context::new(&table, &m, &opts).unwrap();
+        assert!(!ctx.within.as_ref().unwrap().significant);
+        // Offsets of 1 mg per hold (a hysteresis, a bad pose) spread the pose means of white holds:
+        // no walk is read from them.
+        for seed in 1..=12 {
+            let d = diagnose(&walk_log(seed, 0.0, 1.0), &opts).unwrap();
+            assert_ne!(d.verdict, "colored-noise", "seed {seed}: {}", d.to_text());
+        }
     }
 
     #[test]
