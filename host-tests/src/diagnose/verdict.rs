@@ -275,14 +275,16 @@ fn in_sample_of(e: &Evaluation) -> Option<&InSampleFit> {
 /// holds' own answer ([`super::family::from_holds`]: settling, drift or colored noise, and why): when no family
 /// explains the withheld poses and no probe does either, it names the effect (with no shrink: the
 /// pose means cannot follow it); else, when no probe explains the withheld poses either, a family
-/// that alone fits every pose is named ([`fits_every_pose`]).
+/// that alone fits every pose is named ([`fits_every_pose`]); failing that, `quiet_walk` is asked
+/// (a walk read from holds that move too little to be significant,
+/// [`super::family::colored_noise::quiet_walk`]) before the verdict is `unexplained`.
 pub(crate) fn decide(
     m: &Measured,
     evaluations: &[Evaluation],
     probes: &[Probe],
     from_holds: Option<(&'static str, String)>,
     holds_walk: bool,
-    quiet_walk: Option<String>,
+    quiet_walk: impl FnOnce() -> Option<String>,
 ) -> Decision {
     let significant = m.gap.significant;
     let best_probe = probes
@@ -310,7 +312,7 @@ pub(crate) fn decide(
     {
         (gap.ratio_after, gap.real_rmse_after_mg) = (fit.ratio, kept_rmse_mg(&fit.after));
         (e.candidate.effect, Some(i), fit.after.clone(), Some(in_sample_why(fit)))
-    } else if let Some(why) = quiet_walk.filter(|_| significant && best_probe.is_none()) {
+    } else if let Some(why) = (significant && best_probe.is_none()).then(quiet_walk).flatten() {
         ("colored-noise", None, unchanged(), Some(why))
     } else {
         (if significant { "unexplained" } else { "none" }, None, unchanged(), None)
@@ -394,7 +396,7 @@ mod tests {
     #[test]
     fn a_noise_model_that_leaves_the_spread_several_times_its_prediction_is_not_named() {
         let m = significant_gap(None);
-        let verdict = |e: &[Evaluation]| decide(&m, e, &[], None, false, None).verdict;
+        let verdict = |e: &[Evaluation]| decide(&m, e, &[], None, false, || None).verdict;
         // A development log with hysteresis: a walk on one axis took the held-out ratio from 55.7 to
         // 8.8 (gain 0.46); no catalogue family explained it.
         let hysteresis = [on_pose_means("colored-noise", 8.8, 0.46, false), on_pose_means("drift", 55.8, 0.0, true)];
@@ -413,7 +415,7 @@ mod tests {
             let mut drift = on_pose_means(effect, 3.4, 0.34, true);
             (drift.candidate.within_gain, drift.candidate.ratio_after) = (within_gain, 2.45);
             let walk = on_pose_means("colored-noise", 0.82, 0.79, false);
-            decide(&m, &[drift, walk], &[], None, holds_walk, None).verdict
+            decide(&m, &[drift, walk], &[], None, holds_walk, || None).verdict
         };
         let verdict = |within_gain: f64, holds_walk: bool| named("drift", within_gain, holds_walk);
         assert_eq!(verdict(-0.05, true), "colored-noise");
@@ -437,7 +439,7 @@ mod tests {
             let mut holds = holds_only(effect, 0.57, within_disagreement);
             (holds.candidate.heldout_gain, holds.candidate.ratio_after) = (-0.02, 3.43);
             let floor = on_pose_means("colored-noise", 1.27, 0.80, false);
-            decide(&m, &[holds, floor], &[], None, false, None).verdict
+            decide(&m, &[holds, floor], &[], None, false, || None).verdict
         };
         assert_eq!(named("settling", 1.8), "settling");
         // The pose means contradict the holds' fit, or the fit is a drift's line through the holds.
@@ -452,7 +454,7 @@ mod tests {
         let verdict = |gain: f64, predicts_values: bool, probe_gain: f64| {
             let effect = if predicts_values { "drift" } else { "colored-noise" };
             let e = [on_pose_means(effect, 1.2, gain, predicts_values)];
-            decide(&m, &e, &[probe(probe_gain)], None, false, None).verdict
+            decide(&m, &e, &[probe(probe_gain)], None, false, || None).verdict
         };
         // A development log's hysteresis: a noise floor gained 0.88, the hysteresis probe 0.82.
         assert_eq!(verdict(0.88, false, 0.82), "unexplained");
@@ -468,16 +470,16 @@ mod tests {
         let walk = || Some("a random walk at the holds' level".to_string());
         let probe = |gain: f64| probe("bias-step", gain, f64::NAN, 0.0);
         // Nothing else explains the withheld poses: the walk is named, with its reason.
-        let d = decide(&m, &[on_pose_means("drift", 3.0, 0.0, true)], &[], None, false, walk());
+        let d = decide(&m, &[on_pose_means("drift", 3.0, 0.0, true)], &[], None, false, walk);
         assert_eq!((d.verdict, d.located.as_deref()), ("colored-noise", Some("a random walk at the holds' level")));
         // An out-of-catalogue probe places the gap (a development log's offset step gained 0.65).
-        assert_eq!(decide(&m, &[], &[probe(0.65)], None, false, walk()).verdict, "unexplained");
+        assert_eq!(decide(&m, &[], &[probe(0.65)], None, false, walk).verdict, "unexplained");
         // A family explains the withheld poses: it is named, not the walk.
-        assert_eq!(decide(&m, &[on_pose_means("drift", 1.1, 0.6, true)], &[], None, false, walk()).verdict, "drift");
+        assert_eq!(decide(&m, &[on_pose_means("drift", 1.1, 0.6, true)], &[], None, false, walk).verdict, "drift");
         // No significant gap: nothing to explain.
         let mut clean = significant_gap(None);
         clean.gap.significant = false;
-        assert_eq!(decide(&clean, &[], &[], None, false, walk()).verdict, "none");
+        assert_eq!(decide(&clean, &[], &[], None, false, walk).verdict, "none");
     }
 
     #[test]
@@ -489,7 +491,7 @@ mod tests {
         let named = |wander: bool, step_in_sample: f64| {
             let mut drift = on_pose_means("drift", 3.3, 0.47, true);
             (drift.candidate.ratio_after, drift.wander) = (1.87, wander);
-            decide(&m, &[drift], &[probe("bias-step", 0.65, step_in_sample, 0.2)], None, false, None).verdict
+            decide(&m, &[drift], &[probe("bias-step", 0.65, step_in_sample, 0.2)], None, false, || None).verdict
         };
         assert_eq!(named(true, 1.11), "unexplained");
         // The wander fits the poses closer, or the drift is a fixed shape: the step needs its margin.
@@ -507,7 +509,7 @@ mod tests {
             let mut drift = on_pose_means("drift", 7.5, 0.34, true);
             (drift.candidate.ratio_after, drift.wander) = (2.9, wander);
             let walk = on_pose_means("colored-noise", 1.9, noise_gain, false);
-            decide(&m, &[drift, walk], &[], None, false, None).verdict
+            decide(&m, &[drift, walk], &[], None, false, || None).verdict
         };
         assert_eq!(named(true, 0.63), "colored-noise");
         assert_eq!(named(true, 0.5), "drift");
@@ -522,7 +524,7 @@ mod tests {
             let drift = on_pose_means("drift", 1.5, 0.64, true);
             let mut temperature = on_pose_means("temperature", 1.6, temperature_gain, true);
             temperature.credible_cause = credible;
-            decide(&m, &[drift, temperature], &[], None, false, None).verdict
+            decide(&m, &[drift, temperature], &[], None, false, || None).verdict
         };
         // Time leads by 0.08: within a credible cause's tenth, beyond an implausible one's 0.05.
         assert_eq!(named(0.56, true), "temperature");
@@ -539,7 +541,7 @@ mod tests {
             let mut slow = on_pose_means(effect, 1.6, 0.35, true);
             slow.gain_without_worst = gain_without_worst;
             let settling = holds_only("settling", 0.46, 1.5);
-            decide(&m, &[slow, settling], &[], None, false, None).verdict
+            decide(&m, &[slow, settling], &[], None, false, || None).verdict
         };
         // An own-simulator log with a transient in every hold: a temperature through a 30 s lag
         // gained 0.35 by the first pose (its long hold averages the transient differently).
@@ -579,7 +581,7 @@ mod tests {
     fn a_family_that_alone_fits_every_pose_to_white_noise_is_named_when_no_family_explains_withheld_ones() {
         let m = significant_gap(Some(6.0));
         let probe = |in_sample_ratio: f64| probe("cross-axis", 0.2, in_sample_ratio, 0.0);
-        let decide_on = |e: &[Evaluation], p: &[Probe]| decide(&m, e, p, None, false, None);
+        let decide_on = |e: &[Evaluation], p: &[Probe]| decide(&m, e, p, None, false, || None);
         let probe_that_explains = |p: Probe| Probe { heldout_gain: MIN_GAIN, ..p };
         // A development log's cube terms per axis (16 poses): 1.07 with 71 per column; the withheld
         // poses did not confirm them (held-out gain below 0.3); the best probe on every pose 1.84.
@@ -608,7 +610,7 @@ mod tests {
     #[test]
     fn a_fit_to_every_pose_that_takes_a_large_gap_most_of_the_way_alone_is_named() {
         let m = significant_gap(Some(64.4));
-        let decide_on = |e: &[Evaluation], p: &[Probe]| decide(&m, e, p, None, false, None);
+        let decide_on = |e: &[Evaluation], p: &[Probe]| decide(&m, e, p, None, false, || None);
         let with_dof = |mut e: Evaluation, dof: usize| {
             e.candidate.in_sample.as_mut().unwrap().residual_dof = dof;
             e
@@ -637,7 +639,7 @@ mod tests {
         let verdict = |square_ratio: f64, periodic_ratio: f64| {
             let mut square = fitting_every_pose("scale-nonlinearity", square_ratio, 703.0);
             (square.candidate.heldout_gain, square.gain_without_worst) = (0.46, 0.4);
-            decide(&m, &[square], &[probe("periodic", 0.51, periodic_ratio, 0.0)], None, false, None).verdict
+            decide(&m, &[square], &[probe("periodic", 0.51, periodic_ratio, 0.0)], None, false, || None).verdict
         };
         assert_eq!(verdict(0.97, 6.26), "scale-nonlinearity");
         // A probe that fits them nearly as closely, or a family that leaves more than white noise.
