@@ -202,10 +202,12 @@ const QUIET_WALK_Z: Range<f64> = 1.0..3.0;
 const LOW_PASSED_FACTOR: f64 = 1.5;
 
 /// The sensor's readings are correlated by a digital low-pass filter ([`LOW_PASSED_FACTOR`] on some
-/// axis). The holds' segments are then whitened to about a fifth in variance (a filter's correlation
-/// fades from the 0.2 s blocks' level as `1 - c / L`): an 8-reading moving average of white noise
-/// left the segments of 12 simulated logs 1.0-1.3 times white on average, a quiet hold's whole
-/// excess.
+/// axis). The holds' segments are then whitened to within a few tenths in variance only: with an
+/// 8-reading moving average, the holds of 24 simulated logs (white noise and an offset per hold)
+/// moved 2.7 standard deviations beyond white on average (0.5 without the filter), a quiet hold's
+/// whole excess. The block level the segments are whitened by falls short of a moving average's
+/// white-equivalent level by `(K^2 - 1) / (2 K L)` (a fifth for `K = 8` over 0.2 s at 100 Hz);
+/// correcting it by the readings' autocorrelation removed a third of the excess, not all of it.
 fn low_passed(ctx: &Context<'_>) -> bool {
     correlation_factor(ctx.table, &ctx.m.poses, ctx.m.rate).iter().any(|f| *f > LOW_PASSED_FACTOR)
 }
