@@ -236,6 +236,9 @@ pub(crate) struct Measured {
     pub(crate) r: Vec<f64>,
     /// White variance per sample per axis, input unit.
     pub(crate) white: V3,
+    /// How much more a pose mean varies than the per-sample variance predicts, per axis
+    /// ([`correlation_factor`]: 1 for uncorrelated readings; a low-pass filter's oversampling ratio).
+    pub(crate) correlation: V3,
     /// Variance of a pose mean from quantisation that averaging does not remove, per axis, input unit.
     pub(crate) quantisation: V3,
     /// Simulated RMSE of each repeat, mg.
@@ -414,8 +417,9 @@ fn median_pose_variance(poses: &[PoseData]) -> V3 {
 /// reading rounded to a step `q` adds `q^2 / 12`, which the within-pose variance already holds, and at
 /// least that is assumed) times the [`correlation_factor`], so that it over `n` is the variance of a
 /// mean of `n` samples.
-/// Also returns the quantisation floor of a pose mean per axis ([`quantisation_floor`]).
-fn white_variance(table: &Table, poses: &[PoseData], rate: f64) -> Result<(V3, V3), DiagnoseError> {
+/// Also returns the quantisation floor of a pose mean per axis ([`quantisation_floor`]) and the
+/// correlation factor.
+fn white_variance(table: &Table, poses: &[PoseData], rate: f64) -> Result<(V3, V3, V3), DiagnoseError> {
     let white = median_pose_variance(poses);
     let q = quantisation_step(table);
     // Readings that never change within a pose are a quantised sensor whose noise is below one step:
@@ -429,7 +433,7 @@ fn white_variance(table: &Table, poses: &[PoseData], rate: f64) -> Result<(V3, V
     }
     let floor = std::array::from_fn(|a| quantisation_floor(q[a], white[a]));
     let correlation = correlation_factor(table, poses, rate);
-    Ok((std::array::from_fn(|a| white[a].max(q[a] * q[a] / 12.0) * correlation[a]), floor))
+    Ok((std::array::from_fn(|a| white[a].max(q[a] * q[a] / 12.0) * correlation[a]), floor, correlation))
 }
 
 /// Length of the blocks [`correlation_factor`] averages, seconds: longer than the correlation of a
@@ -569,7 +573,7 @@ fn measure_found(table: &Table, opts: &DiagnoseOptions, found: Found) -> Result<
     let calibrated: Vec<V3> = means.iter().map(|m| model.apply(*m)).collect();
     let directions: Vec<V3> = calibrated.iter().map(|f| f.map(|c| c / norm(*f))).collect();
     let r = residuals(&model, &means, gravity);
-    let (white, quantisation) = white_variance(table, &poses, rate)?;
+    let (white, quantisation, correlation) = white_variance(table, &poses, rate)?;
     let white_noise = Noise { white, floor: quantisation, ..Noise::default() };
     let sims = simulate_gap(&model, &directions, &poses, &white_noise, gravity, opts.repeats, opts.seed);
     if sims.len() < 2 {
@@ -590,6 +594,7 @@ fn measure_found(table: &Table, opts: &DiagnoseOptions, found: Found) -> Result<
         directions,
         r,
         white,
+        correlation,
         quantisation,
         sims,
         gap,

@@ -18,9 +18,7 @@ use allan::{colored_noise_estimate, pooled_estimate, pooled_markov};
 
 use super::{Candidate, Context, Evaluation, Family, Variant, periodic};
 use crate::diagnose::gap::Measured;
-use crate::diagnose::gap::{
-    Noise, correlation_factor, mean_cv_ms, quantisation_step, residual_noise_draws, simulate_gap,
-};
+use crate::diagnose::gap::{Noise, mean_cv_ms, quantisation_step, residual_noise_draws, simulate_gap};
 use crate::diagnose::math::{V3, mean};
 use crate::diagnose::verdict::NOISE_LEAVES_AT_MOST;
 use crate::diagnose::within::white_from_differences;
@@ -197,7 +195,7 @@ pub(crate) fn walk_accounts_closely(ctx: &Context<'_>) -> bool {
 /// deviations) and a slow beat over the log (1.15 times, 3.1) were otherwise read as walks.
 const QUIET_WALK_Z: Range<f64> = 1.0..3.0;
 
-/// Correlation factor of a pose mean's noise ([`correlation_factor`]) above which a sensor's
+/// Correlation factor of a pose mean's noise ([`Measured::correlation`]) above which a sensor's
 /// readings are taken as low-passed.
 const LOW_PASSED_FACTOR: f64 = 1.5;
 
@@ -208,7 +206,7 @@ const LOW_PASSED_FACTOR: f64 = 1.5;
 /// whole excess. On four of them the white levels measured on the filtered log's poses were
 /// 0.53-0.69 of the unfiltered log's (the filter's correlation alone explains 0.80-0.87).
 fn low_passed(ctx: &Context<'_>) -> bool {
-    correlation_factor(ctx.table, &ctx.m.poses, ctx.m.rate).iter().any(|f| *f > LOW_PASSED_FACTOR)
+    ctx.m.correlation.iter().any(|f| *f > LOW_PASSED_FACTOR)
 }
 
 /// A random walk at the holds' level ([`walk_from_holds`]) that accounts for the withheld pose
