@@ -208,6 +208,8 @@ pub struct Diagnosis {
     pub short_poses: usize,
     /// Poses whose start or end moved with the tail of a move (a sixth and a guard sixth trimmed).
     pub tails_trimmed: usize,
+    /// Short poses that moved within themselves, left out as fragments of moves.
+    pub moving_fragments: usize,
     /// The factor the pose finder widened its test of a block's mean change by for correlated
     /// (low-passed) readings, when too few poses were found without it.
     pub mean_change_widened: Option<f64>,
@@ -272,6 +274,8 @@ pub struct DiagnosisDocument<'a> {
     short_poses_left_out: usize,
     /// Poses whose start or end was trimmed as the tail of a move.
     tails_trimmed: usize,
+    /// Short poses that moved within themselves, left out as fragments of moves.
+    moving_fragments_left_out: usize,
     /// The pose finder's widening of its test of a block's mean change (correlated readings).
     mean_change_widened: Option<f64>,
     params: &'a Params,
@@ -389,6 +393,7 @@ impl Diagnosis {
             poses: self.poses.len(),
             short_poses_left_out: self.short_poses,
             tails_trimmed: self.tails_trimmed,
+            moving_fragments_left_out: self.moving_fragments,
             mean_change_widened: self.mean_change_widened,
             params: &self.params,
             noise: NoiseSummary { white_mg: self.white_mg, longest_rest_s: self.allan.rest_s },
@@ -515,6 +520,7 @@ mod tests {
             poses: vec![pose(1.0, [0.0, 0.0, 1.0]), pose(9.0, [1.0, 0.0, 0.0])],
             short_poses: 3,
             tails_trimmed: 0,
+            moving_fragments: 1,
             mean_change_widened: None,
             allan: Allan { rest_s: 5.0, tau_s: vec![0.1], adev_mg: vec![0.2], white_mg: vec![0.1] },
             candidates: vec![candidate],
@@ -560,5 +566,6 @@ mod tests {
         assert!(json["verdict"]["heldout_gain"].is_null());
         assert_eq!(json["poses"], 2);
         assert_eq!(json["short_poses_left_out"], 3);
+        assert_eq!(json["moving_fragments_left_out"], 1);
     }
 }

@@ -71,12 +71,16 @@ impl Diagnosis {
             0 => String::new(),
             n => format!(" ({n} poses trimmed: a move's tail at their start or end)"),
         };
+        let fragments = match self.moving_fragments {
+            0 => String::new(),
+            n => format!(" ({n} short poses moving within themselves left out: fragments of moves)"),
+        };
         let widened = self.mean_change_widened.map_or(String::new(), |c| {
             format!(" (readings correlated: the still test's limit on a block's mean change widened {c:.1}x)")
         });
         let disturbed = self.disturbed_left_out.as_ref().map_or(String::new(), |d| format!(" ({d})"));
         format!(
-            "{}: {} rows ({}), {} poses{short}{tails}{widened}{disturbed}, seed {}",
+            "{}: {} rows ({}), {} poses{short}{tails}{fragments}{widened}{disturbed}, seed {}",
             self.file,
             self.samples,
             self.units,
