@@ -756,6 +756,24 @@ mod tests {
     }
 
     #[test]
+    fn a_low_passed_telegraph_noise_is_measured_on_the_pieces_its_jumps_cut() {
+        // Jumps of 12 mg every 6 s on average per axis behind a 4-reading moving average: the
+        // default settings cut the holds in pieces (`poses::split_holds`), which on a low-passed
+        // sensor asks for the widened test; that joins the pieces (32 poses, 7 jumps left between
+        // pieces of a hold). The pieces' jumps, one size per axis, are the noise's evidence: the
+        // log is measured on the pieces as found (50 poses, 17 jumps).
+        let seed = 4;
+        let table = crate::diagnose::testing::low_passed(telegraph_log(seed, 12.0, 6.0), 4);
+        let first = csvio::accumulate(&table, &AccumulateOptions::default()).unwrap();
+        assert!(crate::poses::split_holds(&first), "{} poses", first.poses.len());
+        let d = diagnose(&table, &DiagnoseOptions { seed, ..DiagnoseOptions::DEFAULT }).unwrap();
+        assert_eq!(d.poses.len(), first.poses.len(), "{}", d.to_text());
+        assert_eq!(d.verdict, "colored-noise", "{}", d.to_text());
+        let why = d.located.clone().unwrap_or_default();
+        assert!(why.contains("switches between levels inside the holds"), "{why}");
+    }
+
+    #[test]
     fn a_telegraph_noise_that_splits_the_holds_is_named_from_its_jumps() {
         // Jumps of 12 mg every 6 s on average per axis: the pose finder cuts the holds at the jumps
         // (27 and 44 jumps between pieces of one hold), and the pieces' pose means spread far beyond
