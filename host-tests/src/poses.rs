@@ -249,13 +249,6 @@ const WHITE_CHANGE_Q25: f64 = 0.404;
 /// test (white noise measures about 1.0-1.3).
 pub const CORRELATED_AT_LEAST: f64 = 2.0;
 
-/// Factor by which [`block_mean_correlation`] in blocks twice as long exceeds it from which the block
-/// means move with the holds, not with a filter: a low-pass filter correlates readings over a fixed
-/// span, so blocks longer than it measure the same factor (0.85-1.19 on the third generator's
-/// development sets, filters at 0.05-0.5 of the output rate), while a hand's tremor or sway moves a
-/// block's mean more the longer the block (1.9-3.0 for tremor at 8-12 Hz). Not widened then.
-pub const GROWS_WITH_BLOCK: f64 = 1.4;
-
 /// Fewest pairs of consecutive blocks from which [`block_mean_correlation`] is measured.
 pub const MIN_BLOCK_PAIRS: usize = 20;
 

@@ -228,8 +228,8 @@ pub(crate) struct Measured {
     pub(crate) moving_fragments: usize,
     /// The factor the pose finder widened its test of a block's mean change by (correlated readings).
     pub(crate) mean_change_widened: Option<f64>,
-    /// The pose finder left out more still intervals as too short than it found poses
-    /// ([`crate::poses::fragmented`]).
+    /// The pose finder left out more still intervals as too short than it found poses, or found the
+    /// holds cut in pieces ([`crate::poses::fragmented`]).
     pub(crate) fragmented: bool,
     pub(crate) params: Params,
     pub(crate) model: Model,
@@ -303,7 +303,8 @@ struct Found {
     rate: f64,
     /// The factor the test of a block's mean change was widened by (correlated readings).
     mean_change_widened: Option<f64>,
-    /// More still intervals left out as too short than poses found ([`crate::poses::fragmented`]).
+    /// More still intervals left out as too short than poses found, or the holds cut in pieces
+    /// ([`crate::poses::fragmented`]).
     fragmented: bool,
 }
 

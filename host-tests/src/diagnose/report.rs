@@ -211,7 +211,8 @@ pub struct Diagnosis {
     /// Short poses that moved within themselves, left out as fragments of moves.
     pub moving_fragments: usize,
     /// The factor the pose finder widened its test of a block's mean change by for correlated
-    /// (low-passed) readings, when too few poses were found without it.
+    /// (low-passed) readings, when too few poses were found without it or the holds were found cut in
+    /// pieces.
     pub mean_change_widened: Option<f64>,
     /// Step 2: noise.
     pub allan: Allan,
