@@ -487,10 +487,9 @@ pub(crate) fn split_holds(acc: &Accumulation) -> bool {
     let cut = pairs
         .filter(|(p, s)| {
             let (a, b) = (p[0].mean.map(f64::from), p[1].mean.map(f64::from));
-            let dot: f64 = (0..3).map(|i| a[i] * b[i]).sum();
             let norms = crate::vec3::norm(a) * crate::vec3::norm(b);
             let break_s = s[1].first_row.saturating_sub(s[0].last_row) as f64 / rate;
-            norms > 0.0 && dot >= cos_max * norms && break_s < SAME_HOLD_BREAK_S
+            norms > 0.0 && crate::vec3::dot(a, b) >= cos_max * norms && break_s < SAME_HOLD_BREAK_S
         })
         .count();
     !acc.poses.is_empty() && cut as f64 >= SPLIT_SHARE * acc.poses.len() as f64

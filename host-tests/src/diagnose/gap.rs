@@ -382,8 +382,7 @@ fn drop_moving_fragments(
     rate: f64,
     min_poses: usize,
 ) -> usize {
-    let (white, correlation) = (median_pose_variance(poses), correlation_factor(table, poses, rate));
-    let var: V3 = std::array::from_fn(|a| white[a] * correlation[a]);
+    let var = move_test_variance(table, poses, rate);
     let median_s = median(&poses.iter().map(PoseData::duration).collect::<Vec<_>>());
     let moving: Vec<bool> = poses
         .iter()
@@ -453,8 +452,7 @@ fn tail_sixths(p: &PoseData, var: V3, from_end: bool) -> usize {
 /// a knock that split a hold in two), when at most [`TAILS_AT_MOST`] of the poses do; the library's
 /// poses follow. Returns the poses trimmed.
 fn trim_move_tails(table: &Table, poses: &mut [PoseData], lib_poses: &mut [Pose], rate: f64) -> usize {
-    let (white, correlation) = (median_pose_variance(poses), correlation_factor(table, poses, rate));
-    let var: V3 = std::array::from_fn(|a| white[a] * correlation[a]);
+    let var = move_test_variance(table, poses, rate);
     let tails: Vec<(usize, usize)> =
         poses.iter().map(|p| (tail_sixths(p, var, false), tail_sixths(p, var, true))).collect();
     let count = tails.iter().filter(|(lead, trail)| lead + trail > 0).count();
@@ -472,6 +470,15 @@ fn trim_move_tails(table: &Table, poses: &mut [PoseData], lib_poses: &mut [Pose]
         lib.end_index -= tail as u32;
     }
     count
+}
+
+/// Variance per sample by which the tests of moves within poses ([`trim_move_tails`],
+/// [`drop_moving_fragments`]) judge a pose's sixths, per axis: the median within-pose variance times
+/// the [`correlation_factor`] (white-equivalent, as [`white_variance`]'s without its quantisation
+/// floor).
+fn move_test_variance(table: &Table, poses: &[PoseData], rate: f64) -> V3 {
+    let (white, correlation) = (median_pose_variance(poses), correlation_factor(table, poses, rate));
+    std::array::from_fn(|a| white[a] * correlation[a])
 }
 
 /// The median within-pose variance per sample, per axis.

@@ -399,15 +399,14 @@ fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Step1, DiagnoseError
     Err(refused.map_or_else(|| err(format!("{}: no still poses", table.file)), |(_, error)| error))
 }
 
-/// The holds were found cut in pieces whose means differ by jumps of one size per sensor axis (a
-/// telegraph noise switching inside the holds, [`family::colored_noise::switching_holds`]): the cuts
-/// are the effect's evidence, and the settings that find the holds whole would hide it. On blindgen4's
-/// CI seeds two telegraph noises named from their jumps were `unexplained` once a hold cut in pieces
-/// counted as fragmented ([`crate::poses::split_holds`]).
+/// The holds found cut in pieces (asked only of poses [`crate::poses::fragmented`]) differ by jumps
+/// of one size per sensor axis (a telegraph noise switching inside the holds,
+/// [`family::colored_noise::switching_holds`]): the cuts are the effect's evidence, and the settings
+/// that find the holds whole would hide it. On blindgen4's CI seeds two telegraph noises named from
+/// their jumps were `unexplained` once a hold cut in pieces counted as fragmented
+/// ([`crate::poses::split_holds`]).
 fn switches_in_pieces(table: &Table, opts: &DiagnoseOptions, m: &gap::Measured) -> bool {
-    m.fragmented
-        && family::Context::new(table, m, opts)
-            .is_some_and(|ctx| family::colored_noise::switching_holds(&ctx).is_some())
+    family::Context::new(table, m, opts).is_some_and(|ctx| family::colored_noise::switching_holds(&ctx).is_some())
 }
 
 /// Step 1 on the poses found with the first of `attempts` that calibrates them (or answers them
