@@ -242,13 +242,13 @@ pub(crate) fn common_scale_effect(f: V3, x: f64, power: usize) -> Vec<V3> {
 }
 
 /// A verdict from the holds' movement alone, for when no family explains the withheld poses:
-/// colored noise when the bias switches between levels inside the holds (a telegraph noise that
-/// splits them, [`colored_noise::switching_holds`]), else settling when the movement slows within
+/// colored noise when the bias switches between levels inside the holds (a telegraph noise, whether
+/// it splits them or not, [`colored_noise::switching_holds`]), else settling when the movement slows within
 /// each hold, else drift when a line per hold explains it, else colored noise when every hold
 /// wanders alike; motion when they move in the tremor band,
 /// whether every hold moves alike (a hand) or a few (a passing truck); with what supports it.
 pub(crate) fn from_holds(ctx: &Context<'_>) -> Option<(&'static str, String)> {
-    colored_noise::switching_holds(ctx)
+    colored_noise::switching_holds(ctx, true)
         .map(|d| ("colored-noise", d))
         .or_else(|| settling::settling_holds(ctx, settling::Decay::Significant).map(|d| ("settling", d)))
         .or_else(|| drift::drifting_holds(ctx).map(|d| ("drift", d)))
