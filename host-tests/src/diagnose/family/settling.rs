@@ -321,8 +321,8 @@ mod tests {
     fn holds_that_move_without_slowing_are_offered_no_transient() {
         // A random walk moves each hold's first third against its last (the moduli settle by that
         // test) but not more in the first half than in the second: a pose-level transient toward
-        // the previous pose would be a regressor fitting the walk's pose means (two Python
-        // development noises, a flicker and a walk of 15 poses, were named settling so).
+        // the previous pose would be a regressor fitting the walk's pose means (a flicker noise of 15
+        // poses, blindgen4 138, was named settling so).
         let mut asked = 0;
         for seed in 1..=8 {
             let table = to_table(&generate(&random_scenario(EffectClass::ColoredNoise, seed)), "sim").unwrap();

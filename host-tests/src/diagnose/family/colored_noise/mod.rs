@@ -803,8 +803,8 @@ mod tests {
     fn a_telegraph_noise_whose_jumps_do_not_cut_the_holds_is_named_from_the_steps_inside_them() {
         // Jumps of 2 mg every 30 s on average on x and y, 0.5 mg white noise at 50 Hz, 40 holds of
         // 8 s: the pose finder does not cut the holds at the jumps, only some holds move (no noise
-        // that moves every hold alike), and the verdict was `unexplained` ("within poses: 3.6-6.5x
-        // white noise"; 8 of 8 seeds, and 17 of 32 logs over four such settings). The largest step
+        // that moves every hold alike), and the verdict was `unexplained` ("within poses: 3.3-6.5x
+        // white noise"; 7 of seeds 1-8, and 17 of 32 logs over four such settings). The largest step
         // inside each hold, one size per sensor axis, is the two-level noise.
         for seed in 1..=3 {
             let d = diagnose(
