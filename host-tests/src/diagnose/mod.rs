@@ -85,6 +85,7 @@
 mod family;
 mod gap;
 mod holds;
+mod jump;
 mod locate;
 pub(crate) mod math;
 mod probe;

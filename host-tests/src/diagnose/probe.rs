@@ -9,6 +9,7 @@ use std::ops::Range;
 use super::SEGMENTS;
 use super::family::{Context, Variant};
 use super::gap::PoseData;
+use super::jump::{MIN_SEGMENT_READINGS, jump_in_hold};
 use super::math::{V3, dot, kept_design, lstsq_with_covariance};
 use super::report::Probe;
 use crate::vec3::{cross, norm};
@@ -56,7 +57,7 @@ fn bias_step(ctx: &Context<'_>) -> Vec<Variant> {
     let between = (STEP_SIDE_POSES..=n.saturating_sub(STEP_SIDE_POSES)).map(|first_after| (first_after, 1.0));
     let inside = (STEP_SIDE_POSES..n.saturating_sub(STEP_SIDE_POSES)).filter_map(|p| {
         let (y, var) = hold_deviations(ctx, p)?;
-        let jump = jump_in_hold(&y, var);
+        let jump = jump_in_hold(&[y], [var]);
         (jump.over_line >= JUMP_SEARCH_CHI2).then_some((p, jump.share_after))
     });
     let places: Vec<(usize, f64)> = between.chain(inside).collect();
@@ -118,8 +119,9 @@ fn step_seen_in_holds(ctx: &Context<'_>, rows: &[Vec<f64>]) -> bool {
 fn jump_inside_hold(ctx: &Context<'_>, p: usize, step: V3) -> bool {
     let Some((y, var)) = hold_deviations(ctx, p) else { return false };
     let expected = dot(ctx.directions()[p], step);
-    let jump = jump_in_hold(&y, var);
-    let agrees = jump.size * expected > 0.0 && (0.5..=2.0).contains(&(jump.size / expected));
+    let jump = jump_in_hold(&[y], [var]);
+    let size = jump.size[0];
+    let agrees = size * expected > 0.0 && (0.5..=2.0).contains(&(size / expected));
     agrees && jump.over_line >= JUMP_SEARCH_CHI2
 }
 
@@ -128,45 +130,6 @@ fn jump_inside_hold(ctx: &Context<'_>, p: usize, step: V3) -> bool {
 /// [`jump_in_hold`] searches `4 SEGMENTS - 1`.
 const JUMP_SEARCH_CHI2: f64 = 6.3;
 
-/// The jump that fits a hold's segment deviations best.
-struct HoldJump {
-    /// By how much less residual chi-square a constant and the jump leave than a line in time.
-    over_line: f64,
-    /// The jump's size (output unit).
-    size: f64,
-    /// The share of the hold's samples after the jump.
-    share_after: f64,
-}
-
-/// The jump in `y` (segment deviations of variance `var`) on a quarter-segment grid that fits best:
-/// the segment it falls in takes its share.
-fn jump_in_hold(y: &[f64; SEGMENTS], var: f64) -> HoldJump {
-    let share = |j: usize, at: f64| (j as f64 + 1.0 - at).clamp(0.0, 1.0);
-    let (line, _) = shape_fit(y, var, |j| j as f64);
-    let first = HoldJump { over_line: f64::NEG_INFINITY, size: 0.0, share_after: 1.0 };
-    (1..4 * SEGMENTS).fold(first, |best, q| {
-        let at = q as f64 / 4.0;
-        let (chi2, size) = shape_fit(y, var, |j| share(j, at));
-        let over_line = line - chi2;
-        if over_line > best.over_line {
-            HoldJump { over_line, size, share_after: 1.0 - at / SEGMENTS as f64 }
-        } else {
-            best
-        }
-    })
-}
-
-/// Least squares of `y` (variance `var`) on a constant and one shape over the segments: the
-/// residual chi-square and the shape's coefficient.
-fn shape_fit(y: &[f64; SEGMENTS], var: f64, shape: impl Fn(usize) -> f64) -> (f64, f64) {
-    let n = SEGMENTS as f64;
-    let (sx, sy) = ((0..SEGMENTS).map(&shape).sum::<f64>() / n, y.iter().sum::<f64>() / n);
-    let sxx: f64 = (0..SEGMENTS).map(|j| (shape(j) - sx).powi(2)).sum();
-    let sxy: f64 = (0..SEGMENTS).map(|j| (shape(j) - sx) * (y[j] - sy)).sum();
-    let c = if sxx > 0.0 { sxy / sxx } else { 0.0 };
-    ((0..SEGMENTS).map(|j| (y[j] - sy - c * (shape(j) - sx)).powi(2)).sum::<f64>() / var, c)
-}
-
 /// Pose `p`'s segment means as modulus deviations from its mean (output unit) and their variance
 /// under white noise; `None` with too few samples per segment.
 fn hold_deviations(ctx: &Context<'_>, p: usize) -> Option<([f64; SEGMENTS], f64)> {
@@ -174,7 +137,7 @@ fn hold_deviations(ctx: &Context<'_>, p: usize) -> Option<([f64; SEGMENTS], f64)
     let kt = m.model.kt_times(m.directions[p]);
     let var: f64 = (0..3).map(|a| kt[a] * kt[a] * m.white[a]).sum::<f64>() / pose.seg_n as f64;
     let y = std::array::from_fn(|j| dot(kt, std::array::from_fn(|a| pose.seg[j][a] - pose.mean[a])));
-    (pose.seg_n >= 4 && var > 0.0).then_some((y, var))
+    (pose.seg_n >= MIN_SEGMENT_READINGS && var > 0.0).then_some((y, var))
 }
 
 /// Fewest poses on each side of a probed bias step.

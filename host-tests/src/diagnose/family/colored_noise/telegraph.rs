@@ -4,10 +4,12 @@
 //! that moves or settles jumps along a change of gravity's direction, which follows the pose. Two
 //! pieces are of one hold when the readings between them sit at one level or the other
 //! ([`switch_between`]): a telegraph's levels may lie farther apart than one hold may move. A jump
-//! the pose finder did not cut a hold at is the largest step inside the piece ([`jump_inside`]).
+//! the pose finder did not cut a hold at is the largest jump inside the piece ([`jump_inside`]).
 
+use crate::diagnose::SEGMENTS;
 use crate::diagnose::family::Context;
 use crate::diagnose::gap::PoseData;
+use crate::diagnose::jump::{MIN_SEGMENT_READINGS, jump_in_hold};
 use crate::diagnose::math::{V3, median, norm};
 use crate::vec3::sub;
 
@@ -64,44 +66,19 @@ fn jumps_in_holds(ctx: &Context<'_>) -> Vec<V3> {
         .collect()
 }
 
-/// Least share of a piece on either side of a jump found inside it ([`jump_inside`]).
-const JUMP_INSIDE_EDGE: f64 = 0.1;
-
-/// The largest step inside one piece: the split of its readings into a first and a second part
-/// (each at least [`JUMP_INSIDE_EDGE`] of it) whose means differ the most in white-noise standard
-/// deviations, when it is beyond [`SIGNIFICANT_JUMP_Z`] and explains more of the readings than a
-/// line through them does (a telegraph's level changes at once; a drift or a slow settling moves
-/// along). The step, input unit.
+/// The largest jump inside one piece ([`jump_in_hold`] on its segment means, per sensor axis at one
+/// place), when it lies beyond [`SIGNIFICANT_JUMP_Z`] and fits the segments better than a line in
+/// time does (a telegraph's level changes at once; a drift or a slow settling moves along). The
+/// jump, input unit.
 fn jump_inside(ctx: &Context<'_>, p: &PoseData) -> Option<V3> {
-    let rows = ctx.table.samples.get(p.rows.clone())?;
-    let n = rows.len();
-    let edge = ((n as f64 * JUMP_INSIDE_EDGE) as usize).max(2);
-    if n < 2 * edge + 1 {
+    let var: V3 = ctx.m.white.map(|w| w / p.seg_n as f64);
+    if p.seg_n < MIN_SEGMENT_READINGS || var.iter().any(|v| !(*v > 0.0)) {
         return None;
     }
-    let mean: V3 = std::array::from_fn(|a| rows.iter().map(|s| s[a]).sum::<f64>() / n as f64);
-    let per_reading: V3 = ctx.m.white.map(|w| 1.0 / w.max(f64::MIN_POSITIVE));
-    // Chi-square (white noise) of a step after k readings: the difference of the two parts' means
-    // over its standard deviation, summed over the axes.
-    let mut head = [0.0; 3];
-    let mut best: Option<(f64, V3)> = None;
-    for (i, s) in rows.iter().enumerate().take(n - edge) {
-        (0..3).for_each(|a| head[a] += s[a] - mean[a]);
-        let (k, rest) = ((i + 1) as f64, (n - i - 1) as f64);
-        let step: V3 = std::array::from_fn(|a| -head[a] / k - head[a] / rest);
-        let chi2: f64 = (0..3).map(|a| step[a] * step[a] * per_reading[a] * k * rest / n as f64).sum();
-        if i + 1 >= edge && best.is_none_or(|(c, _)| chi2 > c) {
-            best = Some((chi2, step));
-        }
-    }
-    let (chi2, step) = best?;
-    // ... and of a line in the row index.
-    let centre = (n as f64 - 1.0) / 2.0;
-    let spread: f64 = (0..n).map(|i| (i as f64 - centre).powi(2)).sum();
-    let slope_sum =
-        |a: usize| rows.iter().enumerate().map(|(i, s)| (i as f64 - centre) * (s[a] - mean[a])).sum::<f64>();
-    let line: f64 = (0..3).map(|a| slope_sum(a).powi(2) / spread * per_reading[a]).sum();
-    (chi2 >= SIGNIFICANT_JUMP_Z * SIGNIFICANT_JUMP_Z && chi2 > line).then_some(step)
+    let y: [[f64; SEGMENTS]; 3] = std::array::from_fn(|a| std::array::from_fn(|j| p.seg[j][a] - p.mean[a]));
+    let jump = jump_in_hold(&y, var);
+    let significant = jump.over_constant >= SIGNIFICANT_JUMP_Z * SIGNIFICANT_JUMP_Z;
+    (significant && jump.over_line > 0.0).then_some(jump.size)
 }
 
 /// The holds switch between two levels: at least [`MIN_JUMPS`] jumps inside holds, and on each
