@@ -384,11 +384,10 @@ impl Detector {
         }
         let limit = (STILL_SCATTER_MAX_G * gravity).powi(2);
         let still: Vec<bool> = acc.poses.iter().map(|p| p.variance.iter().all(|v| f64::from(*v) <= limit)).collect();
-        let mut keep = still.iter().copied();
-        acc.poses.retain(|_| keep.next().unwrap_or(true));
-        let mut keep = still.iter().copied();
-        acc.spans.retain(|_| keep.next().unwrap_or(true));
-        let moved = still.iter().filter(|s| !**s).count();
+        let moved: Vec<bool> = still.iter().map(|s| !s).collect();
+        remove_marked(&mut acc.poses, &moved);
+        remove_marked(&mut acc.spans, &moved);
+        let moved = moved.iter().filter(|m| **m).count();
         acc.rejections.moving = acc.rejections.moving.saturating_add(u32::try_from(moved).unwrap_or(u32::MAX));
     }
 }
@@ -618,6 +617,13 @@ impl Run<'_> {
             mean_change_widened: self.detector.mean_change_widened,
         })
     }
+}
+
+/// Removes the items of `items` marked in `marked` (one mark per item, in order; items beyond the
+/// marks stay): the poses and their parallel lists (spans, the library's poses) lose the same ones.
+pub(crate) fn remove_marked<T>(items: &mut Vec<T>, marked: &[bool]) {
+    let mut marks = marked.iter();
+    items.retain(|_| !marks.next().copied().unwrap_or(false));
 }
 
 #[cfg(test)]

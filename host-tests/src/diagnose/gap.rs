@@ -341,9 +341,11 @@ fn read_poses(table: &Table, found_with: &AccumulateOptions) -> Result<Found, Re
     let mut lib_poses = acc.poses;
     let tails_trimmed = trim_move_tails(table, &mut poses, &mut lib_poses, rate);
     let mean_change_widened = acc.mean_change_widened;
-    let moving_fragments = match mean_change_widened {
-        Some(_) => drop_moving_fragments(table, &mut poses, &mut lib_poses, rate, min_poses),
-        None => 0,
+    // Moving fragments are looked for only where the still test was widened for correlated readings.
+    let moving_fragments = if mean_change_widened.is_some() {
+        drop_moving_fragments(table, &mut poses, &mut lib_poses, rate, min_poses)
+    } else {
+        0
     };
     Ok(Found { lib_poses, poses, short, tails_trimmed, moving_fragments, rate, mean_change_widened, fragmented })
 }
@@ -395,10 +397,8 @@ fn drop_moving_fragments(
     if count == 0 || count as f64 > FRAGMENTS_AT_MOST * poses.len() as f64 || poses.len() - count < min_poses {
         return 0;
     }
-    let mut keep = moving.iter().map(|m| !m);
-    poses.retain(|_| keep.next().unwrap_or(true));
-    let mut keep = moving.iter().map(|m| !m);
-    lib_poses.retain(|_| keep.next().unwrap_or(true));
+    crate::poses::remove_marked(poses, &moving);
+    crate::poses::remove_marked(lib_poses, &moving);
     count
 }
 

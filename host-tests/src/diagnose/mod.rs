@@ -407,8 +407,9 @@ fn measure(table: &Table, opts: &DiagnoseOptions) -> Result<Step1, DiagnoseError
 /// their jumps were `unexplained` once a hold cut in pieces counted as fragmented
 /// ([`crate::poses::split_holds`]).
 fn switches_in_pieces(table: &Table, opts: &DiagnoseOptions, m: &gap::Measured) -> bool {
-    family::Context::new(table, m, opts)
-        .is_some_and(|ctx| family::colored_noise::switching_holds(&ctx, false).is_some())
+    family::Context::new(table, m, opts).is_some_and(|ctx| {
+        family::colored_noise::switching_holds(&ctx, family::colored_noise::Jumps::BetweenPieces).is_some()
+    })
 }
 
 /// Step 1 on the poses found with the first of `attempts` that calibrates them (or answers them

@@ -248,7 +248,7 @@ pub(crate) fn common_scale_effect(f: V3, x: f64, power: usize) -> Vec<V3> {
 /// wanders alike; motion when they move in the tremor band,
 /// whether every hold moves alike (a hand) or a few (a passing truck); with what supports it.
 pub(crate) fn from_holds(ctx: &Context<'_>) -> Option<(&'static str, String)> {
-    colored_noise::switching_holds(ctx, true)
+    colored_noise::switching_holds(ctx, colored_noise::Jumps::AlsoInsidePieces)
         .map(|d| ("colored-noise", d))
         .or_else(|| settling::settling_holds(ctx, settling::Decay::Significant).map(|d| ("settling", d)))
         .or_else(|| drift::drifting_holds(ctx).map(|d| ("drift", d)))

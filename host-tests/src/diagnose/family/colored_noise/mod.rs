@@ -10,7 +10,7 @@ mod allan;
 pub(crate) mod coherent;
 mod telegraph;
 
-pub(crate) use telegraph::switching_holds;
+pub(crate) use telegraph::{Jumps, switching_holds};
 
 use std::ops::Range;
 

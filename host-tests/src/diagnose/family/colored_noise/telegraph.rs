@@ -81,13 +81,22 @@ fn jump_inside(ctx: &Context<'_>, p: &PoseData) -> Option<V3> {
     (significant && jump.over_line > 0.0).then_some(jump.size)
 }
 
-/// The holds switch between two levels: at least [`MIN_JUMPS`] jumps inside holds, and on each
-/// sensor axis the jumps that take part in it mostly of one size. With `inside_pieces` the largest
-/// step inside each piece counts too ([`jump_inside`]): a telegraph's jump the pose finder did not
-/// cut the hold at. The description, or `None`.
-pub(crate) fn switching_holds(ctx: &Context<'_>, inside_pieces: bool) -> Option<String> {
+/// Which jumps of the bias [`switching_holds`] counts.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Jumps {
+    /// Between the pieces the pose finder cut a hold into.
+    BetweenPieces,
+    /// Those, and the largest step inside each piece ([`jump_inside`]): a telegraph's jump the pose
+    /// finder did not cut the hold at.
+    AlsoInsidePieces,
+}
+
+/// The holds switch between two levels: at least [`MIN_JUMPS`] jumps inside holds (those `counted`),
+/// and on each sensor axis the jumps that take part in it mostly of one size. The description, or
+/// `None`.
+pub(crate) fn switching_holds(ctx: &Context<'_>, counted: Jumps) -> Option<String> {
     let mut jumps = jumps_in_holds(ctx);
-    if inside_pieces {
+    if counted == Jumps::AlsoInsidePieces {
         jumps.extend(ctx.poses.iter().filter_map(|p| jump_inside(ctx, p)));
     }
     if jumps.len() < MIN_JUMPS {
