@@ -383,11 +383,10 @@ impl Detector {
             return;
         }
         let limit = (STILL_SCATTER_MAX_G * gravity).powi(2);
-        let still: Vec<bool> = acc.poses.iter().map(|p| p.variance.iter().all(|v| f64::from(*v) <= limit)).collect();
-        let moved: Vec<bool> = still.iter().map(|s| !s).collect();
-        remove_marked(&mut acc.poses, &moved);
-        remove_marked(&mut acc.spans, &moved);
-        let moved = moved.iter().filter(|m| **m).count();
+        let moving: Vec<bool> = acc.poses.iter().map(|p| !p.variance.iter().all(|v| f64::from(*v) <= limit)).collect();
+        remove_marked(&mut acc.poses, &moving);
+        remove_marked(&mut acc.spans, &moving);
+        let moved = moving.iter().filter(|m| **m).count();
         acc.rejections.moving = acc.rejections.moving.saturating_add(u32::try_from(moved).unwrap_or(u32::MAX));
     }
 }
@@ -633,6 +632,13 @@ mod tests {
 
     fn library_minimum() -> AccumulateOptions {
         AccumulateOptions { min_pose_s: 0.0, ..AccumulateOptions::default() }
+    }
+
+    #[test]
+    fn marked_items_are_removed_and_unmarked_ones_kept_in_order() {
+        let mut items = vec![10, 11, 12, 13, 14];
+        remove_marked(&mut items, &[true, false, true, false]);
+        assert_eq!(items, [11, 13, 14], "an item beyond the marks stays");
     }
 
     #[test]
