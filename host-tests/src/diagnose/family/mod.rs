@@ -168,6 +168,13 @@ pub(crate) trait Family {
         standard_evaluation(self, ctx)
     }
 
+    /// The stacked fit of the pose means and the holds ([`joint`]) is tried only when the holds move
+    /// significantly: a shape of time fitted to holds that barely move fits their noise, and a
+    /// drift's many shapes then predict some withheld pose means by chance.
+    fn joint_needs_moving_holds(&self) -> bool {
+        true
+    }
+
     /// The family predicts the withheld poses' values (a drift, a non-linearity...): stronger evidence
     /// than a model of their spread only (a noise model), which the verdict names only when no
     /// value-predicting family explains.
@@ -195,19 +202,23 @@ pub(crate) fn evaluation_of<F: Family + ?Sized>(
         Some(f) => ctx.evaluate_fitted(family.name(), f),
         None => ctx.not_testable(family.name()),
     };
-    let Some(w) = ctx.within.as_ref().filter(|w| w.significant) else { return (e, named) };
+    let Some(w) = ctx.within.as_ref().filter(|w| w.significant || !family.joint_needs_moving_holds()) else {
+        return (e, named);
+    };
     let variants = family.within_variants(ctx, w);
     let stacked = joint::best(ctx, w, &variants);
-    let (variants, disagreements): (Vec<WithinVariant>, Vec<f64>) = variants
-        .into_iter()
-        .map(|v| {
-            let disagreement = ctx.channel_disagreement(w, &v).unwrap_or(f64::NAN);
-            (v, disagreement)
-        })
-        .filter(|(_, x)| !(*x > CHANNELS_DISAGREE))
-        .unzip();
-    if let Some((i, fit)) = w.best_of(variants) {
-        ctx.add_within(&mut e, w, fit, disagreements[i]);
+    if w.significant {
+        let (variants, disagreements): (Vec<WithinVariant>, Vec<f64>) = variants
+            .into_iter()
+            .map(|v| {
+                let disagreement = ctx.channel_disagreement(w, &v).unwrap_or(f64::NAN);
+                (v, disagreement)
+            })
+            .filter(|(_, x)| !(*x > CHANNELS_DISAGREE))
+            .unzip();
+        if let Some((i, fit)) = w.best_of(variants) {
+            ctx.add_within(&mut e, w, fit, disagreements[i]);
+        }
     }
     if let Some(fit) = stacked
         && let Some(detail) = joint::add(ctx, &mut e, fit)

@@ -344,6 +344,14 @@ impl Family for Temperature {
         within_variants(ctx, within)
     }
 
+    /// The thermometer, measured on its own, shapes the effect in the holds and in the pose means
+    /// alike: holds that move too little to be significant still pin its coefficients with the
+    /// pose means, which then judge them on the withheld poses. A temperature effect of 12 poses
+    /// (3 degrees of freedom beside the calibration) is tested no other way.
+    fn joint_needs_moving_holds(&self) -> bool {
+        false
+    }
+
     fn variants(&self, ctx: &Context<'_>) -> Vec<Variant> {
         graded_variants(ctx).into_iter().map(|(v, _)| v).collect()
     }
