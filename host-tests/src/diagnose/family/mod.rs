@@ -208,17 +208,7 @@ pub(crate) fn evaluation_of<F: Family + ?Sized>(
     let variants = family.within_variants(ctx, w);
     let stacked = joint::best(ctx, w, &variants);
     if w.significant {
-        let (variants, disagreements): (Vec<WithinVariant>, Vec<f64>) = variants
-            .into_iter()
-            .map(|v| {
-                let disagreement = ctx.channel_disagreement(w, &v).unwrap_or(f64::NAN);
-                (v, disagreement)
-            })
-            .filter(|(_, x)| !(*x > CHANNELS_DISAGREE))
-            .unzip();
-        if let Some((i, fit)) = w.best_of(variants) {
-            ctx.add_within(&mut e, w, fit, disagreements[i]);
-        }
+        add_within_credit(ctx, &mut e, w, variants);
     }
     if let Some(fit) = stacked
         && let Some(detail) = joint::add(ctx, &mut e, fit)
@@ -226,6 +216,23 @@ pub(crate) fn evaluation_of<F: Family + ?Sized>(
         named = Some(detail);
     }
     (e, named)
+}
+
+/// Credits `e` with the best of `variants` on the holds alone (the within-pose channel), among those
+/// whose coefficients from the holds and from the pose means do not disagree beyond
+/// [`CHANNELS_DISAGREE`].
+fn add_within_credit(ctx: &Context<'_>, e: &mut Evaluation, w: &Within, variants: Vec<WithinVariant>) {
+    let (variants, disagreements): (Vec<WithinVariant>, Vec<f64>) = variants
+        .into_iter()
+        .map(|v| {
+            let disagreement = ctx.channel_disagreement(w, &v).unwrap_or(f64::NAN);
+            (v, disagreement)
+        })
+        .filter(|(_, x)| !(*x > CHANNELS_DISAGREE))
+        .unzip();
+    if let Some((i, fit)) = w.best_of(variants) {
+        ctx.add_within(e, w, fit, disagreements[i]);
+    }
 }
 
 /// The calibrated-reading change per parameter of a bias per axis and/or a relative scale per axis

@@ -402,8 +402,26 @@ fn graded_variants(ctx: &Context<'_>) -> Vec<(Variant, Grade)> {
 
 #[cfg(test)]
 mod tests {
+    use crate::csvio::Table;
     use crate::diagnose::{DiagnoseOptions, diagnose, gap};
     use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
+
+    /// A clean simulated log of the own simulator and the times of its rows, s.
+    fn clean_log(seed: u64) -> (Table, Vec<f64>) {
+        let table = to_table(&generate(&random_scenario(EffectClass::None, seed)), "sim").unwrap();
+        let times = (0..table.samples.len()).map(|i| gap::row_time(&table, i, 100.0)).collect();
+        (table, times)
+    }
+
+    /// Adds a bias of `bias_mg(t)` mg along one sensor direction to every row (`times` its times, s).
+    fn add_bias_mg(table: &mut Table, times: &[f64], bias_mg: impl Fn(f64) -> f64) {
+        let mg = table.median_magnitude * 1e-3;
+        let direction = [0.48, -0.6, 0.64];
+        for (sample, t) in table.samples.iter_mut().zip(times) {
+            let bias = bias_mg(*t) * mg;
+            *sample = std::array::from_fn(|a| sample[a] + direction[a] * bias);
+        }
+    }
 
     #[test]
     fn a_drift_under_a_thermometer_creeping_a_fifth_of_a_kelvin_is_not_temperature() {
@@ -412,15 +430,9 @@ mod tests {
         // that is 7.5 mg/K, beyond any MEMS part's offset coefficient: the thermometer only stands
         // in for time.
         for seed in [3, 4] {
-            let mut table = to_table(&generate(&random_scenario(EffectClass::None, seed)), "sim").unwrap();
-            let mg = table.median_magnitude * 1e-3;
-            let times: Vec<f64> = (0..table.samples.len()).map(|i| gap::row_time(&table, i, 100.0)).collect();
+            let (mut table, times) = clean_log(seed);
             let end = times[times.len() - 1];
-            let direction = [0.48, -0.6, 0.64];
-            for (sample, t) in table.samples.iter_mut().zip(&times) {
-                let bias = 1.5 * t / end * mg;
-                *sample = std::array::from_fn(|a| sample[a] + direction[a] * bias);
-            }
+            add_bias_mg(&mut table, &times, |t| 1.5 * t / end);
             table.temps_c = Some(times.iter().map(|t| ((27.8 + 0.2 * t / end) * 16.0).round() / 16.0).collect());
             let d = diagnose(&table, &DiagnoseOptions::DEFAULT).unwrap();
             assert_eq!(d.verdict, "drift", "seed {seed}: {}", d.to_text());
@@ -432,15 +444,9 @@ mod tests {
         // As above with a drift of 0.6 mg under a thermometer creeping by 0.3 K: through it 2 mg/K,
         // within a MEMS part's limits, but a thermometer moving so little stands in for time.
         for seed in [3, 4] {
-            let mut table = to_table(&generate(&random_scenario(EffectClass::None, seed)), "sim").unwrap();
-            let mg = table.median_magnitude * 1e-3;
-            let times: Vec<f64> = (0..table.samples.len()).map(|i| gap::row_time(&table, i, 100.0)).collect();
+            let (mut table, times) = clean_log(seed);
             let end = times[times.len() - 1];
-            let direction = [0.48, -0.6, 0.64];
-            for (sample, t) in table.samples.iter_mut().zip(&times) {
-                let bias = 0.6 * t / end * mg;
-                *sample = std::array::from_fn(|a| sample[a] + direction[a] * bias);
-            }
+            add_bias_mg(&mut table, &times, |t| 0.6 * t / end);
             table.temps_c = Some(times.iter().map(|t| ((27.8 + 0.3 * t / end) * 16.0).round() / 16.0).collect());
             let d = diagnose(&table, &DiagnoseOptions::DEFAULT).unwrap();
             let temperature = d.candidates.iter().find(|c| c.effect == "temperature").unwrap();
@@ -456,14 +462,8 @@ mod tests {
         // about 22.9 (every tenth reading 22). A lag started at the first reading rises from 22 to
         // 22.9 over 100 s: the part's settling, as a warm-up it never had.
         for seed in [3, 4] {
-            let mut table = to_table(&generate(&random_scenario(EffectClass::None, seed)), "sim").unwrap();
-            let mg = table.median_magnitude * 1e-3;
-            let times: Vec<f64> = (0..table.samples.len()).map(|i| gap::row_time(&table, i, 100.0)).collect();
-            let direction = [0.48, -0.6, 0.64];
-            for (sample, t) in table.samples.iter_mut().zip(&times) {
-                let bias = 0.8 * (1.0 - (-t / 100.0).exp()) * mg;
-                *sample = std::array::from_fn(|a| sample[a] + direction[a] * bias);
-            }
+            let (mut table, times) = clean_log(seed);
+            add_bias_mg(&mut table, &times, |t| 0.8 * (1.0 - (-t / 100.0).exp()));
             let reading = |(i, t): (usize, &f64)| if *t < 0.2 || i % 10 == 0 { 22.0 } else { 23.0 };
             table.temps_c = Some(times.iter().enumerate().map(reading).collect());
             let d = diagnose(&table, &DiagnoseOptions::DEFAULT).unwrap();
@@ -477,15 +477,9 @@ mod tests {
         // at 0.4 mg/K along one sensor direction. The thermometer on the board sees the die through
         // a 25 s lag (1/16 K steps): the die runs ahead of it.
         for seed in [5, 8] {
-            let mut table = to_table(&generate(&random_scenario(EffectClass::None, seed)), "sim").unwrap();
-            let mg = table.median_magnitude * 1e-3;
+            let (mut table, times) = clean_log(seed);
             let die = |t: f64| 20.0 - 10.0 * (-t / 200.0).exp();
-            let direction = [0.48, -0.6, 0.64];
-            let times: Vec<f64> = (0..table.samples.len()).map(|i| gap::row_time(&table, i, 100.0)).collect();
-            for (sample, t) in table.samples.iter_mut().zip(&times) {
-                let bias = 0.4 * (die(*t) - 10.0) * mg;
-                *sample = std::array::from_fn(|a| sample[a] + direction[a] * bias);
-            }
+            add_bias_mg(&mut table, &times, |t| 0.4 * (die(t) - 10.0));
             let (mut board, mut last_t) = (die(0.0), 0.0);
             let mut thermometer = Vec::with_capacity(times.len());
             for t in &times {
@@ -505,15 +499,9 @@ mod tests {
     fn a_warm_up_read_by_a_one_degree_thermometer_is_temperature() {
         // A board warming by 12 degC (time constant 300 s); its bias follows the die temperature at
         // 0.4 mg/K along one sensor direction; the thermometer reads whole degrees.
-        let mut table = to_table(&generate(&random_scenario(EffectClass::None, 8)), "sim").unwrap();
-        let mg = table.median_magnitude * 1e-3;
+        let (mut table, times) = clean_log(8);
         let die = |t: f64| 20.0 + 12.0 * (1.0 - (-t / 300.0).exp());
-        let direction = [0.48, -0.6, 0.64];
-        let times: Vec<f64> = (0..table.samples.len()).map(|i| gap::row_time(&table, i, 100.0)).collect();
-        for (sample, t) in table.samples.iter_mut().zip(&times) {
-            let bias = 0.4 * (die(*t) - 20.0) * mg;
-            *sample = std::array::from_fn(|a| sample[a] + direction[a] * bias);
-        }
+        add_bias_mg(&mut table, &times, |t| 0.4 * (die(t) - 20.0));
         table.temps_c = Some(times.iter().map(|t| die(*t).round()).collect());
         let d = diagnose(&table, &DiagnoseOptions::DEFAULT).unwrap();
         let temperature = d.candidates.iter().find(|c| c.effect == "temperature").unwrap();
