@@ -223,13 +223,15 @@ const LAG_START_S: f64 = 1.0;
 fn lagged_temps(ctx: &Context<'_>, tau: f64) -> Option<Vec<f64>> {
     let temps = ctx.table.temps_c.as_ref()?;
     let mut lagged = Vec::with_capacity(temps.len());
-    let mut last_t = row_time(ctx.table, 0, ctx.m.rate);
-    let start =
-        temps.iter().enumerate().take_while(|(i, _)| row_time(ctx.table, *i, ctx.m.rate) - last_t < LAG_START_S);
-    let mut state = median(&start.map(|(_, t)| *t).collect::<Vec<_>>());
-    if !state.is_finite() {
-        state = *temps.first()?;
-    }
+    // Row times count from the first row.
+    let first_second: Vec<f64> = temps
+        .iter()
+        .enumerate()
+        .take_while(|(i, _)| row_time(ctx.table, *i, ctx.m.rate) < LAG_START_S)
+        .map(|(_, t)| *t)
+        .collect();
+    let mut state = Some(median(&first_second)).filter(|m| m.is_finite()).or(temps.first().copied())?;
+    let mut last_t = 0.0;
     for (i, t_c) in temps.iter().enumerate() {
         let t = row_time(ctx.table, i, ctx.m.rate);
         let alpha = if tau > 0.0 { 1.0 - (-(t - last_t).max(0.0) / tau).exp() } else { 1.0 };
