@@ -405,7 +405,7 @@ fn graded_variants(ctx: &Context<'_>) -> Vec<(Variant, Grade)> {
 #[cfg(test)]
 mod tests {
     use crate::csvio::Table;
-    use crate::diagnose::{DiagnoseOptions, diagnose, gap};
+    use crate::diagnose::{DiagnoseOptions, Diagnosis, diagnose, gap};
     use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
 
     /// A clean simulated log of the own simulator and the times of its rows, s.
@@ -425,6 +425,16 @@ mod tests {
         }
     }
 
+    /// The diagnosis of a clean log with a bias ramping by `drift_mg` along one sensor direction over
+    /// the log, under a die thermometer (1/16 K steps) creeping by `creep_k` from 27.8 degC.
+    fn drift_under_creeping_thermometer(seed: u64, drift_mg: f64, creep_k: f64) -> Diagnosis {
+        let (mut table, times) = clean_log(seed);
+        let end = times[times.len() - 1];
+        add_bias_mg(&mut table, &times, |t| drift_mg * t / end);
+        table.temps_c = Some(times.iter().map(|t| ((27.8 + creep_k * t / end) * 16.0).round() / 16.0).collect());
+        diagnose(&table, &DiagnoseOptions::DEFAULT).unwrap()
+    }
+
     #[test]
     fn a_drift_under_a_thermometer_creeping_a_fifth_of_a_kelvin_is_not_temperature() {
         // A warmed-up part: its bias ramps by 1.5 mg along one sensor direction over the log while
@@ -432,11 +442,7 @@ mod tests {
         // that is 7.5 mg/K, beyond any MEMS part's offset coefficient: the thermometer only stands
         // in for time.
         for seed in [3, 4] {
-            let (mut table, times) = clean_log(seed);
-            let end = times[times.len() - 1];
-            add_bias_mg(&mut table, &times, |t| 1.5 * t / end);
-            table.temps_c = Some(times.iter().map(|t| ((27.8 + 0.2 * t / end) * 16.0).round() / 16.0).collect());
-            let d = diagnose(&table, &DiagnoseOptions::DEFAULT).unwrap();
+            let d = drift_under_creeping_thermometer(seed, 1.5, 0.2);
             assert_eq!(d.verdict, "drift", "seed {seed}: {}", d.to_text());
         }
     }
@@ -446,11 +452,7 @@ mod tests {
         // As above with a drift of 0.6 mg under a thermometer creeping by 0.3 K: through it 2 mg/K,
         // within a MEMS part's limits, but a thermometer moving so little stands in for time.
         for seed in [3, 4] {
-            let (mut table, times) = clean_log(seed);
-            let end = times[times.len() - 1];
-            add_bias_mg(&mut table, &times, |t| 0.6 * t / end);
-            table.temps_c = Some(times.iter().map(|t| ((27.8 + 0.3 * t / end) * 16.0).round() / 16.0).collect());
-            let d = diagnose(&table, &DiagnoseOptions::DEFAULT).unwrap();
+            let d = drift_under_creeping_thermometer(seed, 0.6, 0.3);
             let temperature = d.candidates.iter().find(|c| c.effect == "temperature").unwrap();
             assert!(!temperature.applicable, "seed {seed}: {}", d.to_text());
             assert_ne!(d.verdict, "temperature", "seed {seed}: {}", d.to_text());
