@@ -1,7 +1,7 @@
 //! Scale non-linearity: the reading of axis `a` off by `k2 f_a^2` and/or `k3 f_a^3` (in g units),
 //! per axis or (one parameter, for logs of few poses) with one coefficient for all axes.
 
-use super::{Context, Family, Variant};
+use super::{Context, Family, Fitted, Variant};
 
 pub(crate) struct ScaleNonlinearity;
 
@@ -12,6 +12,12 @@ const AXIS_CHOICE_MIN_DOF: usize = 1;
 impl Family for ScaleNonlinearity {
     fn name(&self) -> &'static str {
         "scale-nonlinearity"
+    }
+
+    /// The orientation alone: where the holds stay still, the square and cube terms per axis (the
+    /// only shape of six columns) are tried exactly determined.
+    fn fit(&self, ctx: &Context<'_>) -> Option<Fitted> {
+        ctx.best_of_orientation(self.variants(ctx))
     }
 
     fn variants(&self, ctx: &Context<'_>) -> Vec<Variant> {
