@@ -178,9 +178,9 @@ mod tests {
         // about 60-200). Left one out, the six terms and the calibration's 9 columns are exactly
         // determined on 15 training poses; the family tries no other shape of six columns and the
         // holds stay still, so the withheld pose is predicted from that one shape (never tried when
-        // a residual degree of freedom was asked of it: every seed `unexplained`, no narrower shape
-        // predicts these poses). Where one pose's exactly determined prediction is too noisy (a
-        // pose nearly alone in its direction) the verdict stays `unexplained`, never another family.
+        // a residual degree of freedom was asked of it: 1 of these 8 logs was named, seed 2 by the
+        // square terms alone). Where one pose's exactly determined prediction is too noisy (a pose
+        // nearly alone in its direction) the verdict stays `unexplained`, never another family.
         let (k2, k3) = ([10.0e-3, -12.5e-3, 15.0e-3], [-15.0e-3, 10.0e-3, 12.5e-3]);
         let mut named = 0;
         for seed in 1..=8 {
