@@ -82,7 +82,7 @@ fn fit_dof(columns: usize) -> usize {
 /// [`fit_dof`] of a parametrisation among `alike` of the same width that a family tries, where a
 /// lone shape may be exactly determined (`exact_alone`: a family of the orientation alone on a log
 /// whose holds stay still, [`Context::best_of_orientation`]). Exactly determined, such a shape
-/// predicts its withheld pose from that one shape, as a one-term shape's is; the chance winners
+/// predicts its withheld pose from that one shape, as a one-term shape does; the chance winners
 /// [`WIDE_FIT_DOF`] guards against are the best of many equally wide fits, and a shape of time,
 /// whose path through the pose means an exactly determined fit can trace (a degree-3 polynomial in
 /// time, 18 columns on 18 training poses, predicted an out-of-catalogue hysteresis's withheld poses

@@ -175,7 +175,7 @@ mod tests {
     #[test]
     fn square_and_cube_terms_per_axis_on_sixteen_still_random_poses_are_named_from_their_exactly_determined_fit() {
         // 16 random orientations, square and cube terms of 10-15 mg at 1 g on every axis (gap ratio
-        // about 60-200). Left one out, the six terms and the calibration's 9 columns are exactly
+        // 90 on the first seed). Left one out, the six terms and the calibration's 9 columns are exactly
         // determined on 15 training poses; the family tries no other shape of six columns and the
         // holds stay still, so the withheld pose is predicted from that one shape (never tried when
         // a residual degree of freedom was asked of it: 1 of these 8 logs was named, seed 2 by the
