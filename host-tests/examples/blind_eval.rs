@@ -86,6 +86,7 @@ fn main() -> Result<(), String> {
     bar.finish_and_clear();
     print!("{}", blind_eval::table(&blind_eval::summarize(&outcomes)));
     print!("\n{}", blind_eval::overall(&outcomes).to_text());
+    print!("{}", blind_eval::by_poses_text(&outcomes));
     let slowest = outcomes.iter().map(|o| (o.seconds, o.samples)).fold((0.0, 0), |a, b| if b.0 > a.0 { b } else { a });
     println!(
         "\nslowest diagnosis: {:.2} s for {} samples (release build: these figures need --release)",

@@ -70,6 +70,8 @@ pub struct Outcome {
     pub seconds: f64,
     /// For a refused log: `calibrate` accepts it (its poses calibrate), which a refusal must not be.
     pub calibrate_accepts: bool,
+    /// Poses the diagnosis found (`None` when refused).
+    pub poses: Option<usize>,
 }
 
 impl Outcome {
@@ -96,6 +98,7 @@ pub fn evaluate(spec: &LogSpec) -> Outcome {
         samples: log.samples.len(),
         seconds: 0.0,
         calibrate_accepts: false,
+        poses: None,
     };
     let table = match read_csv_str(&name, &log.to_csv_string(), &ReadOptions::default()) {
         Ok(t) => t,
@@ -113,6 +116,7 @@ pub fn evaluate(spec: &LogSpec) -> Outcome {
             outcome.verdict = d.verdict.to_string();
             outcome.shrink = d.shrink;
             outcome.right = is_right(expected_verdict(spec.family), d.verdict);
+            outcome.poses = Some(d.poses.len());
         }
         Err(e) => {
             outcome.verdict = format!("refused: {}", e.0);
@@ -234,6 +238,37 @@ pub fn table(summaries: &[FamilySummary]) -> String {
     out
 }
 
+/// Bins of the poses the diagnosis found, first and last in each (`None`: no last): a 9-parameter
+/// calibration leaves 12 poses 3 degrees of freedom, so the catalogue's terms per axis (3-6
+/// parameters) cannot all be tested on withheld poses of the first bins (as the Python sets'
+/// `score.py --by-poses`).
+pub const POSE_BINS: [(usize, Option<usize>); 4] = [(6, Some(13)), (14, Some(16)), (17, Some(24)), (25, None)];
+
+/// Catalogue-family logs clearly visible, and right among them, per [`POSE_BINS`] bin (refused logs
+/// found no poses and are in none).
+pub fn visible_by_poses(outcomes: &[Outcome]) -> [(usize, usize); POSE_BINS.len()] {
+    let named = |o: &&Outcome| matches!(expected_verdict(o.family), Expected::Named(_)) && o.visible();
+    std::array::from_fn(|b| {
+        let (first, last) = POSE_BINS[b];
+        let inside = |o: &&Outcome| o.poses.is_some_and(|n| n >= first && last.is_none_or(|l| n <= l));
+        let bin: Vec<&Outcome> = outcomes.iter().filter(named).filter(inside).collect();
+        (bin.len(), bin.iter().filter(|o| o.right).count())
+    })
+}
+
+/// [`visible_by_poses`] as one line.
+pub fn by_poses_text(outcomes: &[Outcome]) -> String {
+    let bins: Vec<String> = POSE_BINS
+        .iter()
+        .zip(visible_by_poses(outcomes))
+        .map(|((first, last), (n, right))| match last {
+            Some(last) => format!("{first}-{last} poses {right}/{n}"),
+            None => format!("{first}+ poses {right}/{n}"),
+        })
+        .collect();
+    format!("right where clearly visible, by poses found: {}\n", bins.join(", "))
+}
+
 /// The figures the targets are stated in, over every family.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Overall {
@@ -288,5 +323,49 @@ impl Overall {
             self.wrongly_refused,
             self.median_shrink
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A drift or clean log's outcome on `poses` poses (none: refused) at `visibility`.
+    fn outcome(family: Family, poses: Option<usize>, visibility: f64, right: bool) -> Outcome {
+        Outcome {
+            family,
+            shape: String::new(),
+            seed: 0,
+            magnitude: 1.0,
+            visibility,
+            verdict: String::new(),
+            right,
+            shrink: 1.0,
+            samples: 0,
+            seconds: 0.0,
+            calibrate_accepts: false,
+            poses,
+        }
+    }
+
+    #[test]
+    fn visible_catalogue_logs_are_binned_by_the_poses_found_at_the_bins_edges() {
+        let d = Family::Drift;
+        let outcomes = [
+            outcome(d, Some(13), 3.0, false),
+            outcome(d, Some(14), 3.0, true),
+            outcome(d, Some(16), 3.0, false),
+            outcome(d, Some(24), 2.0, true),
+            outcome(d, Some(25), 9.0, true),
+            // Not counted: not clearly visible, a clean log, a refused log.
+            outcome(d, Some(30), 1.9, false),
+            outcome(Family::Clean, Some(30), 5.0, false),
+            outcome(d, None, f64::NAN, false),
+        ];
+        assert_eq!(visible_by_poses(&outcomes), [(1, 0), (2, 1), (1, 1), (1, 1)]);
+        assert_eq!(
+            by_poses_text(&outcomes),
+            "right where clearly visible, by poses found: 6-13 poses 0/1, 14-16 poses 1/2, 17-24 poses 1/1, 25+ poses 1/1\n"
+        );
     }
 }

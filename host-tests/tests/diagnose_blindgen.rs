@@ -33,6 +33,7 @@ fn the_diagnosis_holds_on_logs_it_has_never_seen() {
     println!("{}", blind_eval::table(&blind_eval::summarize(&outcomes)));
     let all = blind_eval::overall(&outcomes);
     println!("{}", all.to_text());
+    println!("{}", blind_eval::by_poses_text(&outcomes));
     assert!(all.clean.0 >= PER_FAMILY as usize && all.clean.1 * 20 <= all.clean.0, "false alarms: {all:?}");
     assert!(all.outside.1 * 10 >= all.outside.0 * 9, "out-of-catalogue logs given a catalogue name: {all:?}");
     assert_eq!(all.wrongly_refused, 0, "a log calibrate accepts was refused");
