@@ -79,6 +79,11 @@ impl Outcome {
     pub fn visible(&self) -> bool {
         self.visibility >= CLEARLY_VISIBLE
     }
+
+    /// A catalogue family's effect, clearly visible: what "right where clearly visible" counts.
+    pub fn visible_catalogue_effect(&self) -> bool {
+        matches!(expected_verdict(self.family), Expected::Named(_)) && self.visible()
+    }
 }
 
 /// Generates, writes, reads back and diagnoses the log of `spec`.
@@ -247,11 +252,10 @@ pub const POSE_BINS: [(usize, Option<usize>); 4] = [(6, Some(13)), (14, Some(16)
 /// Catalogue-family logs clearly visible, and right among them, per [`POSE_BINS`] bin (refused logs
 /// found no poses and are in none).
 pub fn visible_by_poses(outcomes: &[Outcome]) -> [(usize, usize); POSE_BINS.len()] {
-    let named = |o: &&Outcome| matches!(expected_verdict(o.family), Expected::Named(_)) && o.visible();
     std::array::from_fn(|b| {
         let (first, last) = POSE_BINS[b];
         let inside = |o: &&Outcome| o.poses.is_some_and(|n| n >= first && last.is_none_or(|l| n <= l));
-        let bin: Vec<&Outcome> = outcomes.iter().filter(named).filter(inside).collect();
+        let bin: Vec<&Outcome> = outcomes.iter().filter(|o| o.visible_catalogue_effect()).filter(inside).collect();
         (bin.len(), bin.iter().filter(|o| o.right).count())
     })
 }
@@ -286,9 +290,7 @@ pub struct Overall {
 
 /// [`Overall`] of a set of outcomes.
 pub fn overall(outcomes: &[Outcome]) -> Overall {
-    let kind = |o: &&Outcome| expected_verdict(o.family);
-    let named: Vec<&Outcome> = outcomes.iter().filter(|o| matches!(kind(o), Expected::Named(_))).collect();
-    let visible: Vec<&&Outcome> = named.iter().filter(|o| o.visible()).collect();
+    let visible: Vec<&Outcome> = outcomes.iter().filter(|o| o.visible_catalogue_effect()).collect();
     let count = |e: Expected| outcomes.iter().filter(|o| expected_verdict(o.family) == e).count();
     let right = |e: Expected| outcomes.iter().filter(|o| expected_verdict(o.family) == e && o.right).count();
     let shrinks: Vec<f64> = visible.iter().filter(|o| o.right).map(|o| o.shrink).collect();
