@@ -527,6 +527,23 @@ fn unmeasured(table: &Table, opts: &DiagnoseOptions, candidates: Vec<Candidate>,
 pub(crate) mod testing {
     use crate::csvio::Table;
 
+    /// A clean simulated log with `bias(pose, seconds into its hold, seconds into the log)` (mg,
+    /// sensor frame) added to every static pose's rows.
+    pub(crate) fn log_with(seed: u64, bias: &dyn Fn(usize, f64, f64) -> super::math::V3) -> Table {
+        use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
+        let mut table = to_table(&generate(&random_scenario(EffectClass::None, seed)), "sim").unwrap();
+        let m = super::gap::measure(&table, &super::DiagnoseOptions::DEFAULT).unwrap();
+        let mg = table.median_magnitude * 1e-3;
+        for (p, pose) in m.poses.iter().enumerate() {
+            for row in pose.rows.clone() {
+                let t = super::gap::row_time(&table, row, m.rate);
+                let b = bias(p, t - pose.t_start, t);
+                table.samples[row] = std::array::from_fn(|a| table.samples[row][a] + b[a] * mg);
+            }
+        }
+        table
+    }
+
     /// An own-simulator log (random scenario `seed`, no effect) whose z axis alone bows: k2 2 mg,
     /// k3 -1.5 mg at 1 g.
     pub(crate) fn z_bowed(seed: u64) -> Table {

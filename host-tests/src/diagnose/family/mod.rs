@@ -844,6 +844,7 @@ impl<'a> Context<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::diagnose::testing::log_with;
     use crate::diagnose::{MIN_GAIN, gap};
     use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
     use crate::vec3::norm;
@@ -958,22 +959,6 @@ mod tests {
         let widest = exact - WIDE_FIT_DOF;
         assert!(ctx.best_of(vec![variant(widest)]).is_some(), "{widest} extra columns on {n} poses");
         assert!(ctx.best_of_orientation(grid(widest)).is_some(), "two of {widest} extra columns on {n} poses");
-    }
-
-    /// A clean simulated log with `bias(pose, seconds into its hold, seconds into the log)` (mg,
-    /// sensor frame) added to every static pose's rows.
-    fn log_with(seed: u64, bias: &dyn Fn(usize, f64, f64) -> V3) -> Table {
-        let mut table = to_table(&generate(&random_scenario(EffectClass::None, seed)), "sim").unwrap();
-        let m = gap::measure(&table, &DiagnoseOptions::DEFAULT).unwrap();
-        let mg = table.median_magnitude * 1e-3;
-        for (p, pose) in m.poses.iter().enumerate() {
-            for row in pose.rows.clone() {
-                let t = gap::row_time(&table, row, m.rate);
-                let b = bias(p, t - pose.t_start, t);
-                table.samples[row] = std::array::from_fn(|a| table.samples[row][a] + b[a] * mg);
-            }
-        }
-        table
     }
 
     #[test]

@@ -1,6 +1,7 @@
 //! Motion: poses whose own samples move (taps, sway): the chi-square of the segment means after
 //! the first third of the hold (a transient at the start is settling, not motion) is robustly
-//! compared with the median pose's; disturbed poses are dropped, each at the
+//! compared with the median pose's; so is the scatter of the readings about those segment means (a
+//! vibration faster than a segment: footsteps, a fan). Disturbed poses are dropped, each at the
 //! cost of an expected noise variance plus the penalty, and the gain is measured on the rest.
 //! Disturbed holds that decay, or ring at a common frequency (`ringing`), are settling.
 
@@ -8,11 +9,12 @@ use accelcal::model::PARAM_COUNT;
 
 use super::{Context, Evaluation, Family, Fitted, Variant, colored_noise, ringing, standard_evaluation};
 use crate::diagnose::SEGMENTS;
+use crate::diagnose::gap::PoseData;
 use crate::diagnose::locate::{within_chi2_from, within_chi2_of};
+use crate::diagnose::math::median;
 
 /// Leading segments of a hold not looked at (a transient there is settling).
 const SKIPPED_SEGMENTS: usize = 2;
-use crate::diagnose::math::median;
 
 pub(crate) struct Motion;
 
@@ -54,14 +56,63 @@ pub(crate) fn moving(ctx: &Context<'_>) -> Option<Vec<bool>> {
     (!settles).then_some(dropped)
 }
 
-/// The poses whose samples move after the first third of their hold (`None`: none, or too many to
-/// leave enough for the fit).
+/// The poses whose samples move after the first third of their hold, or whose readings are
+/// [`shaken`] (`None`: none, or too many to leave enough for the fit).
 pub(crate) fn disturbed(ctx: &Context<'_>) -> Option<Vec<bool>> {
     let chi: Vec<f64> = ctx.poses.iter().map(|p| within_chi2_from(p, &ctx.m.white, SKIPPED_SEGMENTS)).collect();
     let threshold = (6.0 * median(&chi)).max(40.0);
-    let dropped: Vec<bool> = chi.iter().map(|c| *c > threshold).collect();
+    let shaken = shaken(ctx);
+    let dropped: Vec<bool> = chi.iter().zip(&shaken).map(|(c, s)| *c > threshold || *s).collect();
     let count = dropped.iter().filter(|d| **d).count();
     (count > 0 && ctx.poses.len() - count >= PARAM_COUNT + 3).then_some(dropped)
+}
+
+/// Standard errors by which a shaken pose's readings scatter beyond the median pose's.
+const SHAKEN_Z: f64 = 6.0;
+
+/// Least share by which a shaken pose's readings scatter beyond the median pose's.
+const SHAKEN_SHARE: f64 = 0.1;
+
+/// A pose's readings' scatter about their segment means after the first [`SKIPPED_SEGMENTS`]
+/// (each axis's variance over its white variance, averaged over the axes), and the readings it
+/// rests on.
+fn scatter(ctx: &Context<'_>, p: &PoseData) -> (f64, usize) {
+    let (white, samples) = (ctx.m.white, &ctx.table.samples);
+    let (mut sum, mut count) = (0.0, 0);
+    for k in SKIPPED_SEGMENTS..SEGMENTS {
+        let rows = p.rows.start + k * p.seg_n..p.rows.start + (k + 1) * p.seg_n;
+        for a in (0..3).filter(|&a| white[a] > 0.0) {
+            sum += samples[rows.clone()].iter().map(|s| (s[a] - p.seg[k][a]).powi(2)).sum::<f64>() / white[a];
+            count += rows.len();
+        }
+    }
+    (if count > 0 { sum / count as f64 } else { f64::NAN }, count)
+}
+
+/// The poses whose readings scatter beyond the median pose's by [`SHAKEN_SHARE`] and
+/// [`SHAKEN_Z`] standard errors (a white noise's, the readings' correlation counted, or the poses'
+/// own spread when larger: a noise slower than a segment scatters some poses more than others), and
+/// every other piece the pose finder cut from their holds ([`Context::hold_runs`]): a vibration
+/// faster than the segments (footsteps, a fan) moves no segment mean but shakes the readings, and
+/// what shakes part of a hold disturbs all of it.
+fn shaken(ctx: &Context<'_>) -> Vec<bool> {
+    let scatters: Vec<(f64, usize)> = ctx.poses.iter().map(|p| scatter(ctx, p)).collect();
+    let finite: Vec<f64> = scatters.iter().map(|s| s.0).filter(|s| s.is_finite()).collect();
+    let typical = median(&finite);
+    let spread = 1.4826 * median(&finite.iter().map(|s| (s / typical - 1.0).abs()).collect::<Vec<_>>());
+    let correlation = ctx.m.correlation.iter().copied().fold(1.0, f64::max);
+    let piece_shaken = |&(s, count): &(f64, usize)| {
+        let excess = s / typical - 1.0;
+        let standard_error = (2.0 * correlation / count.max(1) as f64).sqrt().max(spread);
+        excess > SHAKEN_SHARE && excess > SHAKEN_Z * standard_error
+    };
+    let mut out = vec![false; ctx.poses.len()];
+    for run in ctx.hold_runs() {
+        if scatters[run.clone()].iter().any(piece_shaken) {
+            out[run].fill(true);
+        }
+    }
+    out
 }
 
 /// The nominal model without the `dropped` poses, each charged one parameter.
@@ -99,3 +150,85 @@ fn decays(ctx: &Context<'_>, dropped: &[bool]) -> bool {
 
 /// How much more a decaying transient moves in the first half of a hold than in the second.
 const DECAY_FACTOR: f64 = 4.0;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diagnose::testing::{log_with, markov_log};
+    use crate::diagnose::{DiagnoseOptions, diagnose, gap};
+    use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
+
+    /// Footsteps near the bench during the holds `shaken`: a step about every 0.5 s rings the floor at
+    /// 15 Hz (decaying in 50 ms, along one direction, 15 times the white noise's standard deviation
+    /// at the step), and the walker's weight leans the bench, shifting the readings 1 mg along it.
+    fn footsteps(seed: u64, shaken: &[usize]) -> crate::csvio::Table {
+        let v = [0.3, -0.4, 0.866];
+        let clean = to_table(&generate(&random_scenario(EffectClass::None, seed)), "sim").unwrap();
+        let m = gap::measure(&clean, &DiagnoseOptions::DEFAULT).unwrap();
+        let white_mg = (m.white.iter().sum::<f64>() / 3.0).sqrt() / (clean.median_magnitude * 1e-3);
+        log_with(seed, &|p, t, _| {
+            if !shaken.contains(&p) {
+                return [0.0; 3];
+            }
+            // Steps 0.5 s apart, each up to 0.1 s early or late at random (a hash of the step and
+            // the pose).
+            let step_at = |k: f64| 0.5 * k + 0.1 * jitter(k as i64, p);
+            let k = (t / 0.5).floor();
+            let since_step = if t >= step_at(k) { t - step_at(k) } else { t - step_at(k - 1.0) };
+            let ring = 15.0 * white_mg * (-since_step / 0.05).exp() * (std::f64::consts::TAU * 15.0 * since_step).sin();
+            v.map(|c| c * (1.0 + ring))
+        })
+    }
+
+    /// A pseudo-random number in -1..1 of a step and a pose (splitmix64).
+    fn jitter(step: i64, pose: usize) -> f64 {
+        let mut z =
+            (step as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ (pose as u64).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^= z >> 31;
+        2.0 * (z >> 11) as f64 / (1u64 << 53) as f64 - 1.0
+    }
+
+    /// The poses [`shaken`] flags: their time spans, s.
+    fn shaken_spans(table: &crate::csvio::Table) -> Vec<(f64, f64)> {
+        let opts = DiagnoseOptions::DEFAULT;
+        let m = gap::measure(table, &opts).unwrap();
+        let ctx = Context::new(table, &m, &opts).unwrap();
+        shaken(&ctx).iter().zip(&m.poses).filter(|(s, _)| **s).map(|(_, p)| (p.t_start, p.t_end)).collect()
+    }
+
+    #[test]
+    fn holds_shaken_by_footsteps_are_dropped_and_named_motion() {
+        // The ringing is faster than a segment: no segment mean moves, the readings do. The pose
+        // finder may cut a shaken hold in pieces; every piece flagged lies in a shaken hold (how
+        // much a hold's readings scatter depends on where its steps fall between the samples).
+        let shaken_poses = [3, 9, 15];
+        for seed in [1, 2, 3] {
+            let clean = to_table(&generate(&random_scenario(EffectClass::None, seed)), "sim").unwrap();
+            let clean_poses = gap::measure(&clean, &DiagnoseOptions::DEFAULT).unwrap().poses;
+            let spans: Vec<(f64, f64)> =
+                shaken_poses.iter().map(|&i| (clean_poses[i].t_start, clean_poses[i].t_end)).collect();
+            let table = footsteps(seed, &shaken_poses);
+            let flagged = shaken_spans(&table);
+            let inside = |f: &(f64, f64), s: &(f64, f64)| f.0 >= s.0 - 0.5 && f.1 <= s.1 + 0.5;
+            assert!(
+                flagged.iter().all(|f| spans.iter().any(|s| inside(f, s))),
+                "seed {seed}: {flagged:?} vs {spans:?}"
+            );
+            assert!(!flagged.is_empty(), "seed {seed}");
+            let d = diagnose(&table, &DiagnoseOptions { seed, ..DiagnoseOptions::DEFAULT }).unwrap();
+            assert_eq!(d.verdict, "motion", "seed {seed}: {}", d.to_text());
+        }
+    }
+
+    #[test]
+    fn a_gauss_markov_noise_scattering_some_holds_more_than_others_shakes_none() {
+        // A bias noise of a 1 s correlation time moves the readings within every segment, some
+        // poses more than others by chance: the poses' own spread, not white noise's, is the yardstick.
+        for seed in [1, 2, 3] {
+            let table = markov_log(seed, 1.0, 1.0);
+            assert_eq!(shaken_spans(&table), Vec::new(), "seed {seed}");
+        }
+    }
+}
