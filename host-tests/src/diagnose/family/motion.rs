@@ -167,7 +167,10 @@ mod tests {
     use super::*;
     use crate::diagnose::testing::{log_with, markov_log};
     use crate::diagnose::{DiagnoseOptions, diagnose, gap};
+    use crate::sim::random::{mix64, uniform_in};
     use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
+    use rand_core::SeedableRng;
+    use rand_xoshiro::Xoshiro256PlusPlus;
 
     /// Footsteps near the bench during the holds `shaken`: a step about every 0.5 s rings the floor at
     /// 15 Hz (decaying in 50 ms, along one direction, 15 times the white noise's standard deviation
@@ -191,14 +194,10 @@ mod tests {
         })
     }
 
-    /// A pseudo-random number in -1..1 of a step and a pose (splitmix64).
+    /// A pseudo-random number in -1..1 of a step and a pose.
     fn jitter(step: i64, pose: usize) -> f64 {
-        let mut z =
-            (step as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ (pose as u64).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^= z >> 31;
-        2.0 * (z >> 11) as f64 / (1u64 << 53) as f64 - 1.0
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(mix64(step as u64 ^ mix64(pose as u64)));
+        uniform_in(&mut rng, -1.0, 1.0)
     }
 
     /// The poses [`shaken`] flags: their time spans, s.
