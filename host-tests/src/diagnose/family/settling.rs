@@ -201,7 +201,7 @@ fn trimmed_start(ctx: &Context<'_>, drop: usize) -> Option<(f64, Vec<Option<f64>
 /// The holds disturbed by a ringing mount (a damped oscillation at a common frequency) left out.
 fn ringing_holds_dropped(ctx: &Context<'_>) -> Option<Evaluation> {
     let dropped = motion::disturbed(ctx)?;
-    if !ringing::rings(&ctx.table.samples, ctx.poses, &dropped, ctx.m.rate) {
+    if !ringing::placements_ring(ctx, &dropped) {
         return None;
     }
     let fitted = motion::without(ctx, dropped, "a ringing mount (damped, at one frequency): ringing holds dropped")?;
