@@ -23,7 +23,7 @@
 //!    `colored-noise`). `heldout_gain = 1 - ln(ratio) / ln(nominal ratio)` is the fraction of the
 //!    withheld gap (in log ratio) the candidate removes; a noise model's ratio below 1 (more
 //!    scatter predicted than seen) counts [`OVERSHOOT_WEIGHT`] times its `|ln ratio|`, a value
-//!    fit's [`VALUE_OVERSHOOT_WEIGHT`] times.
+//!    fit's [`VALUE_OVERSHOOT_WEIGHT`] times what exceeds the scored poses' chance, `1 / sqrt(2 n)`.
 //!    Drift and temperature are also fitted on the pose means and the within-pose course together
 //!    (`family/joint.rs`: the segments fix the effect, the means the calibration), which tests them
 //!    on logs too short to withhold a pose and still fit 9 + k parameters.

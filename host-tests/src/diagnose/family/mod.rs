@@ -715,9 +715,14 @@ impl<'a> Context<'a> {
     }
 
     /// `1 - ln(ratio) / ln(nominal ratio)` of a fit that predicts the withheld values; a ratio below
-    /// 1 counts [`VALUE_OVERSHOOT_WEIGHT`] times.
+    /// 1 counts [`VALUE_OVERSHOOT_WEIGHT`] times what it falls short of 1 beyond the chance of the
+    /// scored poses' white noise (a ratio's square is a chi-square over `n` poses: `ln(ratio)` spreads
+    /// by `1 / sqrt(2 n)`): such a fit's residuals cannot fall short of the noise but by
+    /// chance, and within it the fit has explained the withheld poses fully.
     pub(crate) fn value_gain(&self, ratio: f64) -> f64 {
-        gain_over(self.heldout_ratio_nominal, ratio, VALUE_OVERSHOOT_WEIGHT)
+        let chance = (2.0 * self.n_scored().max(1) as f64).sqrt().recip();
+        let beyond_chance = if ratio < 1.0 { (ratio * chance.exp()).min(1.0) } else { ratio };
+        gain_over(self.heldout_ratio_nominal, beyond_chance, VALUE_OVERSHOOT_WEIGHT)
     }
 
     fn evaluate_fitted(&self, name: &'static str, f: Fitted) -> Evaluation {
@@ -922,6 +927,21 @@ mod tests {
         assert!((ctx.heldout_ratio_nominal - nominal).abs() < 1e-9 * nominal, "{nominal}");
         let d = crate::diagnose::diagnose(&table, &opts).unwrap();
         assert_eq!(d.verdict, "drift", "{}", d.to_text());
+    }
+
+    #[test]
+    fn a_held_out_ratio_short_of_one_by_the_poses_chance_explains_fully() {
+        // A drift of 2 mg over the log: the nominal model's held-out ratio well above 1.
+        let table = log_with(1, &|_, _, t| [2.0 * t / 400.0, 0.0, 0.0]);
+        let opts = DiagnoseOptions::DEFAULT;
+        let m = gap::measure(&table, &opts).unwrap();
+        let ctx = Context::new(&table, &m, &opts).unwrap();
+        assert!(ctx.heldout_ratio_nominal > 2.0, "{}", ctx.heldout_ratio_nominal);
+        let chance = (2.0 * ctx.n_scored() as f64).sqrt().recip();
+        let ratio = |ln: f64| ln.exp();
+        assert_eq!(ctx.value_gain(ratio(-0.9 * chance)), 1.0);
+        assert!((ctx.value_gain(ratio(-2.0 * chance)) - ctx.value_gain(ratio(chance))).abs() < 1e-12);
+        assert!(ctx.value_gain(ratio(-2.0 * chance)) > ctx.value_gain(ratio(1.5 * chance)));
     }
 
     #[test]
