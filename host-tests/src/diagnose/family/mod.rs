@@ -704,8 +704,12 @@ impl<'a> Context<'a> {
 
     /// The table rows of each hold ([`Self::hold_runs`]), with the rows between its pieces.
     pub(crate) fn hold_rows(&self) -> Vec<Range<usize>> {
-        let rows = |run: Range<usize>| self.poses[run.start].rows.start..self.poses[run.end - 1].rows.end;
-        self.hold_runs().into_iter().map(rows).collect()
+        self.hold_runs().iter().map(|run| self.rows_of(run)).collect()
+    }
+
+    /// The table rows of a hold's pieces `run` (poses), with the rows between them.
+    pub(crate) fn rows_of(&self, run: &Range<usize>) -> Range<usize> {
+        self.poses[run.start].rows.start..self.poses[run.end - 1].rows.end
     }
 
     /// `1 - ln(ratio) / ln(nominal ratio)` of a noise model; predicting more scatter than there is

@@ -12,11 +12,11 @@ use std::ops::Range;
 use super::Context;
 use crate::diagnose::math::median;
 
-/// Longest half-window, samples.
-const MAX_HALF: usize = 512;
+/// Longest window at a hold's start or end, samples.
+const MAX_WINDOW: usize = 512;
 
-/// Fewest samples per half-window.
-const MIN_HALF: usize = 32;
+/// Fewest samples per window.
+const MIN_WINDOW: usize = 32;
 
 /// Lowest resonance looked for, Hz (slower is sway, not a ringing mount).
 const MIN_HZ: f64 = 1.5;
@@ -38,7 +38,8 @@ const MIN_HOLDS: usize = 2;
 /// ringing. A stationary vibration (footsteps, a fan) gives a ratio of two sums of a few
 /// chi-square variables, F(4, 4) for two holds rung along one direction: above 6.4 one time in
 /// 20. On the seen blind sets (regenerated at stop 70: CI seeds and blindgen2/3 175-178, blindgen4
-/// 152-155) the ringing mounts that reached the test gave 7.6-170, the moving holds 0.2-3.7.
+/// 152-155) the ringing mounts that reached the test gave 7.6-170, the motion logs' disturbed holds
+/// 0.2-3.7.
 const DAMPED_RATIO: f64 = 5.0;
 
 /// Power at the frequencies `cycles` (per sample) of `m` samples from `start` (mean removed, axes
@@ -70,10 +71,9 @@ fn periodogram(samples: &[[f64; 3]], start: usize, m: usize, cycles: &[f64]) -> 
 pub(crate) fn placements_ring(ctx: &Context<'_>, disturbed: &[bool]) -> bool {
     let holds: Vec<Range<usize>> = ctx
         .hold_runs()
-        .into_iter()
-        .zip(ctx.hold_rows())
-        .filter(|(run, _)| disturbed[run.clone()].iter().any(|d| *d))
-        .map(|(_, rows)| rows)
+        .iter()
+        .filter(|run| disturbed[(*run).clone()].iter().any(|d| *d))
+        .map(|run| ctx.rows_of(run))
         .collect();
     rings(&ctx.table.samples, &holds, ctx.m.rate)
 }
@@ -81,9 +81,9 @@ pub(crate) fn placements_ring(ctx: &Context<'_>, disturbed: &[bool]) -> bool {
 /// The holds (rows) ring at a common frequency at their start, and the ringing is damped: their
 /// ends are quieter at that frequency (footsteps or a fan go on through the hold).
 pub(crate) fn rings(samples: &[[f64; 3]], holds: &[Range<usize>], rate: f64) -> bool {
-    let half = |h: &Range<usize>| (h.len() / 2).min(MAX_HALF);
-    let shortest = holds.iter().map(half).min().unwrap_or(0);
-    if holds.len() < MIN_HOLDS || shortest < MIN_HALF || !(rate > 0.0) {
+    let window = |h: &Range<usize>| (h.len() / 2).min(MAX_WINDOW);
+    let shortest = holds.iter().map(window).min().unwrap_or(0);
+    if holds.len() < MIN_HOLDS || shortest < MIN_WINDOW || !(rate > 0.0) {
         return false;
     }
     // A grid from MIN_HZ to MAX_HZ (or near the Nyquist frequency), evaluated on every hold's own
@@ -93,7 +93,7 @@ pub(crate) fn rings(samples: &[[f64; 3]], holds: &[Range<usize>], rate: f64) -> 
         (0..).map(|j| MIN_HZ + STEP_HZ * j as f64).take_while(|f| *f <= top_hz).map(|f| f / rate).collect();
     let (mut early, mut late) = (vec![0.0; cycles.len()], vec![0.0; cycles.len()]);
     for h in holds {
-        let m = half(h);
+        let m = window(h);
         let first = periodogram(samples, h.start, m, &cycles);
         let last = periodogram(samples, h.end - m, m, &cycles);
         let level = median(&first);
