@@ -310,7 +310,7 @@ struct Found {
 
 /// The still intervals of the table found with `found_with` (the CSV reader's accumulation, the
 /// library rejecting those shorter than its `min_pose_s`).
-fn read_poses(table: &Table, found_with: &AccumulateOptions) -> Result<Found, Refusal> {
+fn read_poses(table: &Table, found_with: &AccumulateOptions, config: &CalibrationConfig) -> Result<Found, Refusal> {
     let accumulate = |min_pose_s: f64| {
         csvio::accumulate(table, &AccumulateOptions { min_pose_s, ..*found_with })
             .map_err(|e| err(format!("{}: {e}", table.file)))
@@ -343,7 +343,7 @@ fn read_poses(table: &Table, found_with: &AccumulateOptions) -> Result<Found, Re
     let mean_change_widened = acc.mean_change_widened;
     // Moving fragments are looked for only where the still test was widened for correlated readings.
     let moving_fragments = if mean_change_widened.is_some() {
-        drop_moving_fragments(table, &mut poses, &mut lib_poses, rate, min_poses)
+        drop_moving_fragments(table, &mut poses, &mut lib_poses, rate, |kept| calib::enough_poses(kept, config))
     } else {
         0
     };
@@ -376,13 +376,16 @@ const FRAGMENTS_AT_MOST: f64 = 0.25;
 /// third generator: a 0.96 s pose held 56 % of the squared residual and made the gap significant). On
 /// poses found without the widening a short pose that moves is the handling's own evidence (a sway, a
 /// truck's bursts: the motion family's), and is kept. At most [`FRAGMENTS_AT_MOST`] of the poses, and
-/// only while `min_poses` remain. Returns the poses left out (counted in the report).
+/// only while the poses kept are `enough` to calibrate (as `calibrate`, which keeps the fragments,
+/// would: a hand-held log of the fourth generator found ten poses with the widened test, two of them
+/// fragments, and eight in too few directions for the ellipsoid). Returns the poses left out (counted
+/// in the report).
 fn drop_moving_fragments(
     table: &Table,
     poses: &mut Vec<PoseData>,
     lib_poses: &mut Vec<Pose>,
     rate: f64,
-    min_poses: usize,
+    enough: impl Fn(&[Pose]) -> bool,
 ) -> usize {
     let var = move_test_variance(table, poses, rate);
     let median_s = median(&poses.iter().map(PoseData::duration).collect::<Vec<_>>());
@@ -394,7 +397,11 @@ fn drop_moving_fragments(
         })
         .collect();
     let count = moving.iter().filter(|m| **m).count();
-    if count == 0 || count as f64 > FRAGMENTS_AT_MOST * poses.len() as f64 || poses.len() - count < min_poses {
+    if count == 0 || count as f64 > FRAGMENTS_AT_MOST * poses.len() as f64 {
+        return 0;
+    }
+    let kept: Vec<Pose> = lib_poses.iter().zip(&moving).filter(|(_, m)| !**m).map(|(p, _)| *p).collect();
+    if !enough(&kept) {
         return 0;
     }
     crate::poses::remove_marked(poses, &moving);
@@ -608,7 +615,7 @@ pub(crate) fn measure_with(
     opts: &DiagnoseOptions,
     found_with: &AccumulateOptions,
 ) -> Result<Measured, Refusal> {
-    measure_found(table, opts, read_poses(table, found_with)?)
+    measure_found(table, opts, read_poses(table, found_with, &calibration_config(opts))?)
 }
 
 /// [`measure`] on the poses of `m` but those `dropped` (the same poses, not found again).
@@ -632,6 +639,11 @@ pub(crate) fn measure_without(
     measure_found(table, opts, found)
 }
 
+/// The calibration `calibrate` runs on the poses, with the diagnosis' gravity.
+fn calibration_config(opts: &DiagnoseOptions) -> CalibrationConfig {
+    CalibrationConfig { gravity: opts.gravity as f32, ..CalibrationConfig::DEFAULT }
+}
+
 /// Step 1 on the poses found.
 fn measure_found(table: &Table, opts: &DiagnoseOptions, found: Found) -> Result<Measured, Refusal> {
     let gravity = opts.gravity;
@@ -645,8 +657,7 @@ fn measure_found(table: &Table, opts: &DiagnoseOptions, found: Found) -> Result<
         mean_change_widened,
         fragmented,
     } = found;
-    let config = CalibrationConfig { gravity: gravity as f32, ..CalibrationConfig::DEFAULT };
-    let cal = calib::run(&lib_poses, &config, opts.seed).map_err(|e| Refusal::NotCalibrated {
+    let cal = calib::run(&lib_poses, &calibration_config(opts), opts.seed).map_err(|e| Refusal::NotCalibrated {
         still_poses: lib_poses.len(),
         rate,
         error: err(format!("{}: {e}", table.file)),
@@ -720,7 +731,8 @@ mod tests {
     #[test]
     fn the_correlation_factor_is_one_for_white_noise_and_the_averaging_width_for_averaged_noise() {
         // The poses as found in the raw log (the pose detection is not under test here).
-        let Found { poses, rate, .. } = read_poses(&clean_log_averaged(1), &AccumulateOptions::default()).unwrap();
+        let Found { poses, rate, .. } =
+            read_poses(&clean_log_averaged(1), &AccumulateOptions::default(), &CalibrationConfig::DEFAULT).unwrap();
         // Width 8 with 20-sample blocks: 8 (1 - 8 / 60) = 6.9 expected, a little less with the
         // most varying tenth of the poses left out.
         for (width, low, high) in [(1, 1.0, 1.2), (8, 5.5, 8.5)] {
@@ -735,7 +747,7 @@ mod tests {
     /// them (the slow end of a move).
     fn with_fragment(fragment_s: f64, ramp_g: f64) -> (Table, Found) {
         let mut table = clean_log_averaged(8);
-        let mut found = read_poses(&table, &AccumulateOptions::default()).unwrap();
+        let mut found = read_poses(&table, &AccumulateOptions::default(), &CalibrationConfig::DEFAULT).unwrap();
         let longest = (0..found.poses.len()).max_by_key(|&i| found.poses[i].n).unwrap();
         let hold = found.poses[longest].rows.clone();
         let n = (fragment_s * found.rate) as usize;
@@ -756,11 +768,33 @@ mod tests {
         for (fragment_s, ramp_g, left_out) in [(0.3, 0.05, 1), (0.3, 0.0, 0), (1.0, 0.05, 0)] {
             let (table, Found { mut poses, mut lib_poses, rate, .. }) = with_fragment(fragment_s, ramp_g);
             let before = poses.len();
-            let count = drop_moving_fragments(&table, &mut poses, &mut lib_poses, rate, calib::MIN_POSES);
+            let count = drop_moving_fragments(&table, &mut poses, &mut lib_poses, rate, calibrates);
             let case = format!("{fragment_s} s ramping {ramp_g} g");
             assert_eq!(count, left_out, "{case}");
             assert_eq!((poses.len(), lib_poses.len()), (before - left_out, before - left_out), "{case}");
         }
+    }
+
+    fn calibrates(poses: &[Pose]) -> bool {
+        calib::enough_poses(poses, &CalibrationConfig::DEFAULT)
+    }
+
+    #[test]
+    fn a_fragment_is_kept_when_the_poses_left_would_not_calibrate() {
+        // Every third hold (eight) and the fragment: the ellipsoid start needs nine poses, which
+        // `calibrate`, keeping the fragment, has.
+        let (table, found) = with_fragment(0.3, 0.05);
+        let mut picked: Vec<usize> = (0..found.poses.len()).filter(|i| *i != 4).step_by(3).take(8).collect();
+        picked.insert(4, 4);
+        let poses: Vec<PoseData> = picked.iter().map(|&i| found.poses[i].clone()).collect();
+        let lib_poses: Vec<Pose> = picked.iter().map(|&i| found.lib_poses[i]).collect();
+        assert!(calibrates(&lib_poses) && !calibrates(&[&lib_poses[..4], &lib_poses[5..]].concat()));
+        let (mut p, mut l) = (poses.clone(), lib_poses.clone());
+        assert_eq!(drop_moving_fragments(&table, &mut p, &mut l, found.rate, calibrates), 0);
+        assert_eq!((p.len(), l.len()), (9, 9));
+        // Six poses suffice for a start along the faces: then the fragment goes.
+        let (mut p, mut l) = (poses, lib_poses);
+        assert_eq!(drop_moving_fragments(&table, &mut p, &mut l, found.rate, |k| k.len() >= calib::MIN_POSES), 1);
     }
 
     #[test]
