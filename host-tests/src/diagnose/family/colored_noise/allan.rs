@@ -78,8 +78,9 @@ fn hold_excesses(
 /// finder cut at a bias jump is whole here), on the axes where most holds move beyond white noise
 /// (the median hold's excess at its longest `tau` above [`WALK_EXCESS`]), or where a telegraph
 /// noise would ([`telegraph_moves`]): a noise moves many holds, one disturbed hold (a bias step
-/// within it) is none. Returns `(variances, correlation time)`.
-pub(super) fn pooled_markov(table: &Table, holds: &[Range<usize>], rate: f64, white: V3) -> (V3, f64) {
+/// within it) is none. Returns the fits `(variances, correlation time)` the holds tell apart from
+/// the best by less than [`MARKOV_MISFIT_SPAN`], the best first.
+pub(super) fn pooled_markov(table: &Table, holds: &[Range<usize>], rate: f64, white: V3) -> Vec<(V3, f64)> {
     let excesses: [Vec<(f64, f64, f64)>; 3] = std::array::from_fn(|a| {
         let (points, lasts) = hold_excesses(table, holds, rate, white[a], a);
         let moves = lasts.len() >= 3 && (median(&lasts) > WALK_EXCESS || telegraph_moves(&lasts));
@@ -127,10 +128,17 @@ fn markov_allan(tau: f64, tau_c: f64) -> f64 {
     (2.0 * x - 3.0 + 4.0 * (-x).exp() - (-2.0 * x).exp()) / (x * x)
 }
 
-/// The excesses per axis (empty: none) fitted as a Gauss-Markov noise: the correlation time of
-/// [`MARKOV_TAUS_S`] with the least weighted misfit over the axes, each axis's variance by weighted
-/// least squares (at least 0). Returns `(variances, correlation time)`.
-fn fit_markov(excesses: &[Vec<(f64, f64, f64)>; 3]) -> (V3, f64) {
+/// Rise in the weighted misfit (a chi-square under white noise, [`white_weighted`]) within which
+/// a Gauss-Markov fit at another correlation time is as good as the best: the 95th percentile of
+/// a chi-square of one degree of freedom. Holds shorter than the correlation time see only the
+/// noise's rise (variance over correlation time), not where it levels off.
+const MARKOV_MISFIT_SPAN: f64 = 3.84;
+
+/// The excesses per axis (empty: none) fitted as a Gauss-Markov noise at each correlation time of
+/// [`MARKOV_TAUS_S`], each axis's variance by weighted least squares (at least 0); the fits whose
+/// misfit over the axes is within [`MARKOV_MISFIT_SPAN`] of the least, the best first, as
+/// `(variances, correlation time)`.
+fn fit_markov(excesses: &[Vec<(f64, f64, f64)>; 3]) -> Vec<(V3, f64)> {
     let fit = |points: &[(f64, f64, f64)], tau_c: f64| {
         let num: f64 = points.iter().map(|&(t, e, w)| w * e * markov_allan(t, tau_c)).sum();
         let den: f64 = points.iter().map(|&(t, _, w)| w * markov_allan(t, tau_c).powi(2)).sum();
@@ -138,15 +146,16 @@ fn fit_markov(excesses: &[Vec<(f64, f64, f64)>; 3]) -> (V3, f64) {
         let misfit: f64 = points.iter().map(|&(t, e, w)| w * (e - var * markov_allan(t, tau_c)).powi(2)).sum();
         (var, misfit)
     };
-    let mut best = ([0.0; 3], 0.0, f64::INFINITY);
-    for tau_c in MARKOV_TAUS_S {
-        let per_axis: [(f64, f64); 3] = std::array::from_fn(|a| fit(&excesses[a], tau_c));
-        let misfit: f64 = per_axis.iter().map(|(_, m)| m).sum();
-        if misfit < best.2 {
-            best = (per_axis.map(|(v, _)| v), tau_c, misfit);
-        }
-    }
-    (best.0, best.1)
+    let mut fits: Vec<(V3, f64, f64)> = MARKOV_TAUS_S
+        .iter()
+        .map(|&tau_c| {
+            let per_axis: [(f64, f64); 3] = std::array::from_fn(|a| fit(&excesses[a], tau_c));
+            (per_axis.map(|(v, _)| v), tau_c, per_axis.iter().map(|(_, m)| m).sum())
+        })
+        .collect();
+    fits.sort_by(|a, b| a.2.total_cmp(&b.2));
+    let least = fits.first().map_or(0.0, |f| f.2);
+    fits.into_iter().filter(|f| f.2 <= least + MARKOV_MISFIT_SPAN).map(|(v, tau, _)| (v, tau)).collect()
 }
 
 /// `y` less its least-squares line over the sample index.
@@ -255,5 +264,33 @@ mod tests {
             let expected = super::markov_allan(tau, tau_c);
             assert!((avar / expected - 1.0).abs() < 0.25, "tau {tau}: {avar} vs {expected}");
         }
+    }
+
+    #[test]
+    fn holds_that_see_only_the_rise_leave_the_correlation_time_open_and_the_level_off_them_closes_it() {
+        // Twelve holds of 10 s at 100 Hz, white variance 1 per sample, the excess of a Gauss-Markov
+        // noise (variance 0.2) exactly at its expectation at tau 0.2-2 s. With a correlation time
+        // of 16 s the holds see the rise only: 8 s and 32 s fit as well; with 0.5 s they
+        // see it level off and fall, and no time but 0.5 s fits.
+        let points = |tau_c: f64| -> Vec<(f64, f64, f64)> {
+            let (rate, n, holds) = (100.0, 1000.0, 12.0);
+            let white = 1.0;
+            [20.0, 40.0, 80.0, 160.0, 200.0]
+                .iter()
+                .map(|&m: &f64| {
+                    let tau = m / rate;
+                    let white_avar = white / m;
+                    (tau, 0.2 * super::markov_allan(tau, tau_c), holds * (n / m) / (white_avar * white_avar))
+                })
+                .collect()
+        };
+        let taus = |tau_c: f64| -> Vec<f64> {
+            let p = points(tau_c);
+            super::fit_markov(&[p.clone(), p.clone(), p]).iter().map(|(_, t)| *t).collect()
+        };
+        let slow = taus(16.0);
+        assert_eq!(slow[0], 16.0, "{slow:?}");
+        assert!(slow.len() >= 3 && slow.iter().all(|t| *t >= 2.0), "{slow:?}");
+        assert_eq!(taus(0.5), vec![0.5]);
     }
 }

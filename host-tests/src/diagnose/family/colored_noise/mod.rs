@@ -243,8 +243,9 @@ fn largest_share(cv: &[Option<f64>]) -> f64 {
     if total > 0.0 { squares.iter().copied().fold(0.0, f64::max) / total } else { 0.0 }
 }
 
-/// A noise estimate, and whether it is pooled over the holds (else from the longest rest).
-type Estimate = (Colored, bool);
+/// A noise estimate, whether it is pooled over the holds (else from the longest rest), and the
+/// parameters it is charged on the withheld poses.
+type Estimate = (Colored, bool, f64);
 
 /// Standard deviations (under white noise) by which the holds' movement may fall short of what a
 /// noise model predicts for them.
@@ -309,14 +310,14 @@ impl ColoredNoise {
         let mut best: Option<(f64, Colored)> = None;
         let settle = super::settling::settling_holds(ctx, super::settling::Decay::Ratio).is_some();
         let longest_s = ctx.poses.get(longest_rest(ctx)).map_or(0.0, |p| p.duration());
-        for (estimate, pooled) in estimates {
+        for (estimate, pooled, charged) in estimates {
             for c in estimate.parts() {
                 if !(ctx.pose_level && c.any()) || holds_refute(ctx, &c) || (*pooled && too_smooth(ctx, &c)) {
                     continue;
                 }
                 let max_tau_s = if *pooled { f64::INFINITY } else { longest_s };
                 let saturating = if settle { Vec::new() } else { c.saturating(ctx, max_tau_s) };
-                for (c, params) in std::iter::once((c, 1.0)).chain(saturating) {
+                for (c, params) in std::iter::once((c, *charged)).chain(saturating) {
                     let Some(ratio) = self.heldout_ratio(ctx, &c, params) else { continue };
                     if best.is_none_or(|(b, _)| ctx.noise_gain(ratio) > ctx.noise_gain(b)) {
                         best = Some((ratio, c));
@@ -353,13 +354,20 @@ fn hold_estimates(ctx: &Context<'_>) -> Vec<Estimate> {
             let (walk, floor) = colored_noise_estimate(ctx.table, rows.start, rows.end, m.rate, w);
             let (pooled_walk, pooled_floor) = pooled_estimate(ctx.table, &pieces, m.rate, w);
             [
-                (Colored { walk, floor, ..Colored::default() }, false),
-                (Colored { walk: pooled_walk, floor: pooled_floor, ..Colored::default() }, true),
+                (Colored { walk, floor, ..Colored::default() }, false, 1.0),
+                (Colored { walk: pooled_walk, floor: pooled_floor, ..Colored::default() }, true, 1.0),
             ]
         })
         .collect();
-    let (markov, markov_tau_s) = pooled_markov(ctx.table, &ctx.hold_rows(), m.rate, m.white);
-    estimates.push((Colored { markov, markov_tau_s, ..Colored::default() }, true));
+    // The holds may not tell the correlation time (holds shorter than it see the rise only): every
+    // time they leave open is tried on the withheld poses, charged the search's `ln` of their count.
+    let markov_fits = pooled_markov(ctx.table, &ctx.hold_rows(), m.rate, m.white);
+    let charged = 1.0 + (markov_fits.len() as f64).ln().ceil();
+    estimates.extend(
+        markov_fits
+            .into_iter()
+            .map(|(markov, markov_tau_s)| (Colored { markov, markov_tau_s, ..Colored::default() }, true, charged)),
+    );
     estimates
 }
 
@@ -413,7 +421,7 @@ impl ColoredNoise {
         let mut estimates = hold_estimates(ctx);
         // The walk whose level the holds' wander measures, when it accounts for the pose means.
         if walk_accounts_closely(ctx) {
-            estimates.extend(holds_walk(ctx).map(|(walk, _)| (Colored { walk, ..Colored::default() }, true)));
+            estimates.extend(holds_walk(ctx).map(|(walk, _)| (Colored { walk, ..Colored::default() }, true, 1.0)));
         }
         let best = self.best_noise(ctx, &estimates);
         let applicable = best.is_some();
