@@ -400,12 +400,13 @@ fn drop_moving_fragments(
     if count == 0 || count as f64 > FRAGMENTS_AT_MOST * poses.len() as f64 {
         return 0;
     }
-    let kept: Vec<Pose> = lib_poses.iter().zip(&moving).filter(|(_, m)| !**m).map(|(p, _)| *p).collect();
+    let mut kept = lib_poses.clone();
+    crate::poses::remove_marked(&mut kept, &moving);
     if !enough(&kept) {
         return 0;
     }
     crate::poses::remove_marked(poses, &moving);
-    crate::poses::remove_marked(lib_poses, &moving);
+    *lib_poses = kept;
     count
 }
 

@@ -128,10 +128,11 @@ fn markov_allan(tau: f64, tau_c: f64) -> f64 {
     (2.0 * x - 3.0 + 4.0 * (-x).exp() - (-2.0 * x).exp()) / (x * x)
 }
 
-/// Rise in the weighted misfit (a chi-square under white noise, [`white_weighted`]) within which
-/// a Gauss-Markov fit at another correlation time is as good as the best: the 95th percentile of
-/// a chi-square of one degree of freedom. Holds shorter than the correlation time see only the
-/// noise's rise (variance over correlation time), not where it levels off.
+/// Rise in the weighted misfit (about a chi-square under white noise, [`white_weighted`]: the
+/// weights are the clusters over the white Allan variance squared, and one hold's taus overlap)
+/// within which a Gauss-Markov fit at another correlation time is as good as the best: the 95th
+/// percentile of a chi-square of one degree of freedom. Holds shorter than the correlation time see
+/// only the noise's rise (variance over correlation time), not where it levels off.
 const MARKOV_MISFIT_SPAN: f64 = 3.84;
 
 /// The excesses per axis (empty: none) fitted as a Gauss-Markov noise at each correlation time of

@@ -55,6 +55,12 @@ fn wander_alike(ctx: &Context<'_>) -> bool {
 
 pub(crate) struct ColoredNoise;
 
+/// The parameters a noise level chosen among `count` correlation times is charged: one, and the
+/// search's `ln` of the times tried.
+fn charged_among(count: usize) -> f64 {
+    1.0 + (count as f64).ln().ceil()
+}
+
 /// Correlation times, s, after which a walk measured in the holds may level off ([`Colored::saturating`]).
 const SATURATION_TAUS_S: [f64; 6] = [8.0, 16.0, 32.0, 64.0, 128.0, 256.0];
 
@@ -103,7 +109,7 @@ impl Colored {
     fn saturating(&self, ctx: &Context<'_>, max_tau_s: f64) -> Vec<(Colored, f64)> {
         let t_end = ctx.poses.last().map_or(0.0, |p| p.t_end);
         let walk_alone = self.walk.iter().any(|v| *v > 0.0) && !self.floor.iter().chain(&self.markov).any(|v| *v > 0.0);
-        let params = 1.0 + (SATURATION_TAUS_S.len() as f64).ln().ceil();
+        let params = charged_among(SATURATION_TAUS_S.len());
         SATURATION_TAUS_S
             .iter()
             .filter(|&&tau| walk_alone && tau < t_end && tau <= max_tau_s)
@@ -362,7 +368,7 @@ fn hold_estimates(ctx: &Context<'_>) -> Vec<Estimate> {
     // The holds may not tell the correlation time (holds shorter than it see the rise only): every
     // time they leave open is tried on the withheld poses, charged the search's `ln` of their count.
     let markov_fits = pooled_markov(ctx.table, &ctx.hold_rows(), m.rate, m.white);
-    let charged = 1.0 + (markov_fits.len() as f64).ln().ceil();
+    let charged = charged_among(markov_fits.len());
     estimates.extend(
         markov_fits
             .into_iter()
