@@ -39,7 +39,7 @@ const MIN_HOLDS: usize = 2;
 /// chi-square variables, F(4, 4) for two holds rung along one direction: above 6.4 one time in
 /// 20. On the seen blind sets (regenerated at stop 70: CI seeds and blindgen2/3 175-178, blindgen4
 /// 152-155) the ringing mounts that reached the test gave 7.6-170, the motion logs' disturbed holds
-/// 0.2-3.7.
+/// 0.2-4.0 (a truck's fan bursts: 4.0; re-measured at stop 71).
 const DAMPED_RATIO: f64 = 5.0;
 
 /// Power at the frequencies `cycles` (per sample) of `m` samples from `start` (mean removed, axes
