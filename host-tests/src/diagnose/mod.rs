@@ -278,7 +278,8 @@ const WIDEST_SHAPE_PARAMS: usize = 6;
 /// the residuals' pattern (and, without a context, that the catalogue could not be tested).
 fn unexplained_where(d: &Diagnosis, ctx: Option<&family::Context<'_>>, probe_where: Option<String>) -> String {
     let periodic = || ctx.and_then(family::periodic::location);
-    let place = probe_where.or_else(periodic).unwrap_or_else(|| locate::unexplained_location(d));
+    let line = || ctx.and_then(|c| c.steady_line().map(|l| l.describe(|a, x| c.m.to_mg(x * c.m.model.ka[a][a]))));
+    let place = probe_where.or_else(line).or_else(periodic).unwrap_or_else(|| locate::unexplained_location(d));
     match ctx.map(|ctx| (ctx.poses.len(), ctx.widest_testable())) {
         Some((poses, widest)) if widest < WIDEST_SHAPE_PARAMS => format!(
             "{place}; with {poses} poses no shape of more than {widest} parameters could be tested on withheld poses (the catalogue's terms per axis take 3-6; more poses in varied directions test them)"
