@@ -45,9 +45,12 @@ const LINE_OVER_FLOOR: f64 = 20.0;
 /// a tremor band a few hertz wide puts about as much beside its peak as in it.
 const LINE_OVER_SKIRT: f64 = 10.0;
 
-/// Factor within which a hold's line power lies of the median hold's, and least cosine between a
-/// hold's amplitudes per axis and the median hold's, for the hold to carry the same line.
+/// Factor within which a hold's line power lies of the median hold's for the hold to carry the same
+/// line.
 const SAME_POWER: f64 = 2.0;
+
+/// Least cosine between a hold's amplitudes per axis and the median hold's for the hold to carry the
+/// same line.
 const SAME_DIRECTION: f64 = 0.9;
 
 /// Share of the holds that must carry the same line.
