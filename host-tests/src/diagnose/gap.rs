@@ -254,6 +254,11 @@ impl Measured {
     pub(crate) fn to_mg(&self, v: f64) -> f64 {
         v / self.gravity * 1000.0
     }
+
+    /// The calibration's scale factor per axis: output unit per input unit.
+    pub(crate) fn scale(&self) -> V3 {
+        std::array::from_fn(|a| self.model.ka[a][a])
+    }
 }
 
 /// Why step 1 could not run.

@@ -166,8 +166,7 @@ pub(crate) fn pose_reports(m: &Measured, after: &[Option<f64>]) -> Vec<PoseRepor
 pub(crate) fn longest_rest_allan(table: &Table, m: &Measured) -> Allan {
     let longest = (0..m.poses.len()).max_by_key(|&i| m.poses[i].n).unwrap_or(0);
     let rows = m.poses[longest].rows.clone();
-    let scale: V3 = std::array::from_fn(|a| m.model.ka[a][a]);
-    allan(table, rows.start, rows.end, m.rate, scale, m.white, m.gravity)
+    allan(table, rows.start, rows.end, m.rate, m.scale(), m.white, m.gravity)
 }
 
 /// Where a gap no family explains lies, most specific first: one pose; one orientation; a

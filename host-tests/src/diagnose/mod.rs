@@ -231,7 +231,7 @@ fn diagnose_measured(table: &Table, opts: &DiagnoseOptions, m: &gap::Measured, s
     let holds_walk = ctx.as_ref().is_some_and(family::colored_noise::walk_accounts_closely);
     let quiet_walk = || ctx.as_ref().and_then(family::colored_noise::quiet_walk);
     let decision = verdict::decide(m, &evaluations, &probes, from_holds, holds_walk, quiet_walk);
-    let scale: [f64; 3] = std::array::from_fn(|a| m.model.ka[a][a]);
+    let scale = m.scale();
     let mut d = Diagnosis {
         file: table.file.clone(),
         samples: table.samples.len(),
@@ -278,7 +278,7 @@ const WIDEST_SHAPE_PARAMS: usize = 6;
 /// the residuals' pattern (and, without a context, that the catalogue could not be tested).
 fn unexplained_where(d: &Diagnosis, ctx: Option<&family::Context<'_>>, probe_where: Option<String>) -> String {
     let periodic = || ctx.and_then(family::periodic::location);
-    let line = || ctx.and_then(|c| c.steady_line().map(|l| l.describe(|a, x| c.m.to_mg(x * c.m.model.ka[a][a]))));
+    let line = || ctx.and_then(|c| c.steady_line().map(|l| l.describe(|a, x| c.m.to_mg(x * c.m.scale()[a]))));
     let place = probe_where.or_else(line).or_else(periodic).unwrap_or_else(|| locate::unexplained_location(d));
     match ctx.map(|ctx| (ctx.poses.len(), ctx.widest_testable())) {
         Some((poses, widest)) if widest < WIDEST_SHAPE_PARAMS => format!(

@@ -91,9 +91,9 @@ const FITTING_CAUSE_OVER_PROXY: f64 = 0.3;
 
 /// The evidence a family is ranked by among its kind.
 fn ranking(e: &Evaluation) -> f64 {
-    let fits_every_pose = e.candidate.ratio_after <= FITS_TO_NOISE;
+    let leaves_white_noise = e.candidate.ratio_after <= FITS_TO_NOISE;
     let cause = match (e.candidate.effect, e.credible_cause) {
-        ("temperature", true) if fits_every_pose => FITTING_CAUSE_OVER_PROXY,
+        ("temperature", true) if leaves_white_noise => FITTING_CAUSE_OVER_PROXY,
         ("temperature", true) => CREDIBLE_CAUSE_OVER_PROXY,
         ("temperature", false) => CAUSE_OVER_PROXY,
         _ => 0.0,

@@ -440,7 +440,7 @@ impl ColoredNoise {
         } else {
             m.gap.sim_rmse_mg
         };
-        let scale: V3 = std::array::from_fn(|a| m.model.ka[a][a]);
+        let scale = m.scale();
         let mg = |v: f64, a: usize| m.to_mg(v.sqrt() * scale[a]);
         let candidate = Candidate {
             effect: "colored-noise",
