@@ -820,7 +820,6 @@ mod tests {
         let (rate, hold) = (found.rate, found.poses[k].rows.clone());
         let (n, gap) = ((cut_s * rate) as usize, (0.1 * rate) as usize);
         let start = if inside { hold.start + hold.len() / 2 } else { hold.end - n };
-        let g = table.median_magnitude;
         for (i, s) in table.samples[start..start + n].iter_mut().enumerate() {
             let lift = 1.0 + lift_g * (std::f64::consts::PI * i as f64 / n as f64).sin();
             s.iter_mut().for_each(|c| *c *= lift);
