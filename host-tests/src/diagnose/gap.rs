@@ -425,7 +425,8 @@ fn drop_moving_fragments(
 const EDGE_GAP_S: f64 = 0.5;
 
 /// Least angle between two poses' mean readings for a turn between them, degrees: a hold's pieces
-/// read within a fraction of a degree of each other (the 11 mg of a lift are 0.6 degrees).
+/// read within a fraction of a degree of each other (a lift along gravity does not turn the reading;
+/// 11 mg across it turn it by atan(0.011), 0.63 degrees).
 const TURN_DEG: f64 = 5.0;
 
 /// Pose `i` is a piece at the edge of a hold: the pose before it is of the same hold (within
