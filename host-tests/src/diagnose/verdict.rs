@@ -108,7 +108,13 @@ fn explains_poses(e: &Evaluation) -> bool {
 
 /// A value family with evidence in the holds only (a transient repeated in every hold).
 fn holds_only(e: &Evaluation) -> bool {
-    e.predicts_values && e.candidate.applicable && !explains_poses(e) && e.candidate.within_gain >= MIN_GAIN
+    seen_in_holds(e) && !explains_poses(e)
+}
+
+/// A value family whose fit to the holds' course explains them (within-pose gain at least
+/// [`MIN_GAIN`]), whatever it does on the withheld pose means.
+fn seen_in_holds(e: &Evaluation) -> bool {
+    e.predicts_values && e.candidate.applicable && e.candidate.within_gain >= MIN_GAIN
 }
 
 /// The family's fit to the holds agrees with the pose means.
@@ -124,11 +130,7 @@ fn agrees(e: &Evaluation) -> bool {
 /// standing: on the Python seen sets a thermal touch after each placement, gains 0.31 on withheld
 /// poses and 0.44 in the holds, 1.3 chi-square per coefficient apart, was named colored noise.)
 fn settles_in_holds(e: &Evaluation) -> bool {
-    e.candidate.effect == "settling"
-        && e.predicts_values
-        && e.candidate.applicable
-        && e.candidate.within_gain >= MIN_GAIN
-        && agrees(e)
+    e.candidate.effect == "settling" && seen_in_holds(e) && agrees(e)
 }
 
 /// A family and its index among the evaluations.
