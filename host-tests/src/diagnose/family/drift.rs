@@ -27,12 +27,6 @@ const HARMONICS: [usize; 5] = [1, 2, 3, 4, 6];
 /// Time constants tried, as fractions of the log's duration.
 const TAU_FACTORS: [f64; 6] = [0.05, 0.1, 0.2, 0.4, 0.8, 1.6];
 
-/// Least time constant, as a fraction of the log's duration, of a scale settling exponentially
-/// ([`course_variants`]). A faster one moves the first poses alone: a one-parameter common scale
-/// with a time constant of 0.05-0.1 of the log fitted the transients of settling logs (every hold
-/// settling) and an offset step on the Python sets better than the settling family did.
-const SCALE_TAU_MIN: f64 = 0.2;
-
 /// Least share of the holds' movement beyond white noise a line per hold must explain for
 /// [`drifting_holds`] (a random walk's path: about 0.7; see [`Within::line_share`]).
 const HOLD_LINES_EXPLAIN: f64 = 0.9;
@@ -80,6 +74,19 @@ pub(crate) fn drifting_holds(ctx: &Context<'_>) -> Option<String> {
     })
 }
 
+/// A warm-up's course at `t`: `1 - exp(-t / tau)` (`t`, `tau` in one unit).
+fn warm_up(t: f64, tau: f64) -> f64 {
+    1.0 - (-t / tau).exp()
+}
+
+/// The time constants (s) the pose level tries, [`TAU_FACTORS`] of the log ending at `t_end`. None faster than the first hold: a warm-up over within it is seen by the pose
+/// means in the first pose alone (a one-pose offset); that hold's course is the settling family's
+/// evidence.
+fn pose_level_taus(ctx: &Context<'_>, t_end: f64) -> Vec<f64> {
+    let first_hold_s = ctx.poses.first().map_or(0.0, |p| p.t_end - p.t_start);
+    TAU_FACTORS.iter().map(|f| f * t_end).filter(|tau| *tau >= first_hold_s).collect()
+}
+
 /// Per axis, the bias basis functions `phi_k(t)` along the pose direction.
 fn columns(ctx: &Context<'_>, basis: &dyn Fn(f64) -> Vec<f64>) -> Vec<Vec<f64>> {
     ctx.poses
@@ -94,7 +101,7 @@ type Basis = Box<dyn Fn(f64) -> f64>;
 
 /// Named time bases `phi_k(t)` (each costs 3 parameters, one per axis) over a log ending at `t_end`.
 fn time_bases(t_end: f64) -> Vec<(String, Vec<Basis>)> {
-    let warm = |tau: f64| Box::new(move |t: f64| 1.0 - (-t / tau).exp()) as Box<dyn Fn(f64) -> f64>;
+    let warm = |tau: f64| Box::new(move |t: f64| warm_up(t, tau)) as Box<dyn Fn(f64) -> f64>;
     let mut out: Vec<(String, Vec<Basis>)> = Vec::new();
     for f in TAU_FACTORS {
         out.push((format!("bias (1 - exp(-t / {:.0} s))", f * t_end), vec![warm(f * t_end)]));
@@ -217,19 +224,15 @@ impl Family for Drift {
 
     fn variants(&self, ctx: &Context<'_>) -> Vec<Variant> {
         let t_end = ctx.poses.last().map_or(1.0, PoseData::t_mid).max(1e-9);
-        let warm = |tau: f64| move |t: f64| 1.0 - (-t / tau).exp();
-        // A warm-up faster than the first hold is over within it: the pose means see it in the first
-        // pose alone (a one-pose offset); that hold's course is the settling family's evidence.
-        let first_hold_s = ctx.poses.first().map_or(0.0, |p| p.t_end - p.t_start);
-        let taus: Vec<f64> = TAU_FACTORS.iter().map(|f| f * t_end).filter(|tau| *tau >= first_hold_s).collect();
+        let taus = pose_level_taus(ctx, t_end);
         let mut out = Vec::new();
         for &tau in &taus {
-            let extra = columns(ctx, &|t| vec![warm(tau)(t)]);
+            let extra = columns(ctx, &|t| vec![warm_up(t, tau)]);
             out.push(Variant { extra, params: 4, detail: format!("bias (1 - exp(-t / {tau:.0} s))") });
         }
         for (i, &t1) in taus.iter().enumerate() {
             for &t2 in taus.iter().skip(i + 2) {
-                let extra = columns(ctx, &|t| vec![warm(t1)(t), warm(t2)(t)]);
+                let extra = columns(ctx, &|t| vec![warm_up(t, t1), warm_up(t, t2)]);
                 out.push(Variant {
                     extra,
                     params: 8,
@@ -275,11 +278,9 @@ const TAU_CHOICE_MIN_DOF: usize = 1;
 /// constant a parameter too), and together with the bias, the common scale and the bias following
 /// the same course (a supply's voltage, linear or settling: one cause moves both).
 fn course_variants(ctx: &Context<'_>, t_end: f64, variant: &VariantOf<'_>) -> Vec<Variant> {
-    let first_hold_s = ctx.poses.first().map_or(0.0, |p| p.t_end - p.t_start);
-    let taus = TAU_FACTORS.iter().filter(|f| **f >= SCALE_TAU_MIN).map(|f| f * t_end);
     let mut out = Vec::new();
-    for tau in taus.filter(|tau| *tau >= first_hold_s) {
-        let warm = move |x: f64| 1.0 - (-x * t_end / tau).exp();
+    for tau in pose_level_taus(ctx, t_end) {
+        let warm = move |x: f64| warm_up(x * t_end, tau);
         let per_axis = variant(4, format!("scale (1 - exp(-t / {tau:.0} s)) per axis"), &|f, x| {
             bias_scale_effect(f, warm(x), 1, false, true)
         });
@@ -331,25 +332,10 @@ mod tests {
         // the log, the thermometer flat. Twelve hand-placed poses leave the calibration 3 degrees of
         // freedom: the per-axis scale in time (3 parameters) cannot be tested, the common one can.
         for seed in [21, 22, 23] {
-            let mut scenario = random_scenario(EffectClass::None, seed);
-            let mut geometry = seed;
-            while !covers_every_axis(&plan_directions(&Plan::Random(12), geometry)) {
-                geometry = geometry.wrapping_add(0x1_0000_0000);
-            }
-            scenario.sim.plan = Plan::Random(12);
-            scenario.sim.seed = geometry;
-            let sim = &scenario.sim;
-            let end_s = sim.initial_rest_s + 12.0 * (sim.seconds_per_pose + sim.move_seconds);
-            let recording = simulate_with(
-                sim,
-                &mut [&mut |t: f64, _p: Option<usize>, r: &mut [f64; 3]| {
-                    let scale = 1.0 - 3.0e-3 * t / end_s;
-                    r.iter_mut().for_each(|v| *v *= scale);
-                }],
-            );
-            let temps_c = vec![25.0; recording.samples.len()];
-            let table = to_table(&SimLog { recording, temps_c }, "supply-sag").unwrap();
-            let d = diagnose(&table, &DiagnoseOptions { seed, ..DiagnoseOptions::DEFAULT }).unwrap();
+            let d = diagnose_disturbed(seed, 12, &|t, end_s, r| {
+                let scale = 1.0 - 3.0e-3 * t / end_s;
+                r.iter_mut().for_each(|v| *v *= scale);
+            });
             assert_eq!(d.verdict, "drift", "seed {seed}: {}", d.to_text());
             let named = d.candidates.iter().find(|c| c.effect == "drift").unwrap();
             assert!(named.detail.starts_with("scale common to every axis"), "seed {seed}: {:?}", named.variants);
