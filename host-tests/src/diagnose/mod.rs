@@ -613,7 +613,7 @@ mod tests {
     }
 
     #[test]
-    fn the_tail_of_a_move_in_a_few_pose_starts_is_trimmed_and_a_transient_in_every_one_is_not() {
+    fn the_tail_of_a_move_in_a_few_pose_starts_is_trimmed_and_a_transient_in_every_one_is_settling() {
         // The hand still settling the part after a lift: 12 mg along the vertical decaying in 0.3 s
         // at the start of a hold (the detector's variance test barely sees it).
         use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
@@ -641,10 +641,13 @@ mod tests {
         assert_eq!(d.tails_trimmed, 2, "{}", d.to_text());
         assert_eq!(d.verdict, "none", "{}", d.to_text());
         assert!(d.to_text().contains("2 poses trimmed"), "{}", d.to_text());
-        // Every pose: the part's settling, left to the settling family.
+        // Every pose: the part's settling, left to the settling family. The sixths test does not take
+        // it whole; the edge test takes the first tenths of a second where they differ from the
+        // second after them beyond noise, and the rest of the transient stays for the family.
         let d = diagnose(&tailed(&|_| true), &opts).unwrap();
-        assert_eq!(d.tails_trimmed, 0, "{}", d.to_text());
         assert_eq!(d.verdict, "settling", "{}", d.to_text());
+        let settling = d.candidates.iter().find(|c| c.effect == "settling").unwrap();
+        assert!(settling.heldout_gain >= MIN_GAIN, "{}", d.to_text());
     }
 
     #[test]
