@@ -546,7 +546,8 @@ const EDGE_TAIL_Z: f64 = 4.0;
 /// first [`EDGE_BLOCKS`] blocks whose mean differs from the [`EDGE_REFERENCE_S`] after them by more
 /// than [`EDGE_TAIL_Z`] standard errors on some axis (`var`: white-equivalent variance per sample),
 /// when a block after it no longer does (the tail is over within the blocks tested; a change that
-/// lasts, a slow settling or a move beginning, is not a tail). 0 for a pose too short to test.
+/// lasts, a slow settling or a move beginning, is not a tail). 0 for a pose too short to test
+/// (under 3 s: twice the blocks and the reference).
 fn edge_tail_rows(table: &Table, p: &PoseData, var: V3, rate: f64, from_end: bool) -> usize {
     let block = ((EDGE_BLOCK_S * rate).round() as usize).max(2);
     let reference_rows = ((EDGE_REFERENCE_S * rate).round() as usize).max(4);
@@ -579,12 +580,12 @@ fn edge_tail_rows(table: &Table, p: &PoseData, var: V3, rate: f64, from_end: boo
 
 /// Trims the tails of moves the still test let into the poses ([`edge_tail_rows`]), at both ends
 /// of every pose long enough to test, after [`trim_move_tails`] (which takes a large tail in a few
-/// poses whole); the library's poses follow. Unlike that test's sixths, a tail over within a few tenths of a second in every hold is a
-/// move's (a sensor's settling that lasts beyond the blocks tested is left to the settling
-/// family). Untrimmed, they moved the holds'
-/// segments: on the fifth generator's clean logs the within-pose ratio's 90th percentile was 1.61
-/// (1.35 trimmed; the Python generators' 1.28 and 1.27), and the holds' wander named colored noise
-/// on clean and out-of-catalogue logs. Returns which poses were trimmed.
+/// poses whole); the library's poses follow. Unlike that test's sixths, a tail over within a few
+/// tenths of a second in every hold is a move's (a sensor's settling that lasts beyond the blocks
+/// tested is left to the settling family). Untrimmed, they moved the holds' segments: on the fifth
+/// generator's clean development logs the within-pose ratio's 90th percentile was 1.61 (1.35
+/// trimmed; the Python generators' 1.28 either way), and the holds' wander named colored noise on
+/// clean and out-of-catalogue logs. Returns which poses were trimmed.
 fn trim_edge_tails(table: &Table, poses: &mut [PoseData], lib_poses: &mut [Pose], rate: f64) -> Vec<bool> {
     let var = move_test_variance(table, poses, rate);
     poses
