@@ -531,7 +531,8 @@ const EDGE_BLOCK_S: f64 = 0.1;
 
 /// Blocks tested at each edge of a pose: the still test, which judges blocks of about
 /// [`crate::poses::TARGET_BLOCK_S`], lets through up to a few tenths of a second of a move's slow
-/// end (a minimum-jerk turn's last 0.1-0.3 s on the fifth generator's logs).
+/// end (on a fifth-generator log, measured with numpy: poses began 0.07-0.31 s before the
+/// generator's holds and one ended 0.16 s into the next turn).
 const EDGE_BLOCKS: usize = 5;
 
 /// The reference the edge blocks are compared with: this long a stretch of the pose right after

@@ -79,9 +79,9 @@ fn warm_up(t: f64, tau: f64) -> f64 {
     1.0 - (-t / tau).exp()
 }
 
-/// The time constants (s) the pose level tries, [`TAU_FACTORS`] of the log ending at `t_end`. None faster than the first hold: a warm-up over within it is seen by the pose
-/// means in the first pose alone (a one-pose offset); that hold's course is the settling family's
-/// evidence.
+/// The time constants (s) the pose level tries, [`TAU_FACTORS`] of the log ending at `t_end`. None
+/// faster than the first hold: a warm-up over within it is seen by the pose means in the first pose
+/// alone (a one-pose offset); that hold's course is the settling family's evidence.
 fn pose_level_taus(ctx: &Context<'_>, t_end: f64) -> Vec<f64> {
     let first_hold_s = ctx.poses.first().map_or(0.0, |p| p.t_end - p.t_start);
     TAU_FACTORS.iter().map(|f| f * t_end).filter(|tau| *tau >= first_hold_s).collect()

@@ -191,14 +191,15 @@ pub(crate) fn common_scale_effect(f: V3, x: f64, power: usize) -> Vec<V3> {
 /// 4 320 logs, one aliased motor vibration named colored noise, now unexplained; no other answer
 /// changed).
 pub(crate) fn from_holds(ctx: &Context<'_>) -> Option<(&'static str, String)> {
-    let periodic = ctx.steady_line().is_some() || ctx.periodic_line().is_some();
+    let steady = ctx.steady_line().is_some();
+    let periodic = steady || ctx.periodic_line().is_some();
     colored_noise::switching_holds(ctx, colored_noise::Jumps::AlsoInsidePieces)
         .filter(|_| !periodic)
         .map(|d| ("colored-noise", d))
         .or_else(|| settling::settling_holds(ctx, settling::Decay::Significant).map(|d| ("settling", d)))
         .or_else(|| drift::drifting_holds(ctx).map(|d| ("drift", d)))
         .or_else(|| {
-            if ctx.steady_line().is_some() {
+            if steady {
                 return None;
             }
             let Some(wander) = colored_noise::wandering_holds(ctx) else {
