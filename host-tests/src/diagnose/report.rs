@@ -179,6 +179,9 @@ pub struct Probe {
     /// imitates it on the pose means would move that hold as a line, so it vetoes those with no margin.
     #[serde(skip)]
     pub jump_in_hold: bool,
+    /// The parameters its best parametrisation is charged (its columns and its search).
+    #[serde(skip)]
+    pub params: usize,
 }
 
 /// The whole diagnosis.

@@ -269,6 +269,7 @@ mod tests {
         // motor-aliasing log, 40 poses). The holds carry the sinusoid in phase over the whole log.
         use std::f64::consts::TAU;
         let opts = DiagnoseOptions::DEFAULT;
+        let mut read_as_switching = 0;
         for (seed, hold_s, hz) in [(2, 2.0, 0.38), (5, 2.0, 0.38), (2, 3.0, 0.25), (3, 3.0, 0.25)] {
             let mut scenario = random_scenario(EffectClass::None, seed);
             scenario.sim.seconds_per_pose = hold_s;
@@ -282,9 +283,14 @@ mod tests {
             let ctx = Context::new(&table, &m, &opts).unwrap();
             let case = format!("seed {seed}, holds {hold_s} s, {hz} Hz");
             assert!(ctx.periodic_line().is_some(), "{case}");
-            assert!(colored_noise::switching_holds(&ctx, colored_noise::Jumps::AlsoInsidePieces).is_some(), "{case}");
+            read_as_switching +=
+                colored_noise::switching_holds(&ctx, colored_noise::Jumps::AlsoInsidePieces).is_some() as usize;
             assert_ne!(from_holds(&ctx).map(|(effect, _)| effect), Some("colored-noise"), "{case}");
         }
+        // The telegraph test reads some of them as switching (two of the four with jumps inside a
+        // piece counted from 6 standard deviations, all four from 10): there the sinusoid's guard is
+        // what answers.
+        assert!(read_as_switching >= 2, "{read_as_switching} of 4 read as switching");
     }
 
     #[test]
