@@ -294,7 +294,7 @@ fn one_pose(ctx: &Context<'_>) -> Option<Probe> {
         in_sample_ratio: ctx.fit_ratio(&ctx.base_rows, &dropped).map_or(f64::NAN, |(r, _)| r),
         veto_margin: 0.0,
         jump_in_hold: false,
-        params,
+        columns: hold.len(),
     })
 }
 
@@ -356,8 +356,8 @@ pub(crate) fn run(ctx: &Context<'_>) -> Vec<Probe> {
             let jump_in_hold = shape == "bias-step" && step_seen_in_holds(ctx, &f.rows);
             let heldout_gain = ctx.value_gain(f.score_ratio);
             let in_sample_ratio = f.in_sample.map_or(f64::NAN, |fit| fit.ratio);
-            let params = f.params;
-            Some(Probe { shape, heldout_gain, detail: f.detail, in_sample_ratio, veto_margin, jump_in_hold, params })
+            let columns = f.rows.first().map_or(0, |r| r.len().saturating_sub(ctx.base_columns()));
+            Some(Probe { shape, heldout_gain, detail: f.detail, in_sample_ratio, veto_margin, jump_in_hold, columns })
         })
         .chain(one_pose(ctx))
         .collect()

@@ -179,9 +179,10 @@ pub struct Probe {
     /// imitates it on the pose means would move that hold as a line, so it vetoes those with no margin.
     #[serde(skip)]
     pub jump_in_hold: bool,
-    /// The parameters its best parametrisation is charged (its columns and its search).
+    /// The columns of its best parametrisation (its coefficients, without the charge of its search;
+    /// one per pose left out).
     #[serde(skip)]
-    pub params: usize,
+    pub columns: usize,
 }
 
 /// The whole diagnosis.

@@ -206,13 +206,14 @@ fn beaten(e: &Evaluation, probes: &[Probe]) -> bool {
     })
 }
 
-/// The family is a penalised wander that spends more parameters than the probe and fits every pose
-/// less closely than the probe does: the wander follows any path through the poses, the probe's
-/// few parameters fit them. A wander of no more parameters than the probe is a shape as rigid as
-/// the probe's (a linear ramp, 1.9 effective parameters, fitted to 1.333 of white noise where a bias
-/// step with its search, 6 parameters, fitted 1.329: on the development sets it was `unexplained`).
+/// The family is a penalised wander that spends more effective parameters than the probe has
+/// columns and fits every pose less closely than the probe does: the wander follows any path
+/// through the poses, a step among them too, where the probe's few columns fit them. A wander of no
+/// more parameters than the probe's columns is a shape as rigid as the probe's (a linear ramp's, 1.9
+/// effective parameters, fitted every pose to 1.333 of white noise where a bias step's three
+/// columns fitted 1.329: it was `unexplained`).
 fn wander_dominated(e: &Evaluation, p: &Probe) -> bool {
-    e.wander && e.candidate.extra_params > p.params && p.in_sample_ratio < e.candidate.ratio_after
+    e.wander && e.candidate.extra_params > p.columns && p.in_sample_ratio < e.candidate.ratio_after
 }
 
 /// A value family fitted to the pose means of a walk: the holds wander as a noise whose walk
@@ -443,7 +444,7 @@ mod tests {
 
     /// A probe (its place not seen as a jump in a hold).
     fn probe(shape: &'static str, heldout_gain: f64, in_sample_ratio: f64, veto_margin: f64) -> Probe {
-        Probe { shape, heldout_gain, detail: String::new(), in_sample_ratio, veto_margin, jump_in_hold: false, params: 3 }
+        Probe { shape, heldout_gain, detail: String::new(), in_sample_ratio, veto_margin, jump_in_hold: false, columns: 3 }
     }
 
     fn on_pose_means(effect: &'static str, heldout_ratio: f64, heldout_gain: f64, predicts_values: bool) -> Evaluation {
