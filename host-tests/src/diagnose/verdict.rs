@@ -444,7 +444,15 @@ mod tests {
 
     /// A probe (its place not seen as a jump in a hold).
     fn probe(shape: &'static str, heldout_gain: f64, in_sample_ratio: f64, veto_margin: f64) -> Probe {
-        Probe { shape, heldout_gain, detail: String::new(), in_sample_ratio, veto_margin, jump_in_hold: false, columns: 3 }
+        Probe {
+            shape,
+            heldout_gain,
+            detail: String::new(),
+            in_sample_ratio,
+            veto_margin,
+            jump_in_hold: false,
+            columns: 3,
+        }
     }
 
     fn on_pose_means(effect: &'static str, heldout_ratio: f64, heldout_gain: f64, predicts_values: bool) -> Evaluation {
