@@ -44,9 +44,9 @@ const SIGNIFICANT_JUMP_Z: f64 = 10.0;
 /// over a constant (chi-square on three axes, the best of the `4 SEGMENTS - 1` places searched):
 /// white noise passes 36 on one place with probability 7.5e-8, on the 23 at most 1.7e-6 per
 /// hold. At [`SIGNIFICANT_JUMP_Z`] a popcorn noise of 1.8 mg on a part of 3 mg white noise
-/// (holds of 1-9 s) counted 5 of its 9 jumps beyond 6 standard deviations; on the development sets (2 304 logs) 6 turned
-/// it and one telegraph noise from `unexplained` to colored noise and changed no other answer, 5
-/// lost the telegraph again (more jumps, not of one size).
+/// (holds of 1-9 s) counted 5 of its 9 jumps beyond 6 standard deviations; on the development
+/// sets (2 304 logs) 6 turned it and one telegraph noise from `unexplained` to colored noise and
+/// changed no other answer, 5 lost the telegraph again (more jumps, not of one size).
 const SIGNIFICANT_INSIDE_Z: f64 = 6.0;
 
 /// Largest jump between two pieces of a hold that a switch of the bias can be, share of gravity's
