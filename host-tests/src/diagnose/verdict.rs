@@ -34,11 +34,17 @@ const CAUSE_OVER_PROXY: f64 = 0.05;
 
 /// ... within which a credible cause is (a temperature fit whose coefficients a MEMS part can
 /// have, [`Evaluation::credible_cause`]): the thermometer reads the sensor's temperature with its
-/// own noise, rounding and lag where time is exact, so a smooth function of time fits a
-/// temperature effect a little better than the thermometer it follows. On the Python development
-/// sets (2 592 logs) the temperature effects named drift at 0.05 led time by 0.057-0.096 in
-/// evidence; the drifts named drift led the thermometer by 0.090 and more.
-const CREDIBLE_CAUSE_OVER_PROXY: f64 = 0.1;
+/// own noise, rounding and lag where time is exact, and the drift family searches many shapes of
+/// time (exponentials, polynomials, a wander) on the same withheld poses, so a smooth function of
+/// time fits a temperature effect a little better than the thermometer it follows. On the Python
+/// development sets (2 592 logs) the temperature effects named drift at 0.05 led time by
+/// 0.057-0.096 in evidence. At 0.1, on stop 79's development sets (2 304 logs) two blindgen5
+/// temperature effects (a self-heating and a warm-up, board thermometers) trailed time by 0.16 and
+/// 0.13 and were named drift, and every drift named drift led its applicable temperature fit by
+/// more than 0.3; at 0.2 those two and a room cycle of an earlier fresh set (named colored noise)
+/// were named temperature and no other answer changed on 4 992 logs (the development sets, the
+/// fresh sets of stops 77-79, CI's seeds).
+const CREDIBLE_CAUSE_OVER_PROXY: f64 = 0.2;
 
 /// Chi-square per coefficient up to which a within-pose fit agrees with the pose means
 /// ([`Candidate::within_disagreement`](super::report::Candidate::within_disagreement)). A transient
@@ -699,7 +705,7 @@ mod tests {
     }
 
     #[test]
-    fn a_credible_thermometer_is_named_before_time_within_a_tenth() {
+    fn a_credible_thermometer_is_named_before_time_within_two_tenths() {
         let m = significant_gap(None);
         let named = |temperature_gain: f64, credible: bool| {
             let drift = on_pose_means("drift", 1.5, 0.64, true);
@@ -707,12 +713,15 @@ mod tests {
             temperature.credible_cause = credible;
             decide(&m, &[drift, temperature], &[], None, false, || None).verdict
         };
-        // Time leads by 0.08: within a credible cause's tenth, beyond an implausible one's 0.05.
+        // Time leads by 0.08: within a credible cause's two tenths, beyond an implausible one's 0.05.
         assert_eq!(named(0.56, true), "temperature");
         assert_eq!(named(0.56, false), "drift");
         assert_eq!(named(0.61, false), "temperature");
-        // Time leads by 0.12: time is named either way.
-        assert_eq!(named(0.52, true), "drift");
+        // Time leads by 0.16 (a blindgen5 self-heating read by a board thermometer): still the
+        // credible thermometer; by 0.24 time is named either way.
+        assert_eq!(named(0.48, true), "temperature");
+        assert_eq!(named(0.48, false), "drift");
+        assert_eq!(named(0.40, true), "drift");
     }
 
     #[test]
@@ -726,10 +735,13 @@ mod tests {
             decide(&m, &[drift, temperature], &[], None, false, || None).verdict
         };
         // A self-heating log (blindgen4 156): a warm-up's exponential in time led the thermometer
-        // by 0.19, both fitting every pose to white noise.
+        // by 0.19, both fitting every pose to white noise (within two tenths a credible thermometer
+        // is named whatever it leaves). Time ahead by 0.24: named the thermometer only when it
+        // fits every pose to white noise.
         assert_eq!(named(0.67, true, 0.90), "temperature");
+        assert_eq!(named(0.62, true, 0.90), "temperature");
         // Leaving more than white noise after its fit, an implausible fit or time far ahead: time.
-        assert_eq!(named(0.67, true, 1.28), "drift");
+        assert_eq!(named(0.62, true, 1.28), "drift");
         assert_eq!(named(0.67, false, 0.90), "drift");
         assert_eq!(named(0.5, true, 0.90), "drift");
     }
