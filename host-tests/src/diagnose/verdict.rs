@@ -36,15 +36,15 @@ const CAUSE_OVER_PROXY: f64 = 0.05;
 /// have, [`Evaluation::credible_cause`]): the thermometer reads the sensor's temperature with its
 /// own noise, rounding and lag where time is exact, and the drift family searches many shapes of
 /// time (exponentials, polynomials, a wander) on the same withheld poses, so a smooth function of
-/// time fits a temperature effect a little better than the thermometer it follows. On the Python
-/// development sets (2 592 logs) the temperature effects named drift at 0.05 led time by
-/// 0.057-0.096 in evidence, and the drifts named drift led the thermometer by 0.090 and more (how
-/// many of them by less than 0.2 was not recorded). At 0.1, on stop 79's development sets (2 304 logs) two blindgen5
-/// temperature effects (a self-heating and a warm-up, board thermometers) trailed time by 0.16 and
-/// 0.13 and were named drift, and every drift named drift led its applicable temperature fit by
-/// more than 0.3; at 0.2 those two and a room cycle of an earlier fresh set (named colored noise)
-/// were named temperature and no other answer changed on 4 992 logs (the development sets, the
-/// fresh sets of stops 77-79, CI's seeds).
+/// time fits a temperature effect a little better than the thermometer it follows. An earlier
+/// stop's record (Python development sets, 2 592 logs, bound 0.05): the temperature effects named
+/// drift led time by 0.057-0.096 in evidence, the drifts named drift led the thermometer by 0.090
+/// and more (how many by less than 0.2 was not recorded). At 0.1, on stop 79's development sets
+/// (2 304 logs) two blindgen5 temperature effects (a self-heating and a warm-up, board
+/// thermometers) trailed time by 0.16 and 0.13 and were named drift, and every drift named drift
+/// led its applicable temperature fit by more than 0.3; at 0.2 those two and a room cycle of an
+/// earlier fresh set (named colored noise) were named temperature and no other answer changed on
+/// 4 992 logs (the development sets, the fresh sets of stops 77-79, CI's seeds).
 const CREDIBLE_CAUSE_OVER_PROXY: f64 = 0.2;
 
 /// Chi-square per coefficient up to which a within-pose fit agrees with the pose means

@@ -17,10 +17,10 @@ use crate::vec3::sub;
 /// switching noise many times (the telegraph noises named from their jumps on stop 46's development
 /// sets and blindgen4 115: 7-34). Asking 3, stop 45's first version (jumps judged against the
 /// pieces' own sample variance) also named a settling and a drift colored noise. Asking 5 (stop 78)
-/// turned a popcorn noise of 5 clear jumps (holds of 2-6 s, dwell 9.5 s) and a random walk moving
+/// turned a popcorn noise of 5 clear jumps (holds of 2-7 s, dwell 9.5 s) and a random walk moving
 /// the holds 2.8 times white noise to colored noise on the development sets (2 304 logs), and one
 /// telegraph noise of CI's blindgen4 seeds, but also the real FXOS8700 session `data_sample`
-/// (hand-placed, `unexplained`): 5 jumps inside its holds of 0.9-2.3 mg, on y and z, of two sizes
+/// (hand-placed, `unexplained`): 5 jumps inside its holds of 0.9-2.4 mg, on y and z, of two sizes
 /// each within the band.
 const MIN_JUMPS: usize = 6;
 
