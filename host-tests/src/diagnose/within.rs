@@ -31,6 +31,13 @@ const SIGNIFICANT_Z: f64 = 4.0;
 /// ... and at least this ratio.
 const MIN_RATIO: f64 = 1.15;
 
+/// Standard deviations (under white noise) by which the holds but the one that moves most still move
+/// ([`Within::significant_beyond_one_hold`]). Without a hold of 72 s whose slow transient (2 mg, tau
+/// 10 s) dominated the channel, the 24 short holds of an own-simulator log settling after every
+/// set-down moved 3.5; the 15 other holds of a blind generator's bad pose (a board pushed during one
+/// hold) 1.3, those of own-simulator logs with one hold settling -0.8-1.1.
+const SPREAD_Z: f64 = 3.0;
+
 /// The share of a random walk's movement within the holds a line per hold explains: about 0.7
 /// for a Brownian path's six segment means pooled over 12 holds ([`Within::line_share`]).
 const BROWNIAN_LINE_SHARE: f64 = 0.7;
@@ -263,6 +270,29 @@ impl Within {
             var += hold.var;
         }
         if var > 0.0 { ((observed - mean) / var.sqrt(), (mean - white_mean) / var.sqrt()) } else { (0.0, 0.0) }
+    }
+
+    /// The movement stays beyond white noise without the hold that moves most (`holds`: each hold's
+    /// poses, the pieces the pose finder cut it into), by [`SPREAD_Z`] standard deviations and
+    /// [`MIN_RATIO`]: it is spread over the holds, not carried by one (a board pushed or knocked
+    /// during one hold, a bad pose).
+    pub(crate) fn significant_beyond_one_hold(&self, holds: &[Range<usize>]) -> bool {
+        // Per hold: the sum of its squared deviations, its rows and its poses in the channel.
+        let mut per_hold = vec![(0.0, 0, 0); holds.len()];
+        for rows in self.pose_ranges() {
+            let Some(h) = holds.iter().position(|hold| hold.contains(&self.pose[rows.start])) else { continue };
+            per_hold[h].0 += self.d[rows.clone()].iter().map(|v| v * v).sum::<f64>();
+            (per_hold[h].1, per_hold[h].2) = (per_hold[h].1 + rows.len(), per_hold[h].2 + 1);
+        }
+        let excess = |h: &(f64, usize, usize)| h.0 - h.1 as f64;
+        let Some(largest) = (0..holds.len()).max_by(|&a, &b| excess(&per_hold[a]).total_cmp(&excess(&per_hold[b])))
+        else {
+            return false;
+        };
+        per_hold.swap_remove(largest);
+        let (sum, rows, poses) = per_hold.iter().fold((0.0, 0, 0), |acc, h| (acc.0 + h.0, acc.1 + h.1, acc.2 + h.2));
+        let ms = if rows > 0 { sum / rows as f64 } else { 0.0 };
+        poses > 0 && ms > 1.0 + SPREAD_Z * (2.0 / (poses * (SEGMENTS - 1)) as f64).sqrt() && ms.sqrt() >= MIN_RATIO
     }
 
     /// The mean square of the whitened deviations beyond white noise, and its standard deviation
