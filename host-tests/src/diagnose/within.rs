@@ -35,7 +35,7 @@ const MIN_RATIO: f64 = 1.15;
 /// ([`Within::significant_beyond_one_hold`]). Without a hold of 72 s whose slow transient (2 mg, tau
 /// 10 s) dominated the channel, the 24 short holds of an own-simulator log settling after every
 /// set-down moved 3.5; the 15 other holds of a blind generator's bad pose (a board pushed during one
-/// hold) 1.3, those of own-simulator logs with one hold settling -0.8-1.1.
+/// hold) 1.3, those of three own-simulator logs with one hold settling (4 mg, tau 3 s) -1.1 to 1.4.
 const SPREAD_Z: f64 = 3.0;
 
 /// The share of a random walk's movement within the holds a line per hold explains: about 0.7

@@ -32,7 +32,8 @@ impl Family for Motion {
     /// noise: the better on withheld poses.
     fn evaluate(&self, ctx: &Context<'_>) -> Evaluation {
         let mut dropped = standard_evaluation(self, ctx);
-        if let Some(one_hold) = moving(ctx).filter(|d| !dropped.candidate.applicable && in_one_hold(ctx, d)) {
+        let moving_in_one_hold = || moving(ctx).filter(|d| in_one_hold(ctx, d));
+        if let Some(one_hold) = (!dropped.candidate.applicable).then(moving_in_one_hold).flatten() {
             let poses: Vec<String> = (0..one_hold.len()).filter(|&i| one_hold[i]).map(|i| i.to_string()).collect();
             dropped.candidate.detail =
                 format!("one hold moves (poses {}): a bad pose, not handling that recurs", poses.join(" "));

@@ -420,9 +420,10 @@ mod tests {
     #[test]
     fn one_hold_that_settles_is_no_settling_of_the_holds() {
         // The board pushed once as it was set down: 4 mg along one direction at the set-down of
-        // hold 9, relaxing with tau 3 s (slower than a move's tail); no other hold moves. The holds' movement is significant but
-        // one hold carries it (a bad pose): the holds do not settle, even by the ratio of their
-        // halves' movement alone. The same transient after every set-down they do.
+        // hold 9, relaxing with tau 3 s (slower than a move's tail); no other hold moves. The
+        // holds' movement is significant but one hold carries it (a bad pose): the holds do not
+        // settle, even by the ratio of their halves' movement alone. The same transient after
+        // every set-down they do.
         let v = [0.6, -0.64, 0.48];
         let settle = |age: f64| v.map(|c| c * 4.0 * (-age / 3.0).exp());
         let (mut once, mut every) = (0, 0);
