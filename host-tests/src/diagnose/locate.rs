@@ -101,6 +101,17 @@ impl Diagnosis {
         (rms(&el), rms(&expected))
     }
 
+    /// The pose whose change within its hold (last third against first, in units of its white
+    /// noise) carries more than half of the poses' squared change, and that share: one hold moving
+    /// (a bad pose), not the log's holds.
+    fn within_carried_by_one(&self) -> Option<(usize, f64)> {
+        let scaled = |p: &PoseReport| (p.early_late_mg / (p.expected_mg * 6f64.sqrt())).powi(2);
+        let squares: Vec<f64> = self.poses.iter().map(scaled).filter(|v| v.is_finite()).collect();
+        let total: f64 = squares.iter().sum();
+        let (k, top) = squares.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1))?;
+        (squares.len() == self.poses.len() && *top > 0.5 * total).then_some((k, top / total))
+    }
+
     /// Step 2 in one line: the share of the squared residual in the three worst poses (and their
     /// orientations), the correlation with time and temperature, the within-pose change over white
     /// noise and the Allan deviation at the longest `tau` over white noise.
@@ -200,7 +211,8 @@ pub(crate) fn unexplained_location(d: &Diagnosis) -> String {
     }
     let (within, expected) = d.within_stats();
     if within > 2.0 * expected {
-        return format!("within poses: {:.1}x white noise", within / expected);
+        let one = d.within_carried_by_one().map(|(k, share)| format!(", {:.0} % of it in pose #{k}", 100.0 * share));
+        return format!("within poses: {:.1}x white noise{}", within / expected, one.unwrap_or_default());
     }
     if let (Some(a), Some(w)) = (d.allan.adev_mg.last(), d.allan.white_mg.last())
         && a > &(2.0 * w)

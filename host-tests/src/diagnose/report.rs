@@ -541,6 +541,22 @@ mod tests {
     }
 
     #[test]
+    fn movement_within_the_holds_that_one_pose_carries_is_placed_there() {
+        // Eight poses alike but for their change within the hold: white noise gives 0.245 mg (the
+        // thirds' difference of a pose mean of 0.1 mg); holds moving 0.6 mg each, or one 1.5 mg.
+        let directions = [[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, -1.0, 0.0]];
+        let moved = |changes: &dyn Fn(usize) -> f64| {
+            let mut d = diagnosis();
+            d.poses =
+                (0..8).map(|i| PoseReport { early_late_mg: changes(i), ..pose(i as f64, directions[i % 4]) }).collect();
+            crate::diagnose::locate::unexplained_location(&d)
+        };
+        assert_eq!(moved(&|_| 0.6), "within poses: 2.4x white noise");
+        let one = moved(&|i| if i == 3 { 1.5 } else { 0.05 });
+        assert_eq!(one, "within poses: 2.2x white noise, 99 % of it in pose #3");
+    }
+
+    #[test]
     fn the_document_has_the_documented_shape_and_non_finite_numbers_are_null() {
         let json = diagnosis().to_json();
         let text = json.to_string();
