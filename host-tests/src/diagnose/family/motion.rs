@@ -34,9 +34,8 @@ impl Family for Motion {
         let mut dropped = standard_evaluation(self, ctx);
         let moving_in_one_hold = || moving(ctx).filter(|d| in_one_hold(ctx, d));
         if let Some(one_hold) = (!dropped.candidate.applicable).then(moving_in_one_hold).flatten() {
-            let poses: Vec<String> = (0..one_hold.len()).filter(|&i| one_hold[i]).map(|i| i.to_string()).collect();
             dropped.candidate.detail =
-                format!("one hold moves (poses {}): a bad pose, not handling that recurs", poses.join(" "));
+                format!("one hold moves (poses {}): a bad pose, not handling that recurs", marked(&one_hold));
         }
         let Some(tremor) = ctx.tremor() else { return dropped };
         let mut shaken = colored_noise::ColoredNoise.noise_model(ctx);
@@ -56,6 +55,12 @@ impl Family for Motion {
         let dropped = moving(ctx).filter(|d| !in_one_hold(ctx, d))?;
         without(ctx, dropped, "moving poses dropped")
     }
+}
+
+/// The indices of the `marked` poses, space-separated.
+fn marked(marked: &[bool]) -> String {
+    let list: Vec<String> = (0..marked.len()).filter(|&i| marked[i]).map(|i| i.to_string()).collect();
+    list.join(" ")
 }
 
 /// Every `dropped` pose is a piece of one hold ([`Context::hold_runs`]).
@@ -147,13 +152,13 @@ pub(crate) fn without(ctx: &Context<'_>, dropped: Vec<bool>, what: &str) -> Opti
     let count = dropped.iter().filter(|d| **d).count();
     let rows = ctx.base_rows.clone();
     let ratio = ctx.heldout_ratio(&rows, &dropped, count)?;
-    let list: Vec<String> = dropped.iter().enumerate().filter(|(_, d)| **d).map(|(i, _)| i.to_string()).collect();
+    let list = marked(&dropped);
     Some(Fitted {
         rows,
         dropped,
         score_ratio: ratio,
         params: count,
-        detail: format!("{what}: {}", list.join(" ")),
+        detail: format!("{what}: {list}"),
         tried: Vec::new(),
         in_sample: None,
     })
