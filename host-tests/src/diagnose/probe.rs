@@ -295,6 +295,7 @@ fn one_pose(ctx: &Context<'_>) -> Option<Probe> {
         veto_margin: 0.0,
         jump_in_hold: false,
         columns: hold.len(),
+        step_before: None,
     })
 }
 
@@ -353,11 +354,22 @@ pub(crate) fn run(ctx: &Context<'_>) -> Vec<Probe> {
         .filter_map(|&(shape, make, veto_margin, leaves_dof)| {
             let variants = make(ctx).into_iter().filter(|v| leaves_dof(ctx, &v.extra)).collect();
             let f = ctx.best_of(variants)?;
+            let step_before =
+                (shape == "bias-step").then(|| fitted_step(ctx, &f.rows).map(|(after, _)| after)).flatten();
             let jump_in_hold = shape == "bias-step" && step_seen_in_holds(ctx, &f.rows);
             let heldout_gain = ctx.value_gain(f.score_ratio);
             let in_sample_ratio = f.in_sample.map_or(f64::NAN, |fit| fit.ratio);
             let columns = f.rows.first().map_or(0, |r| r.len().saturating_sub(ctx.base_columns()));
-            Some(Probe { shape, heldout_gain, detail: f.detail, in_sample_ratio, veto_margin, jump_in_hold, columns })
+            Some(Probe {
+                shape,
+                heldout_gain,
+                detail: f.detail,
+                in_sample_ratio,
+                veto_margin,
+                jump_in_hold,
+                columns,
+                step_before,
+            })
         })
         .chain(one_pose(ctx))
         .collect()

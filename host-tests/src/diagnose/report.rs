@@ -183,6 +183,9 @@ pub struct Probe {
     /// one per pose left out).
     #[serde(skip)]
     pub columns: usize,
+    /// For a bias step, the first pose it shifts: the step lies before that pose's hold or inside it.
+    #[serde(skip)]
+    pub step_before: Option<usize>,
 }
 
 /// The whole diagnosis.

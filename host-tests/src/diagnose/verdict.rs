@@ -492,6 +492,7 @@ mod tests {
             veto_margin,
             jump_in_hold: false,
             columns: 3,
+            step_before: None,
         }
     }
 
