@@ -240,6 +240,39 @@ impl Within {
         total / self.d.len() as f64
     }
 
+    /// A random walk per axis (variance per second, input unit) that moves the holds' segment means
+    /// as much as they move beyond white noise, axis by axis as the poses' directions see them (the
+    /// method of moments: each deviation's square beyond 1 regressed on the walk each axis would
+    /// give it; an axis whose level comes out negative is set to 0 and the others refitted). `None`
+    /// when no axis moves.
+    pub(crate) fn walk_per_axis(&self, m: &Measured) -> Option<V3> {
+        let brownian = brownian_deviation_share();
+        let unit = |a: usize| std::array::from_fn(|b| f64::from(u8::from(a == b)));
+        let regressors: Vec<V3> = (0..self.d.len())
+            .map(|i| {
+                let w2 = self.weight[i] * self.weight[i];
+                std::array::from_fn(|a| noise_along_hold(m, self.pose[i], unit(a), [0.0; 3]).0 * brownian * w2)
+            })
+            .collect();
+        // `lstsq` minimises `(r + X x)^2`: `r` is the excess with its sign turned.
+        let excess: Vec<f64> = self.d.iter().map(|v| 1.0 - v * v).collect();
+        let mut axes: Vec<usize> = (0..3).collect();
+        while !axes.is_empty() {
+            let rows: Vec<Vec<f64>> = regressors.iter().map(|c| axes.iter().map(|&a| c[a]).collect()).collect();
+            let all: Vec<usize> = (0..rows.len()).collect();
+            let x = super::math::lstsq(&rows, &excess, &all)?;
+            match (0..axes.len()).filter(|&j| x[j] < 0.0).min_by(|&j, &k| x[j].total_cmp(&x[k])) {
+                Some(j) => _ = axes.remove(j),
+                None => {
+                    let mut walk = [0.0; 3];
+                    axes.iter().zip(&x).for_each(|(&a, &v)| walk[a] = v);
+                    return (walk.iter().any(|v| *v > 0.0) && walk.iter().all(|v| v.is_finite())).then_some(walk);
+                }
+            }
+        }
+        None
+    }
+
     /// The holds' movement that a line per hold leaves (their roughness) against what a random walk
     /// `walk` and a floor `floor` (as in [`Within::predicted_excess`]) with the white noise would
     /// leave: `(shortfall, power)`, the observed roughness less the expected in standard deviations
