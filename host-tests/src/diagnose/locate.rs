@@ -65,6 +65,12 @@ pub(crate) fn orientation_label(u: V3) -> String {
     format!("{}{}", if u[a] >= 0.0 { "+" } else { "-" }, ["x", "y", "z"][a])
 }
 
+/// The change within a pose's hold (last third against first) that white noise gives, mg: two
+/// thirds of n/3 samples each, `sqrt(2 * 3)` times the pose mean's noise.
+fn white_change_mg(p: &PoseReport) -> f64 {
+    p.expected_mg * 6f64.sqrt()
+}
+
 impl Diagnosis {
     pub(crate) fn by_orientation(&self) -> Vec<(String, usize, f64)> {
         let mut out = Vec::new();
@@ -96,8 +102,7 @@ impl Diagnosis {
 
     pub(crate) fn within_stats(&self) -> (f64, f64) {
         let el: Vec<f64> = self.poses.iter().map(|p| p.early_late_mg).collect();
-        // White noise: two thirds of n/3 samples each -> sqrt(2 * 3) * sigma_pose_mean.
-        let expected: Vec<f64> = self.poses.iter().map(|p| p.expected_mg * 6f64.sqrt()).collect();
+        let expected: Vec<f64> = self.poses.iter().map(white_change_mg).collect();
         (rms(&el), rms(&expected))
     }
 
@@ -105,7 +110,7 @@ impl Diagnosis {
     /// noise) carries more than half of the poses' squared change, and that share: one hold moving
     /// (a bad pose), not the log's holds.
     fn within_carried_by_one(&self) -> Option<(usize, f64)> {
-        let scaled = |p: &PoseReport| (p.early_late_mg / (p.expected_mg * 6f64.sqrt())).powi(2);
+        let scaled = |p: &PoseReport| (p.early_late_mg / white_change_mg(p)).powi(2);
         let squares: Vec<f64> = self.poses.iter().map(scaled).filter(|v| v.is_finite()).collect();
         let total: f64 = squares.iter().sum();
         let (k, top) = squares.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1))?;

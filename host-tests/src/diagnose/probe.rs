@@ -103,9 +103,8 @@ fn fitted_step(ctx: &Context<'_>, rows: &[Vec<f64>]) -> Option<(usize, V3)> {
 /// One of the two holds beside a bias step shows it as a jump ([`jump_inside_hold`]): the bias
 /// jumped within that hold, where a slow change that imitates the step on the pose means would move
 /// it as a line.
-fn step_seen_in_holds(ctx: &Context<'_>, rows: &[Vec<f64>]) -> bool {
-    fitted_step(ctx, rows)
-        .is_some_and(|(after, step)| [after - 1, after].iter().any(|&p| jump_inside_hold(ctx, p, step)))
+fn step_seen_in_holds(ctx: &Context<'_>, (after, step): (usize, V3)) -> bool {
+    [after - 1, after].iter().any(|&p| jump_inside_hold(ctx, p, step))
 }
 
 /// Hold `p`'s segments show the step as a jump at one time in the hold (size fitted, the sign of the
@@ -354,9 +353,9 @@ pub(crate) fn run(ctx: &Context<'_>) -> Vec<Probe> {
         .filter_map(|&(shape, make, veto_margin, leaves_dof)| {
             let variants = make(ctx).into_iter().filter(|v| leaves_dof(ctx, &v.extra)).collect();
             let f = ctx.best_of(variants)?;
-            let step_before =
-                (shape == "bias-step").then(|| fitted_step(ctx, &f.rows).map(|(after, _)| after)).flatten();
-            let jump_in_hold = shape == "bias-step" && step_seen_in_holds(ctx, &f.rows);
+            let step = (shape == "bias-step").then(|| fitted_step(ctx, &f.rows)).flatten();
+            let jump_in_hold = step.is_some_and(|s| step_seen_in_holds(ctx, s));
+            let step_before = step.map(|(after, _)| after);
             let heldout_gain = ctx.value_gain(f.score_ratio);
             let in_sample_ratio = f.in_sample.map_or(f64::NAN, |fit| fit.ratio);
             let columns = f.rows.first().map_or(0, |r| r.len().saturating_sub(ctx.base_columns()));

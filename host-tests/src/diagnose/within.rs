@@ -38,6 +38,12 @@ const MIN_RATIO: f64 = 1.15;
 /// hold) 1.3, those of three own-simulator logs with one hold settling (4 mg, tau 3 s) -1.1 to 1.4.
 const SPREAD_Z: f64 = 3.0;
 
+/// The whitened deviations' mean square `ms` over `poses` poses lies `z` standard deviations (under
+/// white noise) beyond 1, and its root at least [`MIN_RATIO`].
+fn beyond_white(ms: f64, poses: usize, z: f64) -> bool {
+    ms > 1.0 + z * (2.0 / (poses * (SEGMENTS - 1)) as f64).sqrt() && ms.sqrt() >= MIN_RATIO
+}
+
 /// The share of a random walk's movement within the holds a line per hold explains: about 0.7
 /// for a Brownian path's six segment means pooled over 12 holds ([`Within::line_share`]).
 const BROWNIAN_LINE_SHARE: f64 = 0.7;
@@ -215,9 +221,8 @@ impl Within {
             return None;
         }
         let ms = w.d.iter().map(|v| v * v).sum::<f64>() / w.d.len() as f64;
-        let spread = (2.0 / (used * (SEGMENTS - 1)) as f64).sqrt();
         w.nominal_ratio = ms.sqrt();
-        w.significant = ms > 1.0 + SIGNIFICANT_Z * spread && w.nominal_ratio >= MIN_RATIO;
+        w.significant = beyond_white(ms, used, SIGNIFICANT_Z);
         Some(w)
     }
 
@@ -325,7 +330,7 @@ impl Within {
         per_hold.swap_remove(largest);
         let (sum, rows, poses) = per_hold.iter().fold((0.0, 0, 0), |acc, h| (acc.0 + h.0, acc.1 + h.1, acc.2 + h.2));
         let ms = if rows > 0 { sum / rows as f64 } else { 0.0 };
-        poses > 0 && ms > 1.0 + SPREAD_Z * (2.0 / (poses * (SEGMENTS - 1)) as f64).sqrt() && ms.sqrt() >= MIN_RATIO
+        poses > 0 && beyond_white(ms, poses, SPREAD_Z)
     }
 
     /// The mean square of the whitened deviations beyond white noise, and its standard deviation
