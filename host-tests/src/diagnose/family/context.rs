@@ -94,6 +94,11 @@ const UNPREDICTABLE: f64 = 1e6;
 /// at white noise on a sinusoidal bias of 25 poses).
 const IN_SAMPLE_MIN_DOF: usize = 3;
 
+/// ... for a design of one extra column: on a log of 12 poses (3 beyond the nominal model's
+/// columns) one term is judged on the 2 it leaves, the verdict asking a chi-square drop beyond
+/// chance of any search ([`super::super::verdict`]'s `FEW_DOF_EXPLAINED`).
+pub(crate) const ONE_COLUMN_MIN_DOF: usize = 2;
+
 /// Logs of at most this many poses count a probe's residual degrees of freedom leaving one out
 /// ([`Context::leaves_residual_dof`]); longer ones as if a fold of `opts.folds` were withheld. A
 /// probe searches many designs (a period, a step's place, a turn axis) on the same withheld poses:
@@ -468,7 +473,8 @@ impl<'a> Context<'a> {
         let base = self.base_columns();
         let columns = rows.first().map_or(0, Vec::len);
         let kept = dropped.iter().filter(|d| !**d).count();
-        let least = IN_SAMPLE_MIN_DOF.max(columns.saturating_sub(base));
+        let extra = columns.saturating_sub(base);
+        let least = if extra == 1 { ONE_COLUMN_MIN_DOF } else { IN_SAMPLE_MIN_DOF.max(extra) };
         let residual_dof = kept.checked_sub(columns).filter(|&d| d >= least)?;
         let (ratio, after) = self.fit_ratio(rows, dropped)?;
         let before = self.m.gap.ratio_before.powi(2) * kept.saturating_sub(base) as f64;

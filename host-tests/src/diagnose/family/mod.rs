@@ -17,7 +17,7 @@ pub(crate) mod steady_line;
 mod temperature;
 pub(super) mod tremor;
 
-pub(crate) use context::{Context, gain_over};
+pub(crate) use context::{Context, ONE_COLUMN_MIN_DOF, gain_over};
 
 use context::CHANNELS_DISAGREE;
 
