@@ -4,9 +4,8 @@
 //! is no significant gap.
 
 use super::MIN_GAIN;
-use super::family::ONE_COLUMN_MIN_DOF;
 
-use super::family::Evaluation;
+use super::family::{Evaluation, ONE_COLUMN_MIN_DOF};
 use super::gap::Measured;
 use super::math::rms;
 use super::report::{Gap, InSampleFit, Probe};
