@@ -236,7 +236,7 @@ impl Design {
 
     /// The variance of the fit's prediction at `row` in units of one training pose's variance
     /// (`row^T (X^T X)^-1 row`; the leave-one-out `h / (1 - h)` of a pose's own leverage `h`).
-    fn variance_factor(&self, row: &[f64]) -> f64 {
+    pub(crate) fn variance_factor(&self, row: &[f64]) -> f64 {
         let scaled: Vec<f64> = row.iter().zip(&self.scale).map(|(v, s)| v / s).collect();
         forward_substitute(&self.l, &scaled).iter().map(|v| v * v).sum()
     }
