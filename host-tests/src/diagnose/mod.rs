@@ -558,6 +558,23 @@ pub(crate) mod testing {
         table
     }
 
+    /// The table of `recording` with only the poses whose direction `keep` keeps (the rows of the
+    /// others, their holds, left out), at 25 C.
+    pub(crate) fn table_of_poses(
+        mut recording: crate::sim::record::Recording,
+        mut keep: impl FnMut(&[f64; 3]) -> bool,
+        name: &str,
+    ) -> Table {
+        use crate::sim::scenario::{SimLog, to_table};
+        let dropped: Vec<std::ops::Range<usize>> =
+            recording.poses.iter().filter(|p| !keep(&p.direction)).map(|p| p.start..p.end).collect();
+        let kept = |i: &usize| !dropped.iter().any(|r| r.contains(i));
+        recording.samples = (0..recording.samples.len()).filter(kept).map(|i| recording.samples[i]).collect();
+        recording.times_s = (0..recording.times_s.len()).filter(kept).map(|i| recording.times_s[i]).collect();
+        let temps_c = vec![25.0; recording.samples.len()];
+        to_table(&SimLog { recording, temps_c }, name).unwrap()
+    }
+
     /// An own-simulator log (random scenario `seed`, no effect) whose z axis alone bows: k2 2 mg,
     /// k3 -1.5 mg at 1 g.
     pub(crate) fn z_bowed(seed: u64) -> Table {

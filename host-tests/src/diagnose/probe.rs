@@ -389,7 +389,7 @@ mod tests {
     use super::*;
     use crate::csvio::{self, AccumulateOptions, Table};
     use crate::diagnose::{DiagnoseOptions, diagnose, gap};
-    use crate::sim::scenario::{EffectClass, SimLog, generate, random_scenario, to_table};
+    use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
     use crate::sim::{Plan, SimConfig, simulate_with};
 
     /// A clean simulated log whose bias along one direction changes by `size_mg` in the middle of
@@ -584,7 +584,7 @@ mod tests {
     fn lone_edge_log(seed: u64, size_mg: f64) -> Table {
         let cfg = SimConfig { plan: Plan::Cube26, ..SimConfig::paper(seed) };
         let g = cfg.gravity;
-        let mut recording = simulate_with(
+        let recording = simulate_with(
             &cfg,
             &mut [&mut |t: f64, _p: Option<usize>, r: &mut [f64; 3]| {
                 let d = [0.48, -0.6, 0.64];
@@ -592,7 +592,7 @@ mod tests {
             }],
         );
         let mut xz_edges = 0;
-        let mut keep = |u: &[f64; 3]| {
+        let keep = |u: &[f64; 3]| {
             let tilted: Vec<usize> = (0..3).filter(|&a| u[a].abs() > 0.3).collect();
             match tilted.as_slice() {
                 [_] | [0, 1] | [1, 2] => true,
@@ -603,13 +603,7 @@ mod tests {
                 _ => false,
             }
         };
-        let dropped: Vec<std::ops::Range<usize>> =
-            recording.poses.iter().filter(|p| !keep(&p.direction)).map(|p| p.start..p.end).collect();
-        let kept = |i: &usize| !dropped.iter().any(|r| r.contains(i));
-        recording.samples = (0..recording.samples.len()).filter(kept).map(|i| recording.samples[i]).collect();
-        recording.times_s = (0..recording.times_s.len()).filter(kept).map(|i| recording.times_s[i]).collect();
-        let temps_c = vec![25.0; recording.samples.len()];
-        to_table(&SimLog { recording, temps_c }, "lone edge").unwrap()
+        crate::diagnose::testing::table_of_poses(recording, keep, "lone edge")
     }
 
     #[test]

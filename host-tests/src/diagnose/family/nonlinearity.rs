@@ -59,8 +59,6 @@ impl Family for ScaleNonlinearity {
 
 #[cfg(test)]
 mod tests {
-    use std::ops::Range;
-
     use crate::csvio::Table;
     use crate::diagnose::{DiagnoseOptions, diagnose};
     use crate::sim::scenario::{SimLog, to_table};
@@ -109,22 +107,16 @@ mod tests {
     }
 
     /// [`cube_log`] on another plan.
-    fn plan_log(plan: Plan, seed: u64, k2: [f64; 3], k3: [f64; 3], mut keep: impl FnMut(&[f64; 3]) -> bool) -> Table {
+    fn plan_log(plan: Plan, seed: u64, k2: [f64; 3], k3: [f64; 3], keep: impl FnMut(&[f64; 3]) -> bool) -> Table {
         let cfg = SimConfig { plan, ..SimConfig::paper(seed) };
         let g = cfg.gravity;
-        let mut recording = simulate_with(
+        let recording = simulate_with(
             &cfg,
             &mut [&mut |_t: f64, _p: Option<usize>, r: &mut [f64; 3]| {
                 (0..3).for_each(|a| r[a] += g * (k2[a] * (r[a] / g).powi(2) + k3[a] * (r[a] / g).powi(3)));
             }],
         );
-        let dropped: Vec<Range<usize>> =
-            recording.poses.iter().filter(|p| !keep(&p.direction)).map(|p| p.start..p.end).collect();
-        let kept = |i: &usize| !dropped.iter().any(|r| r.contains(i));
-        recording.samples = (0..recording.samples.len()).filter(kept).map(|i| recording.samples[i]).collect();
-        recording.times_s = (0..recording.times_s.len()).filter(kept).map(|i| recording.times_s[i]).collect();
-        let temps_c = vec![25.0; recording.samples.len()];
-        to_table(&SimLog { recording, temps_c }, "cube").unwrap()
+        crate::diagnose::testing::table_of_poses(recording, keep, "cube")
     }
 
     /// Of a cube's poses, how many of the three axes a pose tilts.
