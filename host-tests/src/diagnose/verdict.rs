@@ -345,7 +345,8 @@ fn fits_every_pose<'e>(
 /// poses better than any family that must predict it: a blindgen3 cube term common to the axes on
 /// 12 poses fitted all of them to 0.55, the probe the other 11 to 0.56 (held-out gain 0.98), and the
 /// verdict was `unexplained`. (A blindgen3 bow of z on a cube jig of 19 poses, one of them +z, is
-/// fitted to 6.8 from 106, the probe's 10.9: it is still not named, [`IN_SAMPLE_SHRINK`].)
+/// fitted to 6.8 from 106, the probe's 10.9: it is still not named, by [`IN_SAMPLE_SHRINK`] and a
+/// rotation-sense probe's fit to every pose within [`RIVAL_WITHIN`] of it.)
 fn takes_in_the_lone_pose(fit: &InSampleFit, p: &Probe) -> bool {
     p.shape == "one-pose" && fit.ratio < p.in_sample_ratio
 }
