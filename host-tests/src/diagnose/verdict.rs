@@ -220,7 +220,7 @@ fn beaten(e: &Evaluation, probes: &[Probe]) -> bool {
 /// effective parameters, fitted every pose to 1.333 of white noise where a bias step's three
 /// columns fitted 1.329: it was `unexplained`). Where both fit every pose to white noise
 /// ([`FITS_TO_NOISE`]) the closer fit is chance, and the probe's few columns are the rigid shape (a
-/// blindgen2 single step of 38 poses: the step 0.95 and held-out gain 0.91, a wander of 12
+/// blindgen2 single step of 38 poses: the step 0.95 and held-out gain 0.906, a wander of 12
 /// effective parameters 0.85 and 0.71, within the step's margin; named colored noise through the
 /// quiet walk the wander followed).
 fn wander_dominated(e: &Evaluation, p: &Probe) -> bool {
