@@ -2,7 +2,7 @@
 """Score `accelcal diagnose --json` on a directory written by generate.py.
 
     python3 tools/blindgen2/score.py DIR [DIR ...] [--accelcal PATH] [--json] [--jobs N] [--timeout S]
-        [--by-shape] [--by-poses] [--require-right-visible F] [--max-false-alarms F]
+        [--by-shape] [--by-poses] [--by-evidence] [--require-right-visible F] [--max-false-alarms F]
         [--require-ooc-honest F] [--max-refusals N]
 
 For each log in DIR/manifest.json runs the CLI, records verdict, gap.ratio_before,
@@ -11,6 +11,8 @@ DIR/results.json and prints per family and overall:
   logs, clearly visible (ratio_before >= 2), right among visible, false alarms on clean
   logs (verdict != none, all clean logs), out-of-catalogue honest (none/unexplained, all
   ooc logs), refusals, median shrink of the right visible ones, slowest log (s).
+--by-evidence splits the visible logs by the evidence the diagnosis found for the expected
+family (see `evidence`): a miss whose family has none is not a verdict rule's to mend.
 Several directories are scored together (their logs pooled; results.json written in each).
 The --require/--max options make it a gate: exit status 1, with the reason, when the
 overall figures miss them (CI runs it so on a few seeds).
@@ -31,6 +33,9 @@ VISIBLE = 2.0
 # Bins of the poses the diagnosis found (--by-poses): a 9-parameter calibration leaves 12 poses 3
 # degrees of freedom, so a 3-parameter effect there cannot be tested on withheld poses.
 POSE_BINS = ((6, 13), (14, 16), (17, 24), (25, None))
+# Smallest evidence (held-out gain) for a family to be named: accelcal's `diagnose::MIN_GAIN`.
+MIN_GAIN = 0.3
+EVIDENCE_LABELS = ("family leads", "family trails", "family weak", "out of catalogue")
 
 
 def get(d, path):
@@ -65,7 +70,33 @@ def run_one(cli, d, entry, timeout):
     ratio = get(js, "gap.ratio_before")
     poses = js.get("poses") if isinstance(js.get("poses"), int) else None
     return dict(entry, refused=False, verdict=verdict, ratio_before=ratio, shrink=shrink, seconds=secs,
-                poses_found=poses)
+                poses_found=poses, evidence=evidence(js, entry["expected"]))
+
+
+def family_evidence(c):
+    """A candidate's evidence: the better of its held-out gains on withheld pose means and on
+    withheld holds (`within_gain`); None when not applicable."""
+    if not c.get("applicable"):
+        return None
+    gains = [g for g in (c.get("heldout_gain"), c.get("within_gain")) if isinstance(g, (int, float))]
+    return max(gains) if gains else None
+
+
+def evidence(js, expected):
+    """How the diagnosis' evidence supports the expected family: "family leads" (at least MIN_GAIN,
+    no other family more), "family trails" (at least MIN_GAIN, another more), "family weak" (below
+    MIN_GAIN: the withheld poses and holds do not show it); "out of catalogue" for those logs; None
+    for clean logs."""
+    if expected == "none":
+        return None
+    if expected == "honest":
+        return "out of catalogue"
+    gains = {c.get("effect"): family_evidence(c) for c in js.get("candidates") or []}
+    own = gains.get(expected)
+    if own is None or own < MIN_GAIN:
+        return "family weak"
+    rivals = [g for k, g in gains.items() if k != expected and g is not None]
+    return "family leads" if all(own >= g for g in rivals) else "family trails"
 
 
 def is_right(r):
@@ -123,6 +154,8 @@ def main(argv=None):
     ap.add_argument("--logs", action="store_true", help="also print one line per log")
     ap.add_argument("--by-shape", action="store_true", help="also a table per family/shape")
     ap.add_argument("--by-poses", action="store_true", help="also a table per count of poses the diagnosis found")
+    ap.add_argument("--by-evidence", action="store_true",
+                    help="also a table of the visible logs per evidence for the expected family")
     ap.add_argument("--require-right-visible", type=float, metavar="F",
                     help="fail unless at least this fraction of the clearly visible logs is right")
     ap.add_argument("--max-false-alarms", type=float, metavar="F",
@@ -201,6 +234,8 @@ def report(a, rows):
         print_groups(rows, lambda r: f"{r['family']}/{r['shape']}", width=36)
     if a.by_poses:
         print_groups(rows, pose_bin, first=[bin_label(lo, hi) for lo, hi in POSE_BINS])
+    if a.by_evidence:
+        print_evidence(rows)
     for f in fams:
         print(f"{f}: verdicts {per[f]['verdicts']}")
     if a.logs:
@@ -231,6 +266,19 @@ def pose_bin(r):
         if n >= lo and (hi is None or n <= hi):
             return bin_label(lo, hi)
     return f"under {POSE_BINS[0][0]} poses"
+
+
+def print_evidence(rows):
+    """The visible logs per evidence for the expected family, and how many misses have it."""
+    vis = [r for r in rows if not r["refused"] and isinstance(r.get("ratio_before"), (int, float))
+           and r["ratio_before"] >= VISIBLE and r.get("evidence")]
+    print_groups(vis, lambda r: r["evidence"], first=EVIDENCE_LABELS)
+    missed = [r for r in vis if not is_right(r)]
+    backed = sum(1 for r in missed if r["evidence"] in EVIDENCE_LABELS[:2])
+    print(f"visible misses: {len(missed)}; the expected family has the evidence (leads or trails) in {backed}, "
+          f"is weak in {sum(1 for r in missed if r['evidence'] == 'family weak')}, out of catalogue "
+          f"{sum(1 for r in missed if r['evidence'] == 'out of catalogue')}")
+    print()
 
 
 def print_groups(rows, key, first=(), width=20):
