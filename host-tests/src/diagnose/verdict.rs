@@ -5,7 +5,7 @@
 
 use super::MIN_GAIN;
 
-use super::family::{Evaluation, ONE_COLUMN_MIN_DOF};
+use super::family::{Evaluation, IN_SAMPLE_MIN_DOF, ONE_COLUMN_MIN_DOF};
 use super::gap::Measured;
 use super::math::rms;
 use super::report::{Gap, InSampleFit, Probe};
@@ -83,10 +83,17 @@ fn rests_on_one_pose(e: &Evaluation) -> bool {
 }
 
 /// The value family leaves most of the gap in the poses it was fitted on, or is a penalised wander
-/// (its prior a random walk's steps), which follows any path through them: what it leaves there
-/// says nothing.
+/// (its prior a random walk's steps), which follows any path through them, or its fit to them
+/// leaves fewer than [`IN_SAMPLE_MIN_DOF`] poses beyond its columns (a design of nearly as many
+/// columns as poses takes most of any gap) while neither the family's fit that leaves that many
+/// (its in-sample fit) takes half the gap nor the holds show the family ([`seen_in_holds`]): what
+/// it leaves there says nothing.
 fn fit_not_shown(m: &Measured, v: &Evaluation) -> bool {
-    v.candidate.ratio_after - 1.0 > 0.5 * (m.gap.ratio_before - 1.0) || v.wander
+    let leaves_most = |ratio: f64| ratio - 1.0 > 0.5 * (m.gap.ratio_before - 1.0);
+    let nearly_interpolates = v.fit_dof.is_some_and(|dof| dof < IN_SAMPLE_MIN_DOF);
+    let in_sample_leaves_most = v.candidate.in_sample.as_ref().is_none_or(|f| leaves_most(f.ratio));
+    let unsupported = nearly_interpolates && in_sample_leaves_most && !seen_in_holds(v);
+    leaves_most(v.candidate.ratio_after) || v.wander || unsupported
 }
 
 /// ... within which a credible cause that fits every pose to white noise ([`FITS_TO_NOISE`]) is:
@@ -499,6 +506,7 @@ mod tests {
             gain_without_worst: f64::NAN,
             wander: false,
             credible_cause: false,
+            fit_dof: None,
         }
     }
 
@@ -557,6 +565,35 @@ mod tests {
         // The holds do not walk at the level of the pose means, or the drift explains them too.
         assert_eq!(verdict(-0.05, false), "drift");
         assert_eq!(verdict(0.3, true), "drift");
+    }
+
+    #[test]
+    fn a_value_fit_that_nearly_interpolates_the_poses_shows_nothing_before_a_noise_model_far_ahead() {
+        let m = significant_gap(Some(38.3));
+        // A fresh blindgen5 random walk of 14 poses (stop 84): a scale drift per axis (4 columns,
+        // 1 pose beyond its and the calibration's) gained 0.32 on the withheld poses and left 8.7
+        // on all of them; the drift's in-sample fit (4 poses beyond its columns) left 40.6; the
+        // walk in the holds left the withheld scatter at 3.7 (gain 0.69).
+        let named = |fit_dof: usize, in_sample_ratio: f64, within_gain: f64| {
+            let mut drift = on_pose_means("drift", 18.3, 0.32, true);
+            (drift.candidate.ratio_after, drift.fit_dof, drift.candidate.within_gain) =
+                (8.7, Some(fit_dof), within_gain);
+            drift.candidate.in_sample = Some(InSampleFit {
+                detail: String::new(),
+                ratio: in_sample_ratio,
+                residual_dof: IN_SAMPLE_MIN_DOF + 1,
+                explained_per_param: 0.45,
+                after: Vec::new(),
+            });
+            let walk = on_pose_means("colored-noise", 3.7, 0.69, false);
+            decide(&m, &[drift, walk], &[], None, false, || None).verdict
+        };
+        assert_eq!(named(1, 40.6, f64::NAN), "colored-noise");
+        // Enough poses beyond its columns, an in-sample fit that takes half the gap, or holds that
+        // show the drift: its fit is shown, and a value family stands before a noise model.
+        assert_eq!(named(IN_SAMPLE_MIN_DOF, 40.6, f64::NAN), "drift");
+        assert_eq!(named(1, 15.0, f64::NAN), "drift");
+        assert_eq!(named(1, 40.6, 0.41), "drift");
     }
 
     #[test]

@@ -92,7 +92,7 @@ const UNPREDICTABLE: f64 = 1e6;
 /// poses fits any gap, and one that spends more columns than it leaves traces most gaps (a
 /// temperature quadratic in bias and scale through a smoothed thermometer, 12 columns, left 4 poses
 /// at white noise on a sinusoidal bias of 25 poses).
-const IN_SAMPLE_MIN_DOF: usize = 3;
+pub(crate) const IN_SAMPLE_MIN_DOF: usize = 3;
 
 /// ... for a design of one extra column: on a log of 12 poses (3 beyond the nominal model's
 /// columns) one term is judged on the 2 it leaves, the verdict asking a chi-square drop beyond
@@ -564,7 +564,17 @@ impl<'a> Context<'a> {
             in_sample: f.in_sample,
         };
         let gain_without_worst = self.gain_without_worst_pose(&f.rows, &f.dropped, f.params);
-        Evaluation { candidate, after, predicts_values: true, gain_without_worst, wander: false, credible_cause: false }
+        let kept = f.dropped.iter().filter(|d| !**d).count();
+        let fit_dof = Some(kept.saturating_sub(f.rows.first().map_or(0, Vec::len)));
+        Evaluation {
+            candidate,
+            after,
+            predicts_values: true,
+            gain_without_worst,
+            wander: false,
+            credible_cause: false,
+            fit_dof,
+        }
     }
 
     pub(crate) fn not_testable(&self, name: &'static str) -> Evaluation {
@@ -590,6 +600,7 @@ impl<'a> Context<'a> {
             gain_without_worst: f64::NAN,
             wander: false,
             credible_cause: false,
+            fit_dof: None,
         }
     }
 

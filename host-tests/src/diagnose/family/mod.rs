@@ -17,7 +17,7 @@ pub(crate) mod steady_line;
 mod temperature;
 pub(super) mod tremor;
 
-pub(crate) use context::{Context, ONE_COLUMN_MIN_DOF, gain_over};
+pub(crate) use context::{Context, IN_SAMPLE_MIN_DOF, ONE_COLUMN_MIN_DOF, gain_over};
 
 use context::CHANNELS_DISAGREE;
 
@@ -58,6 +58,9 @@ pub(crate) struct Evaluation {
     pub(crate) gain_without_worst: f64,
     /// The pose-level fit is a penalised wander (`smooth.rs`: its prior a random walk's steps).
     pub(crate) wander: bool,
+    /// Poses beyond the columns of the pose-level fit that leaves `candidate.ratio_after` (`None`:
+    /// not a fit of the pose means alone: a noise model, a stacked fit, not testable).
+    pub(crate) fit_dof: Option<usize>,
     /// A temperature fit whose coefficients a MEMS part can have: the thermometer is a credible
     /// cause, named before time on a near tie ([`super::verdict`]).
     pub(crate) credible_cause: bool,
