@@ -12,7 +12,7 @@ DIR/results.json and prints per family and overall:
   logs (verdict != none, all clean logs), out-of-catalogue honest (none/unexplained, all
   ooc logs), refusals, median shrink of the right visible ones, slowest log (s).
 --by-evidence splits the visible logs by the evidence the diagnosis found for the expected
-family (see `evidence`): a miss whose family has none is not a verdict rule's to mend.
+family (see `evidence`): a miss whose family is weak is one the held-out evidence does not support.
 Several directories are scored together (their logs pooled; results.json written in each).
 The --require/--max options make it a gate: exit status 1, with the reason, when the
 overall figures miss them (CI runs it so on a few seeds).
