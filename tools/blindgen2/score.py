@@ -107,9 +107,13 @@ def is_right(r):
     return r["verdict"] == r["expected"]
 
 
+def is_visible(r):
+    """The log was answered and its gap is clearly visible (gap.ratio_before >= VISIBLE)."""
+    return not r["refused"] and isinstance(r.get("ratio_before"), (int, float)) and r["ratio_before"] >= VISIBLE
+
+
 def summarise(rows):
-    vis = [r for r in rows if not r["refused"] and isinstance(r.get("ratio_before"), (int, float))
-           and r["ratio_before"] >= VISIBLE]
+    vis = [r for r in rows if is_visible(r)]
     right_vis = [r for r in vis if is_right(r)]
     clean = [r for r in rows if r["expected"] == "none" and not r["refused"]]
     ooc = [r for r in rows if r["expected"] == "honest" and not r["refused"]]
@@ -270,8 +274,7 @@ def pose_bin(r):
 
 def print_evidence(rows):
     """The visible logs per evidence for the expected family, and how many misses have it."""
-    vis = [r for r in rows if not r["refused"] and isinstance(r.get("ratio_before"), (int, float))
-           and r["ratio_before"] >= VISIBLE and r.get("evidence")]
+    vis = [r for r in rows if is_visible(r) and r.get("evidence")]
     print_groups(vis, lambda r: r["evidence"], first=EVIDENCE_LABELS)
     missed = [r for r in vis if not is_right(r)]
     backed = sum(1 for r in missed if r["evidence"] in EVIDENCE_LABELS[:2])

@@ -90,7 +90,7 @@ fn rests_on_one_pose(e: &Evaluation) -> bool {
 /// it leaves there says nothing.
 fn fit_not_shown(m: &Measured, v: &Evaluation) -> bool {
     let leaves_most = |ratio: f64| ratio - 1.0 > 0.5 * (m.gap.ratio_before - 1.0);
-    let nearly_interpolates = v.fit_dof.is_some_and(|dof| dof < IN_SAMPLE_MIN_DOF);
+    let nearly_interpolates = v.residual_dof.is_some_and(|dof| dof < IN_SAMPLE_MIN_DOF);
     let in_sample_leaves_most = v.candidate.in_sample.as_ref().is_none_or(|f| leaves_most(f.ratio));
     let unsupported = nearly_interpolates && in_sample_leaves_most && !seen_in_holds(v);
     leaves_most(v.candidate.ratio_after) || v.wander || unsupported
@@ -506,7 +506,7 @@ mod tests {
             gain_without_worst: f64::NAN,
             wander: false,
             credible_cause: false,
-            fit_dof: None,
+            residual_dof: None,
         }
     }
 
@@ -574,10 +574,10 @@ mod tests {
         // 1 pose beyond its and the calibration's) gained 0.32 on the withheld poses and left 8.7
         // on all of them; the drift's in-sample fit (4 poses beyond its columns) left 40.6; the
         // walk in the holds left the withheld scatter at 3.7 (gain 0.69).
-        let named = |fit_dof: usize, in_sample_ratio: f64, within_gain: f64| {
+        let named = |residual_dof: usize, in_sample_ratio: f64, within_gain: f64| {
             let mut drift = on_pose_means("drift", 18.3, 0.32, true);
-            (drift.candidate.ratio_after, drift.fit_dof, drift.candidate.within_gain) =
-                (8.7, Some(fit_dof), within_gain);
+            (drift.candidate.ratio_after, drift.residual_dof, drift.candidate.within_gain) =
+                (8.7, Some(residual_dof), within_gain);
             drift.candidate.in_sample = Some(InSampleFit {
                 detail: String::new(),
                 ratio: in_sample_ratio,

@@ -63,6 +63,12 @@ const WIDE_FIT_DOF: usize = 1;
 /// Columns of a shape with one term per axis (a vector coefficient).
 const ONE_TERM_COLUMNS: usize = 3;
 
+/// Poses kept (not `dropped`) beyond the columns of the design `rows` (`None`: fewer poses than
+/// columns).
+fn residual_dof(rows: &[Vec<f64>], dropped: &[bool]) -> Option<usize> {
+    dropped.iter().filter(|d| !**d).count().checked_sub(rows.first().map_or(0, Vec::len))
+}
+
 /// Fewest training poses beyond its columns a parametrisation of `columns` extra columns needs.
 fn fit_dof(columns: usize) -> usize {
     if columns > ONE_TERM_COLUMNS { WIDE_FIT_DOF } else { MIN_FIT_DOF }
@@ -475,7 +481,7 @@ impl<'a> Context<'a> {
         let kept = dropped.iter().filter(|d| !**d).count();
         let extra = columns.saturating_sub(base);
         let least = if extra == 1 { ONE_COLUMN_MIN_DOF } else { IN_SAMPLE_MIN_DOF.max(extra) };
-        let residual_dof = kept.checked_sub(columns).filter(|&d| d >= least)?;
+        let residual_dof = residual_dof(rows, dropped).filter(|&d| d >= least)?;
         let (ratio, after) = self.fit_ratio(rows, dropped)?;
         let before = self.m.gap.ratio_before.powi(2) * kept.saturating_sub(base) as f64;
         let left = ratio * ratio;
@@ -564,8 +570,7 @@ impl<'a> Context<'a> {
             in_sample: f.in_sample,
         };
         let gain_without_worst = self.gain_without_worst_pose(&f.rows, &f.dropped, f.params);
-        let kept = f.dropped.iter().filter(|d| !**d).count();
-        let fit_dof = Some(kept.saturating_sub(f.rows.first().map_or(0, Vec::len)));
+        let residual_dof = Some(residual_dof(&f.rows, &f.dropped).unwrap_or(0));
         Evaluation {
             candidate,
             after,
@@ -573,7 +578,7 @@ impl<'a> Context<'a> {
             gain_without_worst,
             wander: false,
             credible_cause: false,
-            fit_dof,
+            residual_dof,
         }
     }
 
@@ -600,7 +605,7 @@ impl<'a> Context<'a> {
             gain_without_worst: f64::NAN,
             wander: false,
             credible_cause: false,
-            fit_dof: None,
+            residual_dof: None,
         }
     }
 

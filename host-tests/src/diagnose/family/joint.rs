@@ -83,7 +83,7 @@ pub(crate) fn add(ctx: &Context<'_>, e: &mut Evaluation, fit: JointFit) -> Optio
     c.applicable = true;
     (c.heldout_ratio, c.heldout_gain, c.extra_params) = (fit.ratio, gain, fit.params);
     e.gain_without_worst = fit.gain_without_worst;
-    e.fit_dof = None;
+    e.residual_dof = None;
     c.ratio_after = ratio_after;
     c.detail = format!("{} (pose means and within-pose course together)", fit.detail);
     e.after = fit.after;

@@ -60,7 +60,7 @@ pub(crate) struct Evaluation {
     pub(crate) wander: bool,
     /// Poses beyond the columns of the pose-level fit that leaves `candidate.ratio_after` (`None`:
     /// not a fit of the pose means alone: a noise model, a stacked fit, not testable).
-    pub(crate) fit_dof: Option<usize>,
+    pub(crate) residual_dof: Option<usize>,
     /// A temperature fit whose coefficients a MEMS part can have: the thermometer is a credible
     /// cause, named before time on a near tie ([`super::verdict`]).
     pub(crate) credible_cause: bool,

@@ -480,7 +480,7 @@ impl ColoredNoise {
             gain_without_worst: f64::NAN,
             wander: false,
             credible_cause: false,
-            fit_dof: None,
+            residual_dof: None,
         }
     }
 }
