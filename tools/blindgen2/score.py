@@ -2,8 +2,8 @@
 """Score `accelcal diagnose --json` on a directory written by generate.py.
 
     python3 tools/blindgen2/score.py DIR [DIR ...] [--accelcal PATH] [--json] [--jobs N] [--timeout S]
-        [--by-shape] [--by-poses] [--by-evidence] [--require-right-visible F] [--max-false-alarms F]
-        [--require-ooc-honest F] [--max-refusals N]
+        [--by-shape] [--by-poses] [--by-evidence] [--by-visibility] [--reuse] [--require-right-visible F]
+        [--max-false-alarms F] [--require-ooc-honest F] [--max-refusals N]
 
 For each log in DIR/manifest.json runs the CLI, records verdict, gap.ratio_before,
 shrink and wall time (a non-zero exit is a refusal; its message is kept), writes
@@ -13,6 +13,10 @@ DIR/results.json and prints per family and overall:
   ooc logs), refusals, median shrink of the right visible ones, slowest log (s).
 --by-evidence splits the visible logs by the evidence the diagnosis found for the expected
 family (see `evidence`): a miss whose family is weak is one the held-out evidence does not support.
+--by-visibility tabulates per family the share right among the logs at or above each gap ratio of
+blind_eval's ladder, and the ratio from which 80 % are right (the issue's per-family visibility).
+--reuse scores the rows a previous run wrote to DIR/results.json (no CLI run): tables over many
+directories, or with other options, without diagnosing again.
 Several directories are scored together (their logs pooled; results.json written in each).
 The --require/--max options make it a gate: exit status 1, with the reason, when the
 overall figures miss them (CI runs it so on a few seeds).
@@ -36,6 +40,10 @@ POSE_BINS = ((6, 13), (14, 16), (17, 24), (25, None))
 # Smallest evidence (held-out gain) for a family to be named: accelcal's `diagnose::MIN_GAIN`.
 MIN_GAIN = 0.3
 EVIDENCE_LABELS = ("family leads", "family trails", "family weak", "out of catalogue")
+# Gap ratios from which the share right is tabulated (--by-visibility): accelcal's
+# `blind_eval::VISIBILITY_LADDER`, and the share that defines "visibility for 80 % right".
+VISIBILITY_LADDER = (1.0, 1.25, 1.5, 2.0, 3.0, 5.0, 10.0, 30.0)
+RIGHT_SHARE = 0.8
 
 
 def get(d, path):
@@ -160,6 +168,11 @@ def main(argv=None):
     ap.add_argument("--by-poses", action="store_true", help="also a table per count of poses the diagnosis found")
     ap.add_argument("--by-evidence", action="store_true",
                     help="also a table of the visible logs per evidence for the expected family")
+    ap.add_argument("--by-visibility", action="store_true",
+                    help="also a table per family of the share right from each gap ratio up, and the gap ratio "
+                         "from which 80 %% are right")
+    ap.add_argument("--reuse", action="store_true",
+                    help="score the rows of each DIR/results.json (a previous run) instead of running the CLI")
     ap.add_argument("--require-right-visible", type=float, metavar="F",
                     help="fail unless at least this fraction of the clearly visible logs is right")
     ap.add_argument("--max-false-alarms", type=float, metavar="F",
@@ -168,15 +181,11 @@ def main(argv=None):
                     help="fail unless at least this fraction of the out-of-catalogue logs is none/unexplained")
     ap.add_argument("--max-refusals", type=int, metavar="N", help="fail if more than N logs are refused")
     a = ap.parse_args(argv)
-    if not os.path.exists(a.accelcal):
+    if not a.reuse and not os.path.exists(a.accelcal):
         sys.exit(f"no CLI at {a.accelcal}: build it with `cargo build --release -p accelcal-host` or pass --accelcal")
     rows = []
     for d in a.dirs:
-        with open(os.path.join(d, "manifest.json")) as fh:
-            manifest = json.load(fh)
-        with ThreadPoolExecutor(max_workers=max(1, a.jobs)) as ex:
-            part = list(ex.map(lambda e, d=d: run_one(a.accelcal, d, e, a.timeout), manifest))
-        write_results(d, part)
+        part = reused(d) if a.reuse else run_dir(a, d)
         rows += [dict(r, file=os.path.join(os.path.basename(os.path.normpath(d)), r["file"])) if len(a.dirs) > 1
                  else r for r in part]
     report(a, rows)
@@ -185,6 +194,25 @@ def main(argv=None):
         print(f"GATE FAILED: {f}")
     if failures:
         sys.exit(1)
+
+
+def run_dir(a, d):
+    """Runs the CLI on every log of DIR/manifest.json and writes DIR/results.json."""
+    with open(os.path.join(d, "manifest.json")) as fh:
+        manifest = json.load(fh)
+    with ThreadPoolExecutor(max_workers=max(1, a.jobs)) as ex:
+        part = list(ex.map(lambda e: run_one(a.accelcal, d, e, a.timeout), manifest))
+    write_results(d, part)
+    return part
+
+
+def reused(d):
+    """The per-log rows of DIR/results.json (written by a previous run)."""
+    path = os.path.join(d, "results.json")
+    if not os.path.exists(path):
+        sys.exit(f"no {path}: score {d} once without --reuse")
+    with open(path) as fh:
+        return json.load(fh)["logs"]
 
 
 def write_results(d, rows):
@@ -240,6 +268,8 @@ def report(a, rows):
         print_groups(rows, pose_bin, first=[bin_label(lo, hi) for lo, hi in POSE_BINS])
     if a.by_evidence:
         print_evidence(rows)
+    if a.by_visibility:
+        print_visibility(rows, fams)
     for f in fams:
         print(f"{f}: verdicts {per[f]['verdicts']}")
     if a.logs:
@@ -281,6 +311,32 @@ def print_evidence(rows):
     print(f"visible misses: {len(missed)}; the expected family has the evidence (leads or trails) in {backed}, "
           f"is weak in {sum(1 for r in missed if r['evidence'] == 'family weak')}, out of catalogue "
           f"{sum(1 for r in missed if r['evidence'] == 'out of catalogue')}")
+    print()
+
+
+def visibility_for_share(rows):
+    """The smallest VISIBILITY_LADDER ratio from which at least RIGHT_SHARE of the answered logs at or
+    above it are right (at least 3 logs there), as blind_eval's `visibility_80`; None if none."""
+    for v in VISIBILITY_LADDER:
+        above = [r for r in rows if not r["refused"] and (r.get("ratio_before") or 0.0) >= v]
+        if len(above) >= 3 and sum(1 for r in above if is_right(r)) >= RIGHT_SHARE * len(above):
+            return v
+    return None
+
+
+def print_visibility(rows, fams):
+    """Per family: right/answered among the logs at or above each ladder ratio, and the ratio from
+    which RIGHT_SHARE are right."""
+    head = "".join(f"{'>= ' + format(v, 'g'):>10}" for v in VISIBILITY_LADDER)
+    print(f"{'family':<20}{head}{'80 % right from':>17}")
+    for f in fams:
+        mine = [r for r in rows if r["family"] == f and not r["refused"]]
+        cells = []
+        for v in VISIBILITY_LADDER:
+            above = [r for r in mine if (r.get("ratio_before") or 0.0) >= v]
+            cells.append(f"{sum(1 for r in above if is_right(r))}/{len(above)}" if above else "-")
+        v80 = visibility_for_share(mine)
+        print(f"{f:<20}" + "".join(f"{c:>10}" for c in cells) + f"{'>= ' + format(v80, 'g') if v80 else 'never':>17}")
     print()
 
 
