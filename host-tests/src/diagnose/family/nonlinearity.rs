@@ -119,6 +119,15 @@ mod tests {
         crate::diagnose::testing::table_of_poses(recording, keep, "cube")
     }
 
+    /// `table` diagnosed on `poses` poses as a scale non-linearity: the family's fit to every pose.
+    fn named_with_its_fit(table: &Table, seed: u64, poses: usize) -> crate::diagnose::report::InSampleFit {
+        let d = diagnose(table, &DiagnoseOptions { seed, ..DiagnoseOptions::DEFAULT }).unwrap();
+        assert_eq!(d.poses.len(), poses);
+        assert_eq!(d.verdict, "scale-nonlinearity", "seed {seed}: {}", d.to_text());
+        let family = d.candidates.into_iter().find(|c| c.effect == "scale-nonlinearity").unwrap();
+        family.in_sample.expect("a fit to every pose")
+    }
+
     /// Of a cube's poses, how many of the three axes a pose tilts.
     fn tilted_axes(direction: &[f64; 3]) -> usize {
         direction.iter().filter(|c| c.abs() > 0.3).count()
@@ -152,12 +161,7 @@ mod tests {
         // every pose was asked to leave as many degrees of freedom as its extra columns).
         let (k2, k3) = ([2.0e-3, -1.5e-3, 2.5e-3], [-2.0e-3, 1.5e-3, 1.8e-3]);
         for seed in [1, 2, 3] {
-            let table = cube_log(seed, k2, k3, |u| tilted_axes(u) < 3);
-            let d = diagnose(&table, &DiagnoseOptions { seed, ..DiagnoseOptions::DEFAULT }).unwrap();
-            assert_eq!(d.poses.len(), 18);
-            assert_eq!(d.verdict, "scale-nonlinearity", "seed {seed}: {}", d.to_text());
-            let family = d.candidates.iter().find(|c| c.effect == "scale-nonlinearity").unwrap();
-            let fit = family.in_sample.as_ref().expect("a fit to every pose");
+            let fit = named_with_its_fit(&cube_log(seed, k2, k3, |u| tilted_axes(u) < 3), seed, 18);
             assert_eq!((fit.residual_dof, fit.detail.as_str()), (3, "k2 a^2 + k3 a^3 per axis"), "seed {seed}");
         }
     }
@@ -215,12 +219,7 @@ mod tests {
         // there for one extra column (for the verdict when the withheld poses, each predicted from
         // 1, do not support it: a blindgen3 log of gap ratio 43, held-out gain 0.16, fit 0.55).
         for seed in 1..=3 {
-            let table = plan_log(Plan::Random(12), seed, [0.0; 3], [3.0e-3; 3], |_| true);
-            let d = diagnose(&table, &DiagnoseOptions { seed, ..DiagnoseOptions::DEFAULT }).unwrap();
-            assert_eq!(d.poses.len(), 12);
-            assert_eq!(d.verdict, "scale-nonlinearity", "seed {seed}: {}", d.to_text());
-            let family = d.candidates.iter().find(|c| c.effect == "scale-nonlinearity").unwrap();
-            let fit = family.in_sample.as_ref().expect("a fit to every pose");
+            let fit = named_with_its_fit(&plan_log(Plan::Random(12), seed, [0.0; 3], [3.0e-3; 3], |_| true), seed, 12);
             assert_eq!((fit.residual_dof, fit.detail.as_str()), (2, "k3 a^3, one k3 for all axes"), "seed {seed}");
             assert!(fit.ratio < 1.5, "seed {seed}: {}", fit.ratio);
         }
