@@ -115,9 +115,14 @@ def is_right(r):
     return r["verdict"] == r["expected"]
 
 
+def at_or_above(r, ratio):
+    """The log was answered and its gap ratio (gap.ratio_before) is at least `ratio`."""
+    return not r["refused"] and isinstance(r.get("ratio_before"), (int, float)) and r["ratio_before"] >= ratio
+
+
 def is_visible(r):
     """The log was answered and its gap is clearly visible (gap.ratio_before >= VISIBLE)."""
-    return not r["refused"] and isinstance(r.get("ratio_before"), (int, float)) and r["ratio_before"] >= VISIBLE
+    return at_or_above(r, VISIBLE)
 
 
 def summarise(rows):
@@ -314,12 +319,18 @@ def print_evidence(rows):
     print()
 
 
+def right_above(rows, ratio):
+    """(right, answered) among the logs at or above the gap ratio `ratio`."""
+    above = [r for r in rows if at_or_above(r, ratio)]
+    return sum(1 for r in above if is_right(r)), len(above)
+
+
 def visibility_for_share(rows):
     """The smallest VISIBILITY_LADDER ratio from which at least RIGHT_SHARE of the answered logs at or
     above it are right (at least 3 logs there), as blind_eval's `visibility_80`; None if none."""
     for v in VISIBILITY_LADDER:
-        above = [r for r in rows if not r["refused"] and (r.get("ratio_before") or 0.0) >= v]
-        if len(above) >= 3 and sum(1 for r in above if is_right(r)) >= RIGHT_SHARE * len(above):
+        right, answered = right_above(rows, v)
+        if answered >= 3 and right >= RIGHT_SHARE * answered:
             return v
     return None
 
@@ -330,11 +341,8 @@ def print_visibility(rows, fams):
     head = "".join(f"{'>= ' + format(v, 'g'):>10}" for v in VISIBILITY_LADDER)
     print(f"{'family':<20}{head}{'80 % right from':>17}")
     for f in fams:
-        mine = [r for r in rows if r["family"] == f and not r["refused"]]
-        cells = []
-        for v in VISIBILITY_LADDER:
-            above = [r for r in mine if (r.get("ratio_before") or 0.0) >= v]
-            cells.append(f"{sum(1 for r in above if is_right(r))}/{len(above)}" if above else "-")
+        mine = [r for r in rows if r["family"] == f]
+        cells = [f"{k}/{n}" if n else "-" for k, n in (right_above(mine, v) for v in VISIBILITY_LADDER)]
         v80 = visibility_for_share(mine)
         print(f"{f:<20}" + "".join(f"{c:>10}" for c in cells) + f"{'>= ' + format(v80, 'g') if v80 else 'never':>17}")
     print()
