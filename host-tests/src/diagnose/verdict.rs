@@ -236,7 +236,7 @@ fn beaten(m: &Measured, e: &Evaluation, probes: &[Probe]) -> bool {
     let gain = e.candidate.evidence();
     // A probe that fits every pose far less closely than a family fitting them to white noise does
     // not overrule it.
-    let fits_to_noise = in_sample_of(e).is_some_and(|f| f.ratio <= FITS_TO_NOISE);
+    let fits_to_noise = in_sample_ratio(e) <= FITS_TO_NOISE;
     let far_worse = |p: &&Probe| fits_to_noise && p.in_sample_ratio > RIVAL_WITHIN * FITS_TO_NOISE;
     probes.iter().filter(|p| !far_worse(p)).any(|p| {
         let explains = !e.predicts_values && p.heldout_gain >= MIN_GAIN && !leaves_most(m, p.in_sample_ratio);
@@ -365,7 +365,7 @@ fn fits_every_pose<'e>(
         // A rival fits to white noise too, or (when the family leaves more) comes within a factor.
         let close = if fit.ratio <= FITS_TO_NOISE { FITS_TO_NOISE } else { fit.ratio * RIVAL_WITHIN };
         let rival = |(j, o): (usize, &'e Evaluation)| {
-            j != i && in_sample_of(o).is_some_and(|f| f.ratio <= close) && !cause_over_proxy(e, o)
+            j != i && in_sample_ratio(o) <= close && !cause_over_proxy(e, o)
         };
         let probe_rival = |p: &Probe| p.in_sample_ratio <= close && !takes_in_the_lone_pose(fit, p);
         !evaluations.iter().enumerate().any(rival) && !probes.iter().any(probe_rival)
