@@ -16,7 +16,7 @@ use super::{
 };
 use crate::diagnose::gap::PoseData;
 use crate::diagnose::math::{V3, axis, dot};
-use crate::diagnose::within::{Within, WithinVariant};
+use crate::diagnose::within::{Effect, Within, WithinVariant};
 
 /// Knot counts of the piecewise-linear wander (within-pose channel).
 const KNOTS: [usize; 3] = [3, 5, 9];
@@ -85,15 +85,6 @@ fn warm_up(t: f64, tau: f64) -> f64 {
 fn pose_level_taus(ctx: &Context<'_>, t_end: f64) -> Vec<f64> {
     let first_hold_s = ctx.poses.first().map_or(0.0, |p| p.t_end - p.t_start);
     TAU_FACTORS.iter().map(|f| f * t_end).filter(|tau| *tau >= first_hold_s).collect()
-}
-
-/// Per axis, the bias basis functions `phi_k(t)` along the pose direction.
-fn columns(ctx: &Context<'_>, basis: &dyn Fn(f64) -> Vec<f64>) -> Vec<Vec<f64>> {
-    ctx.poses
-        .iter()
-        .zip(ctx.directions())
-        .map(|(p, u)| basis(p.t_mid()).iter().flat_map(|phi| u.iter().map(move |c| c * phi)).collect())
-        .collect()
 }
 
 /// A function of time, s.
@@ -223,40 +214,70 @@ impl Family for Drift {
     }
 
     fn variants(&self, ctx: &Context<'_>) -> Vec<Variant> {
-        let t_end = ctx.poses.last().map_or(1.0, PoseData::t_mid).max(1e-9);
-        let taus = pose_level_taus(ctx, t_end);
-        let mut out = Vec::new();
-        for &tau in &taus {
-            let extra = columns(ctx, &|t| vec![warm_up(t, tau)]);
-            out.push(Variant { extra, params: 4, detail: format!("bias (1 - exp(-t / {tau:.0} s))") });
-        }
-        for (i, &t1) in taus.iter().enumerate() {
-            for &t2 in taus.iter().skip(i + 2) {
-                let extra = columns(ctx, &|t| vec![warm_up(t, t1), warm_up(t, t2)]);
-                out.push(Variant {
-                    extra,
-                    params: 8,
-                    detail: format!("bias with two time constants, {t1:.0} s and {t2:.0} s"),
-                });
-            }
-        }
-        for degree in 1..=3usize {
-            let extra = columns(ctx, &|t| (1..=degree).map(|k| (t / t_end).powi(k as i32)).collect());
-            let detail = if degree == 1 {
-                "bias linear in time".into()
-            } else {
-                format!("bias polynomial in time, degree {degree}")
-            };
-            out.push(Variant { extra, params: 3 * degree, detail });
-        }
-        out.extend(scale_variants(ctx, t_end));
-        out
+        let shapes = pose_shapes(ctx);
+        shapes
+            .iter()
+            .map(|s| (s.variant(ctx), s.min_dof))
+            .filter(|(v, min_dof)| min_dof.is_none_or(|dof| ctx.trains_beyond(&v.extra, dof)))
+            .map(|(v, _)| v)
+            .collect()
     }
 }
 
-/// A pose-level variant: its parameters, description and effect on the calibrated reading `f` at
-/// the time `x` (a fraction of the log).
-type VariantOf<'a> = dyn Fn(usize, String, &dyn Fn(V3, f64) -> Vec<V3>) -> Variant + 'a;
+/// A pose-level shape of the drift: its charged parameters, description and the change of pose
+/// `p`'s calibrated reading at time `t` (s) per coefficient; `min_dof`, the fewest training poses
+/// beyond its columns in every fold for it to be tried (`None`: no such condition).
+struct Shape<'a> {
+    params: usize,
+    detail: String,
+    effect: Box<Effect<'a>>,
+    min_dof: Option<usize>,
+}
+
+impl Shape<'_> {
+    fn new<'a>(params: usize, detail: String, effect: impl Fn(usize, f64) -> Vec<V3> + 'a) -> Shape<'a> {
+        Shape { params, detail, effect: Box::new(move |p, t, _| effect(p, t)), min_dof: None }
+    }
+
+    /// Its columns at the pose means (each pose at its hold's middle time).
+    fn variant(&self, ctx: &Context<'_>) -> Variant {
+        let extra = (ctx.poses.iter().zip(ctx.directions()).enumerate())
+            .map(|(p, (pose, u))| (self.effect)(p, pose.t_mid(), pose.rows.clone()).iter().map(|e| dot(*u, *e)).collect())
+            .collect();
+        Variant { extra, params: self.params, detail: self.detail.clone() }
+    }
+}
+
+/// A bias per axis following each of `courses` (functions of time, s).
+fn bias_courses<'a>(courses: impl Fn(f64) -> Vec<f64> + 'a) -> impl Fn(usize, f64) -> Vec<V3> + 'a {
+    move |_, t| courses(t).into_iter().flat_map(|c| (0..3).map(move |a| axis(a, c))).collect()
+}
+
+/// The pose-level shapes: a bias warming up with one or two time constants, polynomial in time,
+/// and the scale's shapes ([`scale_shapes_in_time`]); the log ending at its last pose's middle.
+fn pose_shapes<'a>(ctx: &'a Context<'_>) -> Vec<Shape<'a>> {
+    let t_end = ctx.poses.last().map_or(1.0, PoseData::t_mid).max(1e-9);
+    let taus = pose_level_taus(ctx, t_end);
+    let mut out = Vec::new();
+    for &tau in &taus {
+        let detail = format!("bias (1 - exp(-t / {tau:.0} s))");
+        out.push(Shape::new(4, detail, bias_courses(move |t| vec![warm_up(t, tau)])));
+    }
+    for (i, &t1) in taus.iter().enumerate() {
+        for &t2 in taus.iter().skip(i + 2) {
+            let detail = format!("bias with two time constants, {t1:.0} s and {t2:.0} s");
+            out.push(Shape::new(8, detail, bias_courses(move |t| vec![warm_up(t, t1), warm_up(t, t2)])));
+        }
+    }
+    for degree in 1..=3usize {
+        let detail =
+            if degree == 1 { "bias linear in time".into() } else { format!("bias polynomial in time, degree {degree}") };
+        let powers = move |t: f64| (1..=degree).map(|k| (t / t_end).powi(k as i32)).collect();
+        out.push(Shape::new(3 * degree, detail, bias_courses(powers)));
+    }
+    out.extend(scale_shapes_in_time(ctx, t_end));
+    out
+}
 
 /// The change in the calibrated reading `f` of a bias (3 parameters) and one relative scale common
 /// to every axis (1), both following the same course `c` (a ratiometric part on a sagging supply).
@@ -277,45 +298,37 @@ const TAU_CHOICE_MIN_DOF: usize = 1;
 /// exponentially (a reference warming after power-on, each axis by its own amount; the time
 /// constant a parameter too), and together with the bias, the common scale and the bias following
 /// the same course (a supply's voltage, linear or settling: one cause moves both).
-fn course_variants(ctx: &Context<'_>, t_end: f64, variant: &VariantOf<'_>) -> Vec<Variant> {
+fn course_shapes<'a>(ctx: &'a Context<'_>, t_end: f64) -> Vec<Shape<'a>> {
+    let cal = ctx.calibrated();
     let mut out = Vec::new();
     for tau in pose_level_taus(ctx, t_end) {
-        let warm = move |x: f64| warm_up(x * t_end, tau);
-        let per_axis = variant(4, format!("scale (1 - exp(-t / {tau:.0} s)) per axis"), &|f, x| {
-            bias_scale_effect(f, warm(x), 1, false, true)
-        });
-        if ctx.trains_beyond(&per_axis.extra, TAU_CHOICE_MIN_DOF) {
-            out.push(per_axis);
-        }
+        let detail = format!("scale (1 - exp(-t / {tau:.0} s)) per axis");
+        let per_axis = move |p: usize, t: f64| bias_scale_effect(cal[p], warm_up(t, tau), 1, false, true);
+        out.push(Shape { min_dof: Some(TAU_CHOICE_MIN_DOF), ..Shape::new(4, detail, per_axis) });
         let detail = format!("bias and common scale (1 - exp(-t / {tau:.0} s))");
-        out.push(variant(5, detail, &|f, x| bias_and_common_scale(f, warm(x))));
+        out.push(Shape::new(5, detail, move |p, t| bias_and_common_scale(cal[p], warm_up(t, tau))));
     }
-    out.push(variant(4, "bias and common scale linear in time".into(), &bias_and_common_scale));
+    let linear = move |p: usize, t: f64| bias_and_common_scale(cal[p], t / t_end);
+    out.push(Shape::new(4, "bias and common scale linear in time".into(), linear));
     out
 }
 
 /// The scale shapes (per axis, and common to every axis) at the pose level, the log ending at
 /// `t_end`.
-fn scale_variants(ctx: &Context<'_>, t_end: f64) -> Vec<Variant> {
-    let poses = ctx.poses.iter().zip(ctx.directions()).zip(ctx.calibrated());
-    let variant = |params: usize, detail: String, effect: &dyn Fn(V3, f64) -> Vec<V3>| {
-        let extra = poses
-            .clone()
-            .map(|((p, u), f)| effect(*f, p.t_mid() / t_end).iter().map(|e| dot(*u, *e)).collect())
-            .collect();
-        Variant { extra, params, detail }
-    };
-    let mut out: Vec<Variant> = scale_shapes(ctx)
+fn scale_shapes_in_time<'a>(ctx: &'a Context<'_>, t_end: f64) -> Vec<Shape<'a>> {
+    let cal = ctx.calibrated();
+    let mut out: Vec<Shape<'a>> = scale_shapes(ctx)
         .iter()
         .map(|&(bias, detail)| {
-            variant(3 + 3 * usize::from(bias), detail.into(), &|f, x| bias_scale_effect(f, x, 1, bias, true))
+            let effect = move |p: usize, t: f64| bias_scale_effect(cal[p], t / t_end, 1, bias, true);
+            Shape::new(3 + 3 * usize::from(bias), detail.into(), effect)
         })
         .collect();
     for (degree, detail) in common_scale_shapes(ctx) {
-        out.push(variant(degree, detail, &|f, x| common_scale_effect(f, x, degree)));
+        out.push(Shape::new(degree, detail, move |p, t| common_scale_effect(cal[p], t / t_end, degree)));
     }
     if scale_may_drift(ctx) {
-        out.extend(course_variants(ctx, t_end, &variant));
+        out.extend(course_shapes(ctx, t_end));
     }
     out
 }
