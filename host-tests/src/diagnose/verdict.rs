@@ -364,9 +364,7 @@ fn fits_every_pose<'e>(
     let alone = |i: usize, e: &Evaluation, fit: &InSampleFit| {
         // A rival fits to white noise too, or (when the family leaves more) comes within a factor.
         let close = if fit.ratio <= FITS_TO_NOISE { FITS_TO_NOISE } else { fit.ratio * RIVAL_WITHIN };
-        let rival = |(j, o): (usize, &'e Evaluation)| {
-            j != i && in_sample_ratio(o) <= close && !cause_over_proxy(e, o)
-        };
+        let rival = |(j, o): (usize, &'e Evaluation)| j != i && in_sample_ratio(o) <= close && !cause_over_proxy(e, o);
         let probe_rival = |p: &Probe| p.in_sample_ratio <= close && !takes_in_the_lone_pose(fit, p);
         !evaluations.iter().enumerate().any(rival) && !probes.iter().any(probe_rival)
     };
