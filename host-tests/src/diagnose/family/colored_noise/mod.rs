@@ -33,10 +33,7 @@ const EVEN_HOLDS: f64 = 0.25;
 /// spread, and no more than a random walk at the holds' level spreads them
 /// ([`walk_accounts_for_poses`]). The description, or `None`.
 pub(crate) fn wandering_holds(ctx: &Context<'_>) -> Option<String> {
-    let within = ctx
-        .within
-        .as_ref()
-        .filter(|_| wander_alike(ctx) && ctx.periodic_line().is_none() && !periodic::predicts_poses(ctx))?;
+    let within = ctx.within.as_ref().filter(|_| wander_alike(ctx) && !follows_a_period(ctx))?;
     let evenness = within.evenness();
     walk_accounts_for_poses(ctx).then(|| {
         format!(
@@ -45,6 +42,13 @@ pub(crate) fn wandering_holds(ctx: &Context<'_>) -> Option<String> {
             100.0 * within.line_share().clamp(0.0, 1.0)
         )
     })
+}
+
+/// The holds move with one sinusoid in phase over the whole log ([`Context::periodic_line`]) or a
+/// sinusoid over the log predicts the withheld pose means ([`periodic::predicts_poses`]): their
+/// movement is a periodic bias's course, not a noise's wander.
+fn follows_a_period(ctx: &Context<'_>) -> bool {
+    ctx.periodic_line().is_some() || periodic::predicts_poses(ctx)
 }
 
 /// The holds' movement is significant and every hold moves about alike (a noise, not a few
@@ -244,7 +248,7 @@ fn low_passed(ctx: &Context<'_>) -> bool {
 /// white scatter while moving each hold of a few seconds by less than its own noise. The
 /// description, or `None`.
 pub(crate) fn quiet_walk(ctx: &Context<'_>) -> Option<String> {
-    if !ctx.pose_level || ctx.tremor().is_some() || ctx.periodic_line().is_some() || periodic::predicts_poses(ctx) {
+    if !ctx.pose_level || ctx.tremor().is_some() || follows_a_period(ctx) {
         return None;
     }
     let within = ctx.within.as_ref()?;
