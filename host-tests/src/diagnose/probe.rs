@@ -359,21 +359,34 @@ type LeavesDof = fn(&Context<'_>, &[Vec<f64>]) -> bool;
 /// other probes the same way lost 12 right answers.
 const STEP_RESIDUAL_DOF: usize = 2;
 
+/// The searched probes, each with the evidence by which it must exceed a family to veto it and the
+/// test of its residual degrees of freedom.
+const SEARCHED: [(&str, MakeVariants, f64, LeavesDof); 5] = [
+    ("periodic", periodic, 0.0, |c, e| c.leaves_residual_dof(e)),
+    ("bias-step", bias_step, STEP_OVER_DRIFT, |c, e| c.trains_beyond(e, STEP_RESIDUAL_DOF)),
+    ("cross-axis", cross_axis, 0.0, |c, e| c.leaves_residual_dof(e)),
+    ("rotation-direction", rotation_direction, 0.0, |c, e| c.leaves_residual_dof(e)),
+    ("rotation-sense", rotation_sense, TURN_OVER_FAMILY, |c, e| c.leaves_residual_dof(e)),
+];
+
+/// The variants probe `shape` searches (none for the one-pose probe, which searches the poses).
+fn searched_variants(ctx: &Context<'_>, shape: &str) -> Vec<Variant> {
+    let Some(&(_, make, _, leaves_dof)) = SEARCHED.iter().find(|(s, ..)| *s == shape) else { return Vec::new() };
+    make(ctx).into_iter().filter(|v| leaves_dof(ctx, &v.extra)).collect()
+}
+
+/// How many of `draws` (pose residuals of a noise model, in place of the log's) probe `shape`'s
+/// search reaches the held-out gain `gain` in, counting up to `enough`.
+pub(crate) fn draws_reaching(ctx: &Context<'_>, shape: &str, draws: &[Vec<f64>], gain: f64, enough: usize) -> usize {
+    ctx.draws_reaching(&searched_variants(ctx, shape), draws, gain, enough)
+}
+
 /// Every probe with its held-out gain.
 pub(crate) fn run(ctx: &Context<'_>) -> Vec<Probe> {
-    // Each with the evidence by which it must exceed a family to veto it and the test of its
-    // residual degrees of freedom.
-    let probes: [(&'static str, MakeVariants, f64, LeavesDof); 5] = [
-        ("periodic", periodic, 0.0, |c, e| c.leaves_residual_dof(e)),
-        ("bias-step", bias_step, STEP_OVER_DRIFT, |c, e| c.trains_beyond(e, STEP_RESIDUAL_DOF)),
-        ("cross-axis", cross_axis, 0.0, |c, e| c.leaves_residual_dof(e)),
-        ("rotation-direction", rotation_direction, 0.0, |c, e| c.leaves_residual_dof(e)),
-        ("rotation-sense", rotation_sense, TURN_OVER_FAMILY, |c, e| c.leaves_residual_dof(e)),
-    ];
-    probes
+    SEARCHED
         .iter()
-        .filter_map(|&(shape, make, veto_margin, leaves_dof)| {
-            let variants = make(ctx).into_iter().filter(|v| leaves_dof(ctx, &v.extra)).collect();
+        .filter_map(|&(shape, _, veto_margin, _)| {
+            let variants = searched_variants(ctx, shape);
             let f = ctx.best_of(variants)?;
             let step = (shape == "bias-step").then(|| fitted_step(ctx, &f.rows)).flatten();
             let jump_in_hold = step.is_some_and(|s| step_seen_in_holds(ctx, s));

@@ -398,8 +398,9 @@ fn in_sample_of(e: &Evaluation) -> Option<&InSampleFit> {
 /// predicts their whole scatter, [`noise_spans_probe`]), it names the effect (with no shrink: the
 /// pose means cannot follow it); else, when no probe explains the withheld poses either (but a
 /// one-pose probe whose pose the family takes in), a family that alone fits every pose is named
-/// ([`fits_every_pose`]); failing that, `quiet_walk` is asked
-/// (a walk read from holds that move too little to be significant,
+/// ([`fits_every_pose`]); failing that, `quiet_walk` is asked with the best probe, if one explains
+/// the withheld poses (a walk read from holds that move too little to be significant, standing
+/// against the probe only if the walk's own draws give its search as much,
 /// [`super::family::colored_noise::quiet_walk`]) before the verdict is `unexplained`. A penalised
 /// wander that wins on holds whose quiet walk accounts for the withheld pose means is that walk
 /// ([`wander_follows_quiet_walk`]).
@@ -409,7 +410,7 @@ pub(crate) fn decide(
     probes: &[Probe],
     from_holds: Option<(&'static str, String)>,
     holds_walk: bool,
-    quiet_walk: impl Fn() -> Option<String>,
+    quiet_walk: impl Fn(Option<&Probe>) -> Option<String>,
 ) -> Decision {
     let significant = m.gap.significant;
     let explaining = probes.iter().filter(|p| p.heldout_gain.is_finite() && p.heldout_gain >= MIN_GAIN);
@@ -422,7 +423,7 @@ pub(crate) fn decide(
     let mut gap = m.gap.clone();
     let kept_rmse_mg = |after: &[Option<f64>]| m.to_mg(rms(&after.iter().flatten().copied().collect::<Vec<_>>()));
     let unchanged = || m.r.iter().map(|v| Some(*v)).collect();
-    let walk_followed = winner.filter(|&i| wander_follows_quiet_walk(&evaluations[i])).and_then(|_| quiet_walk());
+    let walk_followed = winner.filter(|&i| wander_follows_quiet_walk(&evaluations[i])).and_then(|_| quiet_walk(None));
     let (verdict, winner, after, located) = if let Some(why) = walk_followed {
         ("colored-noise", None, unchanged(), Some(why))
     } else if let Some(i) = winner {
@@ -441,7 +442,7 @@ pub(crate) fn decide(
     {
         (gap.ratio_after, gap.real_rmse_after_mg) = (fit.ratio, kept_rmse_mg(&fit.after));
         (e.candidate.effect, Some(i), fit.after.clone(), Some(in_sample_why(fit)))
-    } else if let Some(why) = (significant && best_probe.is_none()).then(quiet_walk).flatten() {
+    } else if let Some(why) = significant.then(|| quiet_walk(best_probe)).flatten() {
         ("colored-noise", None, unchanged(), Some(why))
     } else {
         (if significant { "unexplained" } else { "none" }, None, unchanged(), None)
@@ -560,7 +561,7 @@ mod tests {
     #[test]
     fn a_noise_model_that_leaves_the_spread_several_times_its_prediction_is_not_named() {
         let m = significant_gap(None);
-        let verdict = |e: &[Evaluation]| decide(&m, e, &[], None, false, || None).verdict;
+        let verdict = |e: &[Evaluation]| decide(&m, e, &[], None, false, |_| None).verdict;
         // A development log with hysteresis: a walk on one axis took the held-out ratio from 55.7 to
         // 8.8 (gain 0.46); no catalogue family explained it.
         let hysteresis = [on_pose_means("colored-noise", 8.8, 0.46, false), on_pose_means("drift", 55.8, 0.0, true)];
@@ -579,7 +580,7 @@ mod tests {
             let mut drift = on_pose_means(effect, 3.4, 0.34, true);
             (drift.candidate.within_gain, drift.candidate.ratio_after) = (within_gain, 2.45);
             let walk = on_pose_means("colored-noise", 0.82, 0.79, false);
-            decide(&m, &[drift, walk], &[], None, holds_walk, || None).verdict
+            decide(&m, &[drift, walk], &[], None, holds_walk, |_| None).verdict
         };
         let verdict = |within_gain: f64, holds_walk: bool| named("drift", within_gain, holds_walk);
         assert_eq!(verdict(-0.05, true), "colored-noise");
@@ -611,7 +612,7 @@ mod tests {
                 after: Vec::new(),
             });
             let walk = on_pose_means("colored-noise", 3.7, 0.69, false);
-            decide(&m, &[drift, walk], &[], None, false, || None).verdict
+            decide(&m, &[drift, walk], &[], None, false, |_| None).verdict
         };
         assert_eq!(named(1, 40.6, f64::NAN), "colored-noise");
         // Enough poses beyond its columns, an in-sample fit that takes half the gap, or holds that
@@ -630,7 +631,7 @@ mod tests {
             let mut fit = on_pose_means(effect, 2.0, gain, true);
             (fit.candidate.ratio_after, fit.wander) = (0.79, wander);
             let walk = on_pose_means("colored-noise", 1.06, 0.9, false);
-            decide(m, &[fit, walk], &[], None, true, || None).verdict
+            decide(m, &[fit, walk], &[], None, true, |_| None).verdict
         };
         assert!(m.poses.len() >= PREDICTS_MOST_POSES);
         assert_eq!(named(&m, "scale-nonlinearity", 0.73, false), "scale-nonlinearity");
@@ -654,7 +655,7 @@ mod tests {
             let mut holds = holds_only(effect, 0.57, within_disagreement);
             (holds.candidate.heldout_gain, holds.candidate.ratio_after) = (-0.02, 3.43);
             let floor = on_pose_means("colored-noise", 1.27, 0.80, false);
-            decide(&m, &[holds, floor], &[], None, false, || None).verdict
+            decide(&m, &[holds, floor], &[], None, false, |_| None).verdict
         };
         assert_eq!(named("settling", 1.8), "settling");
         // The pose means contradict the holds' fit, or the fit is a drift's line through the holds.
@@ -672,7 +673,7 @@ mod tests {
             let mut transient = holds_only("settling", within_gain, within_disagreement);
             (transient.candidate.heldout_gain, transient.candidate.ratio_after) = (0.31, 4.10);
             let floor = on_pose_means("colored-noise", 1.5, 0.81, false);
-            decide(&m, &[transient, floor], &[], None, false, || None).verdict
+            decide(&m, &[transient, floor], &[], None, false, |_| None).verdict
         };
         assert_eq!(named(0.44, 1.3), "settling");
         // Not seen in the holds, or the holds' fit contradicted by the pose means.
@@ -687,7 +688,7 @@ mod tests {
         let verdict = |gain: f64, predicts_values: bool, probe_gain: f64| {
             let effect = if predicts_values { "drift" } else { "colored-noise" };
             let e = [on_pose_means(effect, 1.2, gain, predicts_values)];
-            decide(&m, &e, &[probe(probe_gain)], None, false, || None).verdict
+            decide(&m, &e, &[probe(probe_gain)], None, false, |_| None).verdict
         };
         // A development log's hysteresis: a noise floor gained 0.88, the hysteresis probe 0.82.
         assert_eq!(verdict(0.88, false, 0.82), "unexplained");
@@ -704,7 +705,7 @@ mod tests {
         let m = significant_gap(Some(2.63));
         let verdict = |probe_in_sample: f64| {
             let e = [on_pose_means("colored-noise", 1.1, 0.91, false)];
-            decide(&m, &e, &[probe("cross-axis", 0.90, probe_in_sample, 0.0)], None, false, || None).verdict
+            decide(&m, &e, &[probe("cross-axis", 0.90, probe_in_sample, 0.0)], None, false, |_| None).verdict
         };
         assert_eq!(verdict(2.22), "colored-noise");
         // Taking most of the gap, it does.
@@ -714,13 +715,19 @@ mod tests {
     #[test]
     fn a_walk_read_from_quiet_holds_is_the_last_answer_before_unexplained() {
         let m = significant_gap(None);
-        let walk = || Some("a random walk at the holds' level".to_string());
+        // The walk's own draws reach a probe's gain up to 0.5 (the quiet walk asks them).
+        let walk = |p: Option<&Probe>| {
+            p.is_none_or(|p| p.heldout_gain < 0.5).then(|| "a random walk at the holds' level".to_string())
+        };
         let probe = |gain: f64| probe("bias-step", gain, f64::NAN, 0.0);
         // Nothing else explains the withheld poses: the walk is named, with its reason.
         let d = decide(&m, &[on_pose_means("drift", 3.0, 0.0, true)], &[], None, false, walk);
         assert_eq!((d.verdict, d.located.as_deref()), ("colored-noise", Some("a random walk at the holds' level")));
-        // An out-of-catalogue probe places the gap (a development log's offset step gained 0.65).
+        // An out-of-catalogue probe places the gap beyond what the walk's path gives it (a
+        // development log's offset step gained 0.65)...
         assert_eq!(decide(&m, &[], &[probe(0.65)], None, false, walk).verdict, "unexplained");
+        // ...but not a step the walk's path gives as much.
+        assert_eq!(decide(&m, &[], &[probe(0.35)], None, false, walk).verdict, "colored-noise");
         // A family explains the withheld poses: it is named, not the walk.
         assert_eq!(decide(&m, &[on_pose_means("drift", 1.1, 0.6, true)], &[], None, false, walk).verdict, "drift");
         // No significant gap: nothing to explain.
@@ -738,7 +745,7 @@ mod tests {
         let named = |noise_ratio: f64| {
             let noise = on_pose_means("colored-noise", noise_ratio, -0.5, false);
             let from_holds = Some(("colored-noise", String::from("the holds wander alike")));
-            decide(&m, &[noise], &[probe("bias-step", 0.33, 2.0, 0.2)], from_holds, false, || None).verdict
+            decide(&m, &[noise], &[probe("bias-step", 0.33, 2.0, 0.2)], from_holds, false, |_| None).verdict
         };
         assert_eq!(named(0.59), "colored-noise");
         // A noise that leaves part of the scatter unpredicted leaves the step where the gap lies.
@@ -754,7 +761,7 @@ mod tests {
         let named_with = |wander: bool, wander_params: usize, step_in_sample: f64| {
             let mut drift = on_pose_means("drift", 3.3, 0.47, true);
             (drift.candidate.ratio_after, drift.wander, drift.candidate.extra_params) = (1.87, wander, wander_params);
-            decide(&m, &[drift], &[probe("bias-step", 0.65, step_in_sample, 0.2)], None, false, || None).verdict
+            decide(&m, &[drift], &[probe("bias-step", 0.65, step_in_sample, 0.2)], None, false, |_| None).verdict
         };
         let named = |wander: bool, step_in_sample: f64| named_with(wander, 8, step_in_sample);
         assert_eq!(named(true, 1.11), "unexplained");
@@ -769,7 +776,7 @@ mod tests {
         let both_white = |step_in_sample: f64| {
             let mut drift = on_pose_means("drift", 1.8, 0.71, true);
             (drift.candidate.ratio_after, drift.wander, drift.candidate.extra_params) = (0.85, true, 12);
-            decide(&m, &[drift], &[probe("bias-step", 0.906, step_in_sample, 0.2)], None, false, || None).verdict
+            decide(&m, &[drift], &[probe("bias-step", 0.906, step_in_sample, 0.2)], None, false, |_| None).verdict
         };
         assert_eq!(both_white(0.95), "unexplained");
         assert_eq!(both_white(1.3), "drift");
@@ -784,7 +791,7 @@ mod tests {
         let named = |wander: bool, params: usize, quiet: bool| {
             let mut drift = on_pose_means("drift", 2.0, 0.55, true);
             (drift.wander, drift.candidate.extra_params) = (wander, params);
-            let quiet_walk = || quiet.then(|| "the holds move as a quiet walk".to_string());
+            let quiet_walk = |_: Option<&Probe>| quiet.then(|| "the holds move as a quiet walk".to_string());
             decide(&m, &[drift], &[], None, false, quiet_walk).verdict
         };
         assert_eq!(named(true, 7, true), "colored-noise");
@@ -804,7 +811,7 @@ mod tests {
             let mut drift = on_pose_means("drift", 7.5, 0.34, true);
             (drift.candidate.ratio_after, drift.wander) = (2.9, wander);
             let walk = on_pose_means("colored-noise", 1.9, noise_gain, false);
-            decide(&m, &[drift, walk], &[], None, false, || None).verdict
+            decide(&m, &[drift, walk], &[], None, false, |_| None).verdict
         };
         assert_eq!(named(true, 0.63), "colored-noise");
         assert_eq!(named(true, 0.5), "drift");
@@ -819,7 +826,7 @@ mod tests {
             let drift = on_pose_means("drift", 1.5, 0.64, true);
             let mut temperature = on_pose_means("temperature", 1.6, temperature_gain, true);
             temperature.credible_cause = credible;
-            decide(&m, &[drift, temperature], &[], None, false, || None).verdict
+            decide(&m, &[drift, temperature], &[], None, false, |_| None).verdict
         };
         // Time leads by 0.08: within a credible cause's two tenths, beyond an implausible one's 0.05.
         assert_eq!(named(0.56, true), "temperature");
@@ -840,7 +847,7 @@ mod tests {
             drift.candidate.ratio_after = 0.93;
             let mut temperature = on_pose_means("temperature", 1.4, temperature_gain, true);
             (temperature.credible_cause, temperature.candidate.ratio_after) = (credible, temperature_after);
-            decide(&m, &[drift, temperature], &[], None, false, || None).verdict
+            decide(&m, &[drift, temperature], &[], None, false, |_| None).verdict
         };
         // A self-heating log (blindgen4 156): a warm-up's exponential in time led the thermometer
         // by 0.19, both fitting every pose to white noise (within two tenths a credible thermometer
@@ -861,7 +868,7 @@ mod tests {
             let mut slow = on_pose_means(effect, 1.6, 0.35, true);
             slow.gain_without_worst = gain_without_worst;
             let settling = holds_only("settling", 0.46, 1.5);
-            decide(&m, &[slow, settling], &[], None, false, || None).verdict
+            decide(&m, &[slow, settling], &[], None, false, |_| None).verdict
         };
         // An own-simulator log with a transient in every hold: a temperature through a 30 s lag
         // gained 0.35 by the first pose (its long hold averages the transient differently).
@@ -909,7 +916,7 @@ mod tests {
                 e
             };
             let families = [with("drift", 0.54, 6.97), with("scale-nonlinearity", nonlinearity_gain, nonlinearity_fit)];
-            decide(&m, &families, &[], None, false, || None).verdict
+            decide(&m, &families, &[], None, false, |_| None).verdict
         };
         assert_eq!(named(0.53, 2.06), "scale-nonlinearity");
         // Not closer by the factor, or not tied.
@@ -928,16 +935,16 @@ mod tests {
         // Settling comes before the non-linearity here; both tie with drift and fit
         // every pose three times closer; the non-linearity fits them closer still.
         let families = [with("drift", 0.54, 9.0), with("settling", 0.52, 2.9), with("scale-nonlinearity", 0.51, 1.1)];
-        assert_eq!(decide(&m, &families, &[], None, false, || None).verdict, "scale-nonlinearity");
+        assert_eq!(decide(&m, &families, &[], None, false, |_| None).verdict, "scale-nonlinearity");
         let families = [with("drift", 0.54, 9.0), with("settling", 0.52, 1.1), with("scale-nonlinearity", 0.51, 2.9)];
-        assert_eq!(decide(&m, &families, &[], None, false, || None).verdict, "settling");
+        assert_eq!(decide(&m, &families, &[], None, false, |_| None).verdict, "settling");
     }
 
     #[test]
     fn a_family_that_alone_fits_every_pose_to_white_noise_is_named_when_no_family_explains_withheld_ones() {
         let m = significant_gap(Some(6.0));
         let probe = |in_sample_ratio: f64| probe("cross-axis", 0.2, in_sample_ratio, 0.0);
-        let decide_on = |e: &[Evaluation], p: &[Probe]| decide(&m, e, p, None, false, || None);
+        let decide_on = |e: &[Evaluation], p: &[Probe]| decide(&m, e, p, None, false, |_| None);
         let probe_that_explains = |p: Probe| Probe { heldout_gain: MIN_GAIN, ..p };
         // A development log's cube terms per axis (16 poses): 1.07 with 71 per column; the withheld
         // poses did not confirm them (held-out gain below 0.3); the best probe on every pose 1.84.
@@ -966,7 +973,7 @@ mod tests {
     #[test]
     fn a_fit_to_every_pose_that_takes_a_large_gap_most_of_the_way_alone_is_named() {
         let m = significant_gap(Some(64.4));
-        let decide_on = |e: &[Evaluation], p: &[Probe]| decide(&m, e, p, None, false, || None);
+        let decide_on = |e: &[Evaluation], p: &[Probe]| decide(&m, e, p, None, false, |_| None);
         let with_dof = |mut e: Evaluation, dof: usize| {
             e.candidate.in_sample.as_mut().unwrap().residual_dof = dof;
             e
@@ -1004,7 +1011,7 @@ mod tests {
         let lone = |in_sample_ratio: f64| probe("one-pose", 0.98, in_sample_ratio, 0.0);
         let decide_on = |fit_ratio: f64, p: &[Probe]| {
             let cube = fitting_every_pose("scale-nonlinearity", fit_ratio, 18106.0);
-            decide(&m, &[fitting_every_pose("drift", 13.8, 27.0), cube], p, None, false, || None)
+            decide(&m, &[fitting_every_pose("drift", 13.8, 27.0), cube], p, None, false, |_| None)
         };
         // A cube term common to the axes (blindgen3 195, 12 poses) fitted every pose to 0.55; leaving
         // out its worst pose fitted the other 11 to 0.56 and explained the withheld poses (0.98).
@@ -1028,7 +1035,7 @@ mod tests {
         let verdict = |square_ratio: f64, periodic_ratio: f64| {
             let mut square = fitting_every_pose("scale-nonlinearity", square_ratio, 703.0);
             (square.candidate.heldout_gain, square.gain_without_worst) = (0.46, 0.4);
-            decide(&m, &[square], &[probe("periodic", 0.51, periodic_ratio, 0.0)], None, false, || None).verdict
+            decide(&m, &[square], &[probe("periodic", 0.51, periodic_ratio, 0.0)], None, false, |_| None).verdict
         };
         assert_eq!(verdict(0.97, 6.26), "scale-nonlinearity");
         // A probe that fits them nearly as closely, or a family that leaves more than white noise.

@@ -303,6 +303,40 @@ impl<'a> Context<'a> {
         self.nominal_cv.iter().flatten().count()
     }
 
+    /// How many of `draws` (pose residuals of a noise model, in place of the log's) some of
+    /// `variants` reaches the held-out gain `target` in ([`Self::value_gain`], against the nominal
+    /// model's held-out ratio on the draw), counting up to `enough`: what a search over the
+    /// variants finds in that noise. Each variant's folds are factored once for every draw.
+    pub(crate) fn draws_reaching(&self, variants: &[Variant], draws: &[Vec<f64>], target: f64, enough: usize) -> usize {
+        let scored: Vec<usize> = (0..self.nominal_cv.len()).filter(|&i| self.scored(i)).collect();
+        let n = scored.len() as f64;
+        let ratio_of =
+            |ss: f64, k: usize| ((ss + PARAMETER_PENALTY * k as f64 * self.e_white) / n / self.e_white).sqrt();
+        let chance = (2.0 * n.max(1.0)).sqrt().recip();
+        // Each draw's held-out residuals under the nominal model and their ratio.
+        let nominal: Vec<Option<(Vec<Option<f64>>, f64)>> = (draws.iter().map(|r| self.base_cv_residuals(r)))
+            .map(|cv| cv.map(|cv| (ratio_of(scored.iter().filter_map(|&i| cv[i]).map(|c| c * c).sum(), 0), cv)))
+            .map(|x| x.map(|(ratio, cv)| (cv, ratio)))
+            .collect();
+        let mut reached = vec![false; draws.len()];
+        for v in variants {
+            let rows = self.rows_with(&v.extra);
+            let Some(design) = CvDesign::new(&rows, &self.fold, self.folds, &self.none_dropped) else { continue };
+            for (d, (r, base)) in draws.iter().zip(&nominal).enumerate() {
+                let (Some((cv0, ratio0)), false) = (base, reached[d]) else { continue };
+                let Some(cv) = design.residuals(&rows, r, UNPREDICTABLE) else { continue };
+                let ss = scored.iter().filter_map(|&i| cv[i].or(cv0[i])).map(|c| c * c).sum();
+                let ratio = ratio_of(ss, v.params);
+                let beyond_chance = if ratio < 1.0 { (ratio * chance.exp()).min(1.0) } else { ratio };
+                reached[d] = gain_over(*ratio0, beyond_chance, VALUE_OVERSHOOT_WEIGHT) >= target;
+            }
+            if reached.iter().filter(|x| **x).count() >= enough {
+                break;
+            }
+        }
+        reached.iter().filter(|x| **x).count().min(enough)
+    }
+
     /// Held-out residuals of `r` (one per pose) under the nominal design (`None` for a pose it
     /// cannot predict).
     pub(crate) fn base_cv_residuals(&self, r: &[f64]) -> Option<Vec<Option<f64>>> {
