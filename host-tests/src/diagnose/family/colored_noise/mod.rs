@@ -250,9 +250,9 @@ fn low_passed(ctx: &Context<'_>) -> bool {
 /// probe explains them (`probe`, the best), the walk stands only if its own draws give the probe's
 /// search as much ([`walk_finds_probe`]): a step's place or a period searched over the poses fits
 /// a walk's path too. (Up to stop 88 any such probe kept the walk out: on twelve blind groups,
-/// 5 760 logs, six walks and Gauss-Markov noises, their probes gaining 0.31-0.35, are colored
+/// 5 760 logs, six walks and Gauss-Markov noises, their probes gaining 0.32-0.53, are colored
 /// noise now, and two out-of-catalogue effects are, a cross-axis product and a bilinear one,
-/// whose probes the walk's draws matched; offset steps gaining 0.56-0.92 stay `unexplained`.)
+/// whose steps the walk's draws matched; offset steps gaining 0.56-0.92 stay `unexplained`.)
 /// A walk a few times white noise over the log spreads the pose means several times their white
 /// scatter while moving each hold of a few seconds by less than its own noise. The description,
 /// or `None`.
