@@ -163,6 +163,14 @@ pub(crate) fn gain_over(nominal: f64, ratio: f64, overshoot_weight: f64) -> f64 
     if before > 0.0 { 1.0 - miss / before } else { 0.0 }
 }
 
+/// [`Context::value_gain`] of a held-out `ratio` against the nominal model's `nominal` over `scored`
+/// poses.
+fn value_gain_over(nominal: f64, ratio: f64, scored: usize) -> f64 {
+    let chance = (2.0 * scored.max(1) as f64).sqrt().recip();
+    let beyond_chance = if ratio < 1.0 { (ratio * chance.exp()).min(1.0) } else { ratio };
+    gain_over(nominal, beyond_chance, VALUE_OVERSHOOT_WEIGHT)
+}
+
 /// Folds for `n` poses: one per pose up to `leave_one_out_up_to` poses (every fold keeps as many
 /// poses as it can), else `folds` (at least 1, at most `n`).
 fn fold_count(n: usize, leave_one_out_up_to: usize, folds: usize) -> usize {
@@ -312,11 +320,14 @@ impl<'a> Context<'a> {
         let n = scored.len() as f64;
         let ratio_of =
             |ss: f64, k: usize| ((ss + PARAMETER_PENALTY * k as f64 * self.e_white) / n / self.e_white).sqrt();
-        let chance = (2.0 * n.max(1.0)).sqrt().recip();
         // Each draw's held-out residuals under the nominal model and their ratio.
         let nominal: Vec<Option<(Vec<Option<f64>>, f64)>> = (draws.iter().map(|r| self.base_cv_residuals(r)))
-            .map(|cv| cv.map(|cv| (ratio_of(scored.iter().filter_map(|&i| cv[i]).map(|c| c * c).sum(), 0), cv)))
-            .map(|x| x.map(|(ratio, cv)| (cv, ratio)))
+            .map(|cv| {
+                cv.map(|cv| {
+                    let ratio = ratio_of(scored.iter().filter_map(|&i| cv[i]).map(|c| c * c).sum(), 0);
+                    (cv, ratio)
+                })
+            })
             .collect();
         let mut reached = vec![false; draws.len()];
         for v in variants {
@@ -326,9 +337,7 @@ impl<'a> Context<'a> {
                 let (Some((cv0, ratio0)), false) = (base, reached[d]) else { continue };
                 let Some(cv) = design.residuals(&rows, r, UNPREDICTABLE) else { continue };
                 let ss = scored.iter().filter_map(|&i| cv[i].or(cv0[i])).map(|c| c * c).sum();
-                let ratio = ratio_of(ss, v.params);
-                let beyond_chance = if ratio < 1.0 { (ratio * chance.exp()).min(1.0) } else { ratio };
-                reached[d] = gain_over(*ratio0, beyond_chance, VALUE_OVERSHOOT_WEIGHT) >= target;
+                reached[d] = value_gain_over(*ratio0, ratio_of(ss, v.params), scored.len()) >= target;
             }
             if reached.iter().filter(|x| **x).count() >= enough {
                 break;
@@ -599,9 +608,7 @@ impl<'a> Context<'a> {
     /// by `1 / sqrt(2 n)`): such a fit's residuals cannot fall short of the noise but by
     /// chance, and within it the fit has explained the withheld poses fully.
     pub(crate) fn value_gain(&self, ratio: f64) -> f64 {
-        let chance = (2.0 * self.n_scored().max(1) as f64).sqrt().recip();
-        let beyond_chance = if ratio < 1.0 { (ratio * chance.exp()).min(1.0) } else { ratio };
-        gain_over(self.heldout_ratio_nominal, beyond_chance, VALUE_OVERSHOOT_WEIGHT)
+        value_gain_over(self.heldout_ratio_nominal, ratio, self.n_scored())
     }
 
     pub(super) fn evaluate_fitted(&self, name: &'static str, f: Fitted) -> Evaluation {

@@ -279,17 +279,21 @@ pub(crate) fn quiet_walk(ctx: &Context<'_>, probe: Option<&Probe>) -> Option<Str
     ))
 }
 
+/// Fewest draws of a quiet walk out of [`CV_NOISE_DRAWS`] in which a probe's search must find as
+/// much as in the log for the probe to be no evidence against the walk ([`walk_finds_probe`]).
+const MIN_DRAWS_AS_FOUND: usize = 1;
+
 /// The search of `probe` finds as much in draws of the random walk `walk` (with white noise) as in
-/// the log, in at least [`MIN_DRAWS_AS_CONCENTRATED`] of [`CV_NOISE_DRAWS`]: a step's place or a
-/// period searched over a walk's path fits it as well as the data, so the probe's gain is no
-/// evidence against the walk. A probe that searches nothing (one pose off the others) is never
-/// found so.
+/// the log, in at least [`MIN_DRAWS_AS_FOUND`] of [`CV_NOISE_DRAWS`]: a step's place or a period
+/// searched over a walk's path fits it as well as the data, so the probe's gain is no evidence
+/// against the walk. A probe that searches nothing (one pose off the others) is never found so.
 fn walk_finds_probe(ctx: &Context<'_>, walk: V3, probe: &Probe) -> bool {
     let m = ctx.m;
     let noise = Colored { walk, ..Colored::default() }.noise(m);
     let draws = residual_noise_draws(&m.model, &m.directions, &m.poses, &noise, CV_NOISE_DRAWS, ctx.opts.seed);
-    let enough = MIN_DRAWS_AS_CONCENTRATED;
-    crate::diagnose::probe::draws_reaching(ctx, probe.shape, &draws, probe.heldout_gain, enough) >= enough
+    let found =
+        crate::diagnose::probe::draws_reaching(ctx, probe.shape, &draws, probe.heldout_gain, MIN_DRAWS_AS_FOUND);
+    found >= MIN_DRAWS_AS_FOUND
 }
 
 /// Share of the squared held-out residual in the largest pose (0 without residuals).
