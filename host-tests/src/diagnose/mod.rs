@@ -541,6 +541,25 @@ fn unmeasured(table: &Table, opts: &DiagnoseOptions, candidates: Vec<Candidate>,
 pub(crate) mod testing {
     use crate::csvio::Table;
 
+    /// A probe (its place not seen as a jump in a hold).
+    pub(crate) fn probe(
+        shape: &'static str,
+        heldout_gain: f64,
+        in_sample_ratio: f64,
+        veto_margin: f64,
+    ) -> super::Probe {
+        super::Probe {
+            shape,
+            heldout_gain,
+            detail: String::new(),
+            in_sample_ratio,
+            veto_margin,
+            jump_in_hold: false,
+            columns: 3,
+            step_before: None,
+        }
+    }
+
     /// A clean simulated log with `bias(pose, seconds into its hold, seconds into the log)` (mg,
     /// sensor frame) added to every static pose's rows.
     pub(crate) fn log_with(seed: u64, bias: &dyn Fn(usize, f64, f64) -> super::math::V3) -> Table {

@@ -375,10 +375,10 @@ fn searched_variants(ctx: &Context<'_>, shape: &str) -> Vec<Variant> {
     make(ctx).into_iter().filter(|v| leaves_dof(ctx, &v.extra)).collect()
 }
 
-/// How many of `draws` (pose residuals of a noise model, in place of the log's) probe `shape`'s
-/// search reaches the held-out gain `gain` in, counting up to `enough`.
-pub(crate) fn draws_reaching(ctx: &Context<'_>, shape: &str, draws: &[Vec<f64>], gain: f64, enough: usize) -> usize {
-    ctx.draws_reaching(&searched_variants(ctx, shape), draws, gain, enough)
+/// Probe `shape`'s search reaches the held-out gain `gain` in one of `draws` (pose residuals of a
+/// noise model, in place of the log's).
+pub(crate) fn found_in_a_draw(ctx: &Context<'_>, shape: &str, draws: &[Vec<f64>], gain: f64) -> bool {
+    ctx.reached_in_a_draw(&searched_variants(ctx, shape), draws, gain)
 }
 
 /// Every probe with its held-out gain.

@@ -498,6 +498,7 @@ fn in_sample_why(fit: &InSampleFit) -> String {
 mod tests {
     use super::*;
     use crate::diagnose::report::Candidate;
+    use crate::diagnose::testing::probe;
     use crate::diagnose::{DiagnoseOptions, gap};
     use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
 
@@ -533,20 +534,6 @@ mod tests {
             wander: false,
             credible_cause: false,
             residual_dof: None,
-        }
-    }
-
-    /// A probe (its place not seen as a jump in a hold).
-    fn probe(shape: &'static str, heldout_gain: f64, in_sample_ratio: f64, veto_margin: f64) -> Probe {
-        Probe {
-            shape,
-            heldout_gain,
-            detail: String::new(),
-            in_sample_ratio,
-            veto_margin,
-            jump_in_hold: false,
-            columns: 3,
-            step_before: None,
         }
     }
 

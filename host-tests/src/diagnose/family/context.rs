@@ -311,39 +311,30 @@ impl<'a> Context<'a> {
         self.nominal_cv.iter().flatten().count()
     }
 
-    /// How many of `draws` (pose residuals of a noise model, in place of the log's) some of
-    /// `variants` reaches the held-out gain `target` in ([`Self::value_gain`], against the nominal
-    /// model's held-out ratio on the draw), counting up to `enough`: what a search over the
-    /// variants finds in that noise. Each variant's folds are factored once for every draw.
-    pub(crate) fn draws_reaching(&self, variants: &[Variant], draws: &[Vec<f64>], target: f64, enough: usize) -> usize {
+    /// Some of `variants` reaches the held-out gain `target` ([`Self::value_gain`], against the
+    /// nominal model's held-out ratio on the draw) in one of `draws` (pose residuals of a noise
+    /// model, in place of the log's): a search over the variants finds that much in that noise.
+    /// Each variant's folds are factored once for every draw.
+    pub(crate) fn reached_in_a_draw(&self, variants: &[Variant], draws: &[Vec<f64>], target: f64) -> bool {
         let scored: Vec<usize> = (0..self.nominal_cv.len()).filter(|&i| self.scored(i)).collect();
-        let n = scored.len() as f64;
-        let ratio_of =
-            |ss: f64, k: usize| ((ss + PARAMETER_PENALTY * k as f64 * self.e_white) / n / self.e_white).sqrt();
+        let ratio_of = |ss: f64, k: usize| self.penalised_ratio(ss, 0.0, k, scored.len() as f64);
         // Each draw's held-out residuals under the nominal model and their ratio.
-        let nominal: Vec<Option<(Vec<Option<f64>>, f64)>> = (draws.iter().map(|r| self.base_cv_residuals(r)))
-            .map(|cv| {
-                cv.map(|cv| {
-                    let ratio = ratio_of(scored.iter().filter_map(|&i| cv[i]).map(|c| c * c).sum(), 0);
-                    (cv, ratio)
-                })
+        let nominal: Vec<_> = (draws.iter())
+            .filter_map(|r| self.base_cv_residuals(r).map(|cv| (r.as_slice(), cv)))
+            .map(|(r, cv)| {
+                let ratio = ratio_of(scored.iter().filter_map(|&i| cv[i]).map(|c| c * c).sum(), 0);
+                (r, cv, ratio)
             })
             .collect();
-        let mut reached = vec![false; draws.len()];
-        for v in variants {
+        variants.iter().any(|v| {
             let rows = self.rows_with(&v.extra);
-            let Some(design) = CvDesign::new(&rows, &self.fold, self.folds, &self.none_dropped) else { continue };
-            for (d, (r, base)) in draws.iter().zip(&nominal).enumerate() {
-                let (Some((cv0, ratio0)), false) = (base, reached[d]) else { continue };
-                let Some(cv) = design.residuals(&rows, r, UNPREDICTABLE) else { continue };
+            let Some(design) = CvDesign::new(&rows, &self.fold, self.folds, &self.none_dropped) else { return false };
+            nominal.iter().any(|(r, cv0, ratio0)| {
+                let Some(cv) = design.residuals(&rows, r, UNPREDICTABLE) else { return false };
                 let ss = scored.iter().filter_map(|&i| cv[i].or(cv0[i])).map(|c| c * c).sum();
-                reached[d] = value_gain_over(*ratio0, ratio_of(ss, v.params), scored.len()) >= target;
-            }
-            if reached.iter().filter(|x| **x).count() >= enough {
-                break;
-            }
-        }
-        reached.iter().filter(|x| **x).count().min(enough)
+                value_gain_over(*ratio0, ratio_of(ss, v.params), scored.len()) >= target
+            })
+        })
     }
 
     /// Held-out residuals of `r` (one per pose) under the nominal design (`None` for a pose it
@@ -382,10 +373,16 @@ impl<'a> Context<'a> {
                 ss += c * c;
             }
         }
-        // Against the nominal model's expectation: a design that merely predicts noisily (and so
-        // expects more) must not look better for it; the penalty charges the extra parameters.
+        Some(self.penalised_ratio(ss, n_dropped, k, n))
+    }
+
+    /// The held-out ratio of `n` scored poses whose kept ones leave the squared residual `ss`,
+    /// `n_dropped` dropped, with `k` extra parameters: against the nominal model's expectation (a
+    /// design that merely predicts noisily, and so expects more, must not look better for it), each
+    /// dropped pose counting one white variance and each parameter [`PARAMETER_PENALTY`].
+    fn penalised_ratio(&self, ss: f64, n_dropped: f64, k: usize, n: f64) -> f64 {
         let ms = (ss + (n_dropped + PARAMETER_PENALTY * k as f64) * self.e_white) / n;
-        Some((ms / self.e_white).sqrt())
+        (ms / self.e_white).sqrt()
     }
 
     /// The held-out gain of a design with the pose the nominal model predicts worst left out of both

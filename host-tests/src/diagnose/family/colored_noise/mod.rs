@@ -279,21 +279,15 @@ pub(crate) fn quiet_walk(ctx: &Context<'_>, probe: Option<&Probe>) -> Option<Str
     ))
 }
 
-/// Fewest draws of a quiet walk out of [`CV_NOISE_DRAWS`] in which a probe's search must find as
-/// much as in the log for the probe to be no evidence against the walk ([`walk_finds_probe`]).
-const MIN_DRAWS_AS_FOUND: usize = 1;
-
-/// The search of `probe` finds as much in draws of the random walk `walk` (with white noise) as in
-/// the log, in at least [`MIN_DRAWS_AS_FOUND`] of [`CV_NOISE_DRAWS`]: a step's place or a period
-/// searched over a walk's path fits it as well as the data, so the probe's gain is no evidence
-/// against the walk. A probe that searches nothing (one pose off the others) is never found so.
+/// The search of `probe` finds as much in one of [`CV_NOISE_DRAWS`] draws of the random walk `walk`
+/// (with white noise) as in the log: a step's place or a period searched over a walk's path fits it
+/// as well as the data, so the probe's gain is no evidence against the walk. A probe that searches
+/// nothing (one pose off the others) is never found so.
 fn walk_finds_probe(ctx: &Context<'_>, walk: V3, probe: &Probe) -> bool {
     let m = ctx.m;
     let noise = Colored { walk, ..Colored::default() }.noise(m);
     let draws = residual_noise_draws(&m.model, &m.directions, &m.poses, &noise, CV_NOISE_DRAWS, ctx.opts.seed);
-    let found =
-        crate::diagnose::probe::draws_reaching(ctx, probe.shape, &draws, probe.heldout_gain, MIN_DRAWS_AS_FOUND);
-    found >= MIN_DRAWS_AS_FOUND
+    crate::diagnose::probe::found_in_a_draw(ctx, probe.shape, &draws, probe.heldout_gain)
 }
 
 /// Share of the squared held-out residual in the largest pose (0 without residuals).
@@ -671,16 +665,7 @@ mod tests {
         // much is no evidence against it; a step gaining 0.95 is beyond every draw and places the
         // gap.
         let opts = DiagnoseOptions::DEFAULT;
-        let step = |heldout_gain: f64| crate::diagnose::Probe {
-            shape: "bias-step",
-            heldout_gain,
-            detail: String::new(),
-            in_sample_ratio: f64::NAN,
-            veto_margin: 0.0,
-            jump_in_hold: false,
-            columns: 3,
-            step_before: None,
-        };
+        let step = |heldout_gain: f64| crate::diagnose::testing::probe("bias-step", heldout_gain, f64::NAN, 0.0);
         for (seed, level) in [(4, 0.035), (9, 0.045), (13, 0.055)] {
             let table = walk_log(seed, level, 0.0);
             let m = gap::measure(&table, &opts).unwrap();
