@@ -468,7 +468,7 @@ mod tests {
     fn a_shape_the_moving_holds_contradict_leaves_the_drift_to_the_shapes_they_allow() {
         // A bias warming up along two directions with time constants of 10 s and 100 s (8 and 4 mg)
         // on 13 poses held 6 s after the initial rest (1 mg noise): the holds move. The best shape
-        // on the pose means, a scale common to every axis in time, is 45-107 chi-square per
+        // on the pose means, a scale common to every axis in time, is 38-107 chi-square per
         // coefficient from the holds; until stop 90 that refuted the whole family.
         let opts = |seed| DiagnoseOptions { seed, ..DiagnoseOptions::DEFAULT };
         for seed in [6, 17, 38] {
