@@ -359,9 +359,12 @@ type LeavesDof = fn(&Context<'_>, &[Vec<f64>]) -> bool;
 /// other probes the same way lost 12 right answers.
 const STEP_RESIDUAL_DOF: usize = 2;
 
-/// The searched probes, each with the evidence by which it must exceed a family to veto it and the
-/// test of its residual degrees of freedom.
-const SEARCHED: [(&str, MakeVariants, f64, LeavesDof); 5] = [
+/// A searched probe: its shape, its variants, the evidence by which it must exceed a family to veto
+/// it and the test of its residual degrees of freedom.
+type Searched = (&'static str, MakeVariants, f64, LeavesDof);
+
+/// The searched probes.
+const SEARCHED: [Searched; 5] = [
     ("periodic", periodic, 0.0, |c, e| c.leaves_residual_dof(e)),
     ("bias-step", bias_step, STEP_OVER_DRIFT, |c, e| c.trains_beyond(e, STEP_RESIDUAL_DOF)),
     ("cross-axis", cross_axis, 0.0, |c, e| c.leaves_residual_dof(e)),
@@ -369,24 +372,26 @@ const SEARCHED: [(&str, MakeVariants, f64, LeavesDof); 5] = [
     ("rotation-sense", rotation_sense, TURN_OVER_FAMILY, |c, e| c.leaves_residual_dof(e)),
 ];
 
-/// The variants probe `shape` searches (none for the one-pose probe, which searches the poses).
-fn searched_variants(ctx: &Context<'_>, shape: &str) -> Vec<Variant> {
-    let Some(&(_, make, _, leaves_dof)) = SEARCHED.iter().find(|(s, ..)| *s == shape) else { return Vec::new() };
+/// The variants a searched probe tries: those that leave it its residual degrees of freedom.
+fn variants_of(ctx: &Context<'_>, &(_, make, _, leaves_dof): &Searched) -> Vec<Variant> {
     make(ctx).into_iter().filter(|v| leaves_dof(ctx, &v.extra)).collect()
 }
 
 /// Probe `shape`'s search reaches the held-out gain `gain` in one of `draws` (pose residuals of a
-/// noise model, in place of the log's).
+/// noise model, in place of the log's). The one-pose probe searches no shape: never.
 pub(crate) fn found_in_a_draw(ctx: &Context<'_>, shape: &str, draws: &[Vec<f64>], gain: f64) -> bool {
-    ctx.reached_in_a_draw(&searched_variants(ctx, shape), draws, gain)
+    SEARCHED
+        .iter()
+        .find(|(s, ..)| *s == shape)
+        .is_some_and(|p| ctx.reached_in_a_draw(&variants_of(ctx, p), draws, gain))
 }
 
 /// Every probe with its held-out gain.
 pub(crate) fn run(ctx: &Context<'_>) -> Vec<Probe> {
     SEARCHED
         .iter()
-        .filter_map(|&(shape, _, veto_margin, _)| {
-            let variants = searched_variants(ctx, shape);
+        .filter_map(|probe @ &(shape, _, veto_margin, _)| {
+            let variants = variants_of(ctx, probe);
             let f = ctx.best_of(variants)?;
             let step = (shape == "bias-step").then(|| fitted_step(ctx, &f.rows)).flatten();
             let jump_in_hold = step.is_some_and(|s| step_seen_in_holds(ctx, s));
