@@ -439,7 +439,7 @@ impl<'a> Context<'a> {
     }
 
     /// The holds move beyond white noise (the within-pose channel is significant).
-    fn holds_move(&self) -> bool {
+    pub(crate) fn holds_move(&self) -> bool {
         self.within.as_ref().is_some_and(|w| w.significant)
     }
 

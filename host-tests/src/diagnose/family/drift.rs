@@ -88,8 +88,7 @@ fn holds_disagreement(ctx: &Context<'_>, shape: &Shape<'_>, variant: &Variant) -
 /// chi-square per coefficient from the moving holds, and the whole family was refuted; a bias
 /// warming up over the holds' course gains 0.56 on withheld poses).
 fn moving_holds_contradict(ctx: &Context<'_>, shape: &Shape<'_>, variant: &Variant) -> bool {
-    ctx.within.as_ref().is_some_and(|w| w.significant)
-        && holds_disagreement(ctx, shape, variant).is_some_and(|d| d > CHANNELS_DISAGREE)
+    ctx.holds_move() && holds_disagreement(ctx, shape, variant).is_some_and(|d| d > CHANNELS_DISAGREE)
 }
 
 /// The holds drift smoothly: their movement is significant and a line in time through each hold

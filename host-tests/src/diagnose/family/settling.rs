@@ -432,7 +432,7 @@ mod tests {
             let table = transient_log(seed, &|hold, age| if hold == 9 { settle(age) } else { [0.0; 3] });
             let m = gap::measure(&table, &opts).unwrap();
             let ctx = Context::new(&table, &m, &opts).unwrap();
-            if ctx.within.as_ref().is_some_and(|w| w.significant) {
+            if ctx.holds_move() {
                 once += 1;
                 assert_eq!(settling_holds(&ctx, Decay::Ratio), None, "seed {seed}");
             }
