@@ -7,13 +7,16 @@
 //! withhold some. Each pose's column is the spline averaged over its hold; when the log has the
 //! within-pose channel, the spline's course during each hold is stacked with the pose means (as in
 //! `joint.rs`). Basis and prior are chosen on withheld pose means; the penalty charges the fit's
-//! effective parameters (the trace of the pose rows' hat matrix beyond the calibration's).
+//! effective parameters (the trace of the pose rows' hat matrix beyond the calibration's). The
+//! spline runs along a course ([`Course`]): time for the drift, the thermometer's reading for the
+//! temperature family (a coefficient that is no polynomial in temperature).
 
 use super::{Context, Evaluation};
 use crate::diagnose::PARAMETER_PENALTY;
 use crate::diagnose::math::{
     V3, add_matrices, add_vectors, axis, cholesky_solve_many, dot, normals, rhs, scaled, sums_without,
 };
+use std::ops::Range;
 
 /// Knot counts tried.
 const KNOTS: [usize; 4] = [4, 6, 10, 18];
@@ -31,14 +34,26 @@ struct Shape {
 }
 
 impl Shape {
-    fn detail(&self, t_end: f64, edf: f64) -> String {
-        let h = t_end / (self.knots - 3) as f64;
+    fn detail(&self, course: &Course<'_>, edf: f64) -> String {
+        let h = course.span / (self.knots - 3) as f64;
         let what = if self.order == 1 { "steps" } else { "bends" };
+        let (along, unit, digits) = (&course.along, course.unit, course.digits);
         format!(
-            "bias wandering smoothly in time (cubic spline, {} basis functions {h:.0} s apart, {what} of {} pose-noise sigmas, {edf:.1} effective params)",
+            "bias wandering smoothly {along} (cubic spline, {} basis functions {h:.digits$} {unit} apart, {what} of {} pose-noise sigmas, {edf:.1} effective params)",
             self.knots, self.step
         )
     }
+}
+
+/// What the wander follows, over `0..span`: time (a drift) or a thermometer's reading (a
+/// temperature), as a function of a segment's mid time (s) and its table rows.
+pub(crate) struct Course<'a> {
+    pub(crate) span: f64,
+    pub(crate) at: &'a dyn Fn(f64, Range<usize>) -> f64,
+    /// How the detail names it ("in time"), its unit and the digits of its knot spacing.
+    pub(crate) along: String,
+    pub(crate) unit: &'static str,
+    pub(crate) digits: usize,
 }
 
 /// The best penalised wander.
@@ -47,6 +62,31 @@ pub(crate) struct SmoothFit {
     after: Vec<Option<f64>>,
     edf: f64,
     detail: String,
+    /// The bias at each knot, per axis (output unit), fitted to every pose, and the course's span.
+    knots: Vec<V3>,
+    span: f64,
+}
+
+impl SmoothFit {
+    /// Its penalised held-out ratio.
+    pub(crate) fn ratio(&self) -> f64 {
+        self.ratio
+    }
+
+    /// Its effective parameters beyond the calibration.
+    pub(crate) fn edf(&self) -> f64 {
+        self.edf
+    }
+
+    /// The largest rate of change of the fitted bias on any axis at the course's values `xs`
+    /// (output unit per course unit).
+    pub(crate) fn steepest(&self, xs: &[f64]) -> f64 {
+        let count = self.knots.len();
+        let rate = |x: f64, a: usize| -> f64 {
+            (0..count).map(|j| self.knots[j][a] * bspline_rate(j, count, self.span, x)).sum::<f64>().abs()
+        };
+        xs.iter().flat_map(|&x| (0..3).map(move |a| rate(x, a))).fold(0.0, f64::max)
+    }
 }
 
 /// Basis function `j` of `count` uniform cubic B-splines over `0..t_end` at `t` (their sum is 1 on
@@ -63,14 +103,31 @@ pub(crate) fn bspline(j: usize, count: usize, t_end: f64, t: f64) -> f64 {
     }
 }
 
+/// The rate of change of [`bspline`] in `t`.
+fn bspline_rate(j: usize, count: usize, t_end: f64, t: f64) -> f64 {
+    let h = t_end / (count - 3) as f64;
+    let u = (t - (j as f64 - 1.0) * h) / h;
+    let x = u.abs();
+    let d = if x < 1.0 {
+        (-12.0 * x + 9.0 * x * x) / 6.0
+    } else if x < 2.0 {
+        -(2.0 - x).powi(2) / 2.0
+    } else {
+        0.0
+    };
+    d * u.signum() / h
+}
+
 /// The stacked design of one knot count: whitened pose rows (calibration columns, then `3 knots`
 /// wander columns: the bias at each knot along the pose direction, averaged over the hold), then,
 /// when the log has the within-pose channel, its segments' rows (the wander's course during each
 /// hold, already whitened); their targets and folds (a segment in its pose's fold).
-fn design(ctx: &Context<'_>, knots: usize, t_end: f64) -> (Vec<Vec<f64>>, Vec<f64>, Vec<usize>) {
+fn design(ctx: &Context<'_>, knots: usize, course: &Course<'_>) -> (Vec<Vec<f64>>, Vec<f64>, Vec<usize>) {
     let base = ctx.base_columns();
-    let effect = |_: usize, t: f64, _: std::ops::Range<usize>| -> Vec<V3> {
-        (0..knots).flat_map(|j| (0..3).map(move |a| axis(a, bspline(j, knots, t_end, t)))).collect()
+    let span = course.span;
+    let effect = |_: usize, t: f64, rows: Range<usize>| -> Vec<V3> {
+        let x = (course.at)(t, rows);
+        (0..knots).flat_map(|j| (0..3).map(move |a| axis(a, bspline(j, knots, span, x)))).collect()
     };
     let within = ctx.within.as_ref().map(|w| (w, w.variant(ctx.m, 3 * knots, String::new(), &effect)));
     let pose_extra: Vec<Vec<f64>> = match &within {
@@ -79,7 +136,7 @@ fn design(ctx: &Context<'_>, knots: usize, t_end: f64) -> (Vec<Vec<f64>>, Vec<f6
             .poses
             .iter()
             .zip(ctx.directions())
-            .map(|(p, u)| effect(0, p.t_mid(), 0..0).iter().map(|e| dot(*u, *e)).collect())
+            .map(|(p, u)| effect(0, p.t_mid(), p.rows.clone()).iter().map(|e| dot(*u, *e)).collect())
             .collect(),
     };
     let (mut rows, mut r) = ctx.whitened_pose_rows(&pose_extra);
@@ -154,7 +211,7 @@ fn solve_scaled(a: Vec<Vec<f64>>, rhs: &[&[f64]]) -> Option<Vec<Vec<f64>>> {
 
 /// A shape's penalised held-out ratio, in-sample pose residuals (output unit) and effective
 /// parameters ([`score`]).
-type ShapeScore = (f64, Vec<Option<f64>>, f64);
+type ShapeScore = (f64, Vec<Option<f64>>, f64, Vec<V3>);
 
 /// Penalised held-out ratio, in-sample pose residuals (output unit) and effective parameters of
 /// one shape, from the design's fold normals.
@@ -186,7 +243,8 @@ fn score(
     let edf = (trace - base as f64).max(0.0);
     let ratio = ((ss + PARAMETER_PENALTY * edf) / ctx.n_scored() as f64).sqrt();
     let after = (0..n).map(|i| Some(predict(&solved[0], i) / w)).collect();
-    Some((ratio, after, edf))
+    let knots = solved[0][base..].chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
+    Some((ratio, after, edf, knots))
 }
 
 /// The knot count and prior step that predict the withheld pose means best, each scored by the
@@ -195,13 +253,19 @@ fn score(
 /// predict far worse is luck, not a wander (a 16-pose log fitted with its holds' course: withheld sums of squares 87, 16 and 63
 /// at steps of 0.3, 1 and 3 sigmas, against the nominal model's 212).
 pub(crate) fn best(ctx: &Context<'_>) -> Option<SmoothFit> {
-    if !ctx.pose_level || !(ctx.e_white > 0.0) {
+    let t_end = ctx.poses.last()?.t_end.max(1e-9);
+    let at = |t: f64, _: Range<usize>| t;
+    best_along(ctx, &Course { span: t_end, at: &at, along: "in time".into(), unit: "s", digits: 0 })
+}
+
+/// [`best`] along `course`.
+pub(crate) fn best_along(ctx: &Context<'_>, course: &Course<'_>) -> Option<SmoothFit> {
+    if !ctx.pose_level || !(ctx.e_white > 0.0) || !(course.span > 0.0) {
         return None;
     }
-    let t_end = ctx.poses.last()?.t_end.max(1e-9);
     let mut scored: Vec<(Shape, Option<ShapeScore>)> = Vec::new();
     for knots in KNOTS {
-        let d = design(ctx, knots, t_end);
+        let d = design(ctx, knots, course);
         let normals = FoldNormals::new(&d.0, &d.1, &d.2, ctx.folds);
         for order in [1, 2] {
             for step in STEP_SIGMAS {
@@ -214,8 +278,8 @@ pub(crate) fn best(ctx: &Context<'_>) -> Option<SmoothFit> {
     let (i, ratio) = (0..scored.len())
         .filter_map(|i| median_of_neighbours(&ratios, i).map(|r| (i, r)))
         .min_by(|a, b| a.1.total_cmp(&b.1))?;
-    let (shape, (_, after, edf)) = (scored[i].0, scored[i].1.clone()?);
-    Some(SmoothFit { ratio, after, edf, detail: shape.detail(t_end, edf) })
+    let (shape, (_, after, edf, knots)) = (scored[i].0, scored[i].1.clone()?);
+    Some(SmoothFit { ratio, after, edf, detail: shape.detail(course, edf), knots, span: course.span })
 }
 
 /// The median held-out ratio of shape `i` and its neighbours in `ratios` (the prior steps beside it,
@@ -277,13 +341,33 @@ mod tests {
         // residuals (a warm touch after each placement read as one drift), and one that leaves them.
         let taken = |scale: f64| {
             let after = m.r.iter().map(|r| Some(scale * r)).collect();
-            let fit = SmoothFit { ratio: 0.5, after, edf: 1.0, detail: String::new() };
+            let fit = SmoothFit { ratio: 0.5, after, edf: 1.0, detail: String::new(), knots: Vec::new(), span: 1.0 };
             let mut e = ctx.not_testable("drift");
             add(&ctx, &mut e, fit);
             e.candidate.applicable
         };
         assert!(!taken(10.0), "contradicted by the pose means");
         assert!(taken(1.0));
+    }
+
+    #[test]
+    fn the_splines_rate_is_their_slope() {
+        // Against central differences over the span and beyond its ends.
+        let (count, span, dt) = (6, 12.0, 1e-6);
+        for j in 0..count {
+            for k in -10..=130 {
+                let t = 0.1 * k as f64 + 0.013;
+                let slope = (bspline(j, count, span, t + dt) - bspline(j, count, span, t - dt)) / (2.0 * dt);
+                let rate = bspline_rate(j, count, span, t);
+                assert!((rate - slope).abs() < 1e-6, "basis {j} at {t}: rate {rate}, slope {slope}");
+            }
+        }
+        // A course rising 0.5 per unit on the second axis and falling 0.25 on the third (a line's
+        // coefficients are its values at the basis functions' centres, h apart from -h).
+        let h = span / (count - 3) as f64;
+        let knots = (0..count).map(|j| [0.0, 0.5 * (j as f64 - 1.0) * h, -0.25 * (j as f64 - 1.0) * h]).collect();
+        let fit = SmoothFit { ratio: 1.0, after: Vec::new(), edf: 2.0, detail: String::new(), knots, span };
+        assert!((fit.steepest(&[1.0, 6.0, 11.0]) - 0.5).abs() < 1e-9, "{}", fit.steepest(&[1.0, 6.0, 11.0]));
     }
 
     #[test]

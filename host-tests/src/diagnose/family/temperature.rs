@@ -1,9 +1,13 @@
 //! Temperature: bias, relative scale, or both, linear or quadratic (a second-order temperature
 //! coefficient) in the temperature the sensor sees: the thermometer's reading, or that reading
 //! through a first-order lag (the sensor warms later than the thermometer), with the lag's time
-//! constant from a grid, or as a smooth course in time (a coarse thermometer's staircase).
+//! constant from a grid, or as a smooth course in time (a coarse thermometer's staircase); and a
+//! bias moving smoothly in that temperature (a penalised spline, `smooth.rs`, along the
+//! thermometer instead of time): a coefficient that is no polynomial, such as a package stress
+//! relaxing over a few kelvin.
 
 use super::{Context, Evaluation, Family, Variant, bias_scale_effect, evaluation_of, smooth};
+use crate::diagnose::MIN_GAIN;
 use crate::diagnose::gap::row_time;
 use crate::diagnose::math::{V3, dot, lstsq, lstsq_with_covariance, mean, median};
 use crate::diagnose::within::{Within, WithinVariant};
@@ -371,8 +375,74 @@ impl Family for Temperature {
             .collect();
         let (mut e, named) = evaluation_of(self, ctx, ctx.best_of(variants));
         e.credible_cause = e.candidate.applicable && named.is_some_and(|n| credible.contains(&n));
+        add_wander(ctx, &mut e);
         e
     }
+}
+
+/// Puts the smooth course in temperature ([`wander_in_temperature`]) in the candidate when it
+/// predicts the withheld pose means better than the polynomials and is as rigid as a line
+/// ([`RIGID_EDF`]), or they do not explain them, or it beats them by [`WANDER_AHEAD`]. Its slopes
+/// are within a MEMS part's, so the thermometer is then a credible cause; a course that bends
+/// more than a line is a wander (as a drift's is).
+fn add_wander(ctx: &Context<'_>, e: &mut Evaluation) {
+    let gain = if e.candidate.applicable { e.candidate.heldout_gain } else { f64::NEG_INFINITY };
+    let taken = |f: &smooth::SmoothFit| {
+        f.edf() <= RIGID_EDF || gain < MIN_GAIN || ctx.value_gain(f.ratio()) >= gain + WANDER_AHEAD
+    };
+    let Some(fit) = wander_in_temperature(ctx).filter(taken) else { return };
+    let (before, rigid) = (e.candidate.detail.clone(), fit.edf() <= RIGID_EDF);
+    smooth::add(ctx, e, fit);
+    if e.candidate.detail != before {
+        (e.credible_cause, e.wander) = (true, !rigid);
+    }
+}
+
+/// Effective parameters up to which the smooth course in temperature bends no more than one
+/// coefficient per axis does: a shape as rigid as the linear fit, not a wander.
+const RIGID_EDF: f64 = 3.5;
+
+/// Held-out gain by which a smooth course in temperature that bends more than a line must beat
+/// the family's polynomials when they explain the withheld poses: it follows the thermometer's path
+/// as a drift's wander follows time's (on the fresh sets of stops 83-97 one room cycle, its
+/// quadratic gaining 0.74 and the course 0.81, was then named colored noise by the holds' walk).
+const WANDER_AHEAD: f64 = 0.2;
+
+/// Thermometer readings the smooth wander in temperature is tried along.
+const WANDER_SOURCES: [Source; 5] =
+    [Source::Lagged(0.0), Source::Smoothed, Source::Leading(5.0), Source::Leading(10.0), Source::Leading(30.0)];
+
+/// The bias wandering smoothly in the temperature the sensor sees ([`smooth::best_along`]): a
+/// temperature coefficient that is not a polynomial, with as few effective parameters as the data
+/// ask, read through each of [`WANDER_SOURCES`]; the best of those whose local slope stays within
+/// [`MAX_BIAS_MG_PER_K`] at every pose (two blindgen2 wanders in time under room thermometers
+/// were courses of 5-15 mg/K through each reading tried).
+fn wander_in_temperature(ctx: &Context<'_>) -> Option<smooth::SmoothFit> {
+    let course = Course::fit(ctx);
+    let mut best: Option<smooth::SmoothFit> = None;
+    for source in WANDER_SOURCES {
+        let Some(temps) = source.temps(ctx, course.as_ref()) else { continue };
+        let pose_temps: Vec<f64> = ctx.poses.iter().map(|p| mean(&temps[p.rows.clone()])).collect();
+        if !spans_enough(&pose_temps, mean(&pose_temps)) {
+            continue;
+        }
+        let lo = pose_temps.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = pose_temps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let (lo, span) = (lo - 0.1 * (hi - lo), 1.2 * (hi - lo));
+        let temps = &temps;
+        let at = move |_: f64, rows: std::ops::Range<usize>| mean(&temps[rows]) - lo;
+        let along = format!("in temperature{}", source.detail());
+        let c = smooth::Course { span, at: &at, along, unit: "K", digits: 1 };
+        let xs: Vec<f64> = pose_temps.iter().map(|t| t - lo).collect();
+        let limit = MAX_BIAS_MG_PER_K / ctx.m.to_mg(1.0);
+        let fit = smooth::best_along(ctx, &c);
+        if let Some(fit) = fit.filter(|f| f.steepest(&xs) <= limit)
+            && best.as_ref().is_none_or(|b| fit.ratio() < b.ratio())
+        {
+            best = Some(fit);
+        }
+    }
+    best
 }
 
 /// The parametrisations whose fitted coefficients are not [`Grade::Implausible`], with their grade.
@@ -496,6 +566,26 @@ mod tests {
             let temperature = d.candidates.iter().find(|c| c.effect == "temperature").unwrap();
             assert_eq!(d.verdict, "temperature", "seed {seed}: {}", d.to_text());
             assert!(temperature.detail.contains("lagging the sensor"), "seed {seed}: {}", temperature.detail);
+        }
+    }
+
+    #[test]
+    fn a_bias_curved_in_temperature_under_a_room_cycle_is_a_smooth_course_in_temperature() {
+        // The room's heating cycles the board by 5 K (two cycles over the log); the part's bias
+        // follows the die through a package stress that relaxes over a few kelvin, 2 tanh((T - 25)
+        // / 1 K) mg along one sensor direction (2 mg/K at the steepest): no line or square in
+        // temperature, and a course in time that turns four times. The thermometer reads 1/16 K
+        // steps. Without the smooth course the temperature family named a line in temperature.
+        for seed in [3, 4] {
+            let (mut table, times) = clean_log(seed);
+            let end = times[times.len() - 1];
+            let die = |t: f64| 25.0 + 5.0 * (4.0 * std::f64::consts::PI * t / end).sin();
+            add_bias_mg(&mut table, &times, |t| 2.0 * ((die(t) - 25.0) / 1.0).tanh());
+            table.temps_c = Some(times.iter().map(|t| (die(*t) * 16.0).round() / 16.0).collect());
+            let d = diagnose(&table, &DiagnoseOptions::DEFAULT).unwrap();
+            let temperature = d.candidates.iter().find(|c| c.effect == "temperature").unwrap();
+            assert_eq!(d.verdict, "temperature", "seed {seed}: {}", d.to_text());
+            assert!(temperature.detail.contains("smoothly in temperature"), "seed {seed}: {}", d.to_text());
         }
     }
 
