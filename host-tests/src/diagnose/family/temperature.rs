@@ -409,8 +409,8 @@ const RIGID_EDF: f64 = 3.5;
 const WANDER_AHEAD: f64 = 0.2;
 
 /// Thermometer readings the smooth wander in temperature is tried along.
-const WANDER_SOURCES: [Source; 5] =
-    [Source::Lagged(0.0), Source::Smoothed, Source::Leading(5.0), Source::Leading(10.0), Source::Leading(30.0)];
+const WANDER_SOURCES: [Source; 4] =
+    [Source::Lagged(0.0), Source::Leading(5.0), Source::Leading(10.0), Source::Leading(30.0)];
 
 /// The bias wandering smoothly in the temperature the sensor sees ([`smooth::best_along`]): a
 /// temperature coefficient that is not a polynomial, with as few effective parameters as the data
