@@ -209,8 +209,8 @@ fn solve_scaled(a: Vec<Vec<f64>>, rhs: &[&[f64]]) -> Option<Vec<Vec<f64>>> {
     Some(solved.into_iter().map(|x| x.iter().zip(&d).map(|(v, s)| v / s).collect()).collect())
 }
 
-/// A shape's penalised held-out ratio, in-sample pose residuals (output unit) and effective
-/// parameters ([`score`]).
+/// A shape's penalised held-out ratio, in-sample pose residuals (output unit), effective
+/// parameters and the bias at each knot per axis fitted to every pose (output unit; [`score`]).
 type ShapeScore = (f64, Vec<Option<f64>>, f64, Vec<V3>);
 
 /// Penalised held-out ratio, in-sample pose residuals (output unit) and effective parameters of

@@ -408,6 +408,10 @@ const RIGID_EDF: f64 = 3.5;
 /// quadratic gaining 0.74 and the course 0.81, was then named colored noise by the holds' walk).
 const WANDER_AHEAD: f64 = 0.2;
 
+/// Share of the poses' temperature span the smooth course extends beyond it at each end: a hold's
+/// segments read a little past the extreme pose means.
+const COURSE_MARGIN: f64 = 0.1;
+
 /// Thermometer readings the smooth wander in temperature is tried along.
 const WANDER_SOURCES: [Source; 4] =
     [Source::Lagged(0.0), Source::Leading(5.0), Source::Leading(10.0), Source::Leading(30.0)];
@@ -419,6 +423,7 @@ const WANDER_SOURCES: [Source; 4] =
 /// were courses of 5-15 mg/K through each reading tried).
 fn wander_in_temperature(ctx: &Context<'_>) -> Option<smooth::SmoothFit> {
     let course = Course::fit(ctx);
+    let limit = MAX_BIAS_MG_PER_K / ctx.m.to_mg(1.0);
     let mut best: Option<smooth::SmoothFit> = None;
     for source in WANDER_SOURCES {
         let Some(temps) = source.temps(ctx, course.as_ref()) else { continue };
@@ -428,15 +433,13 @@ fn wander_in_temperature(ctx: &Context<'_>) -> Option<smooth::SmoothFit> {
         }
         let lo = pose_temps.iter().copied().fold(f64::INFINITY, f64::min);
         let hi = pose_temps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let (lo, span) = (lo - 0.1 * (hi - lo), 1.2 * (hi - lo));
+        let (lo, span) = (lo - COURSE_MARGIN * (hi - lo), (1.0 + 2.0 * COURSE_MARGIN) * (hi - lo));
         let temps = &temps;
         let at = move |_: f64, rows: std::ops::Range<usize>| mean(&temps[rows]) - lo;
         let along = format!("in temperature{}", source.detail());
         let c = smooth::Course { span, at: &at, along, unit: "K", digits: 1 };
         let xs: Vec<f64> = pose_temps.iter().map(|t| t - lo).collect();
-        let limit = MAX_BIAS_MG_PER_K / ctx.m.to_mg(1.0);
-        let fit = smooth::best_along(ctx, &c);
-        if let Some(fit) = fit.filter(|f| f.steepest(&xs) <= limit)
+        if let Some(fit) = smooth::best_along(ctx, &c).filter(|f| f.steepest(&xs) <= limit)
             && best.as_ref().is_none_or(|b| fit.ratio() < b.ratio())
         {
             best = Some(fit);
