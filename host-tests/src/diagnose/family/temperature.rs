@@ -210,8 +210,12 @@ impl Terms {
 
 /// The temperature as read through `source`, averaged over each pose.
 fn pose_temps(ctx: &Context<'_>, source: Source, course: Option<&Course>) -> Option<Vec<f64>> {
-    let temps = source.temps(ctx, course)?;
-    Some(ctx.poses.iter().map(|p| mean(&temps[p.rows.clone()])).collect())
+    Some(pose_means(ctx, &source.temps(ctx, course)?))
+}
+
+/// The per-row temperatures `temps` averaged over each pose.
+fn pose_means(ctx: &Context<'_>, temps: &[f64]) -> Vec<f64> {
+    ctx.poses.iter().map(|p| mean(&temps[p.rows.clone()])).collect()
 }
 
 /// Seconds of readings whose median starts a lagged thermometer ([`lagged_temps`]): a coarse
@@ -427,7 +431,7 @@ fn wander_in_temperature(ctx: &Context<'_>) -> Option<smooth::SmoothFit> {
     let mut best: Option<smooth::SmoothFit> = None;
     for source in WANDER_SOURCES {
         let Some(temps) = source.temps(ctx, course.as_ref()) else { continue };
-        let pose_temps: Vec<f64> = ctx.poses.iter().map(|p| mean(&temps[p.rows.clone()])).collect();
+        let pose_temps = pose_means(ctx, &temps);
         if !spans_enough(&pose_temps, mean(&pose_temps)) {
             continue;
         }
