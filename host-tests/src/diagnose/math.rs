@@ -237,8 +237,13 @@ impl Design {
     /// The variance of the fit's prediction at `row` in units of one training pose's variance
     /// (`row^T (X^T X)^-1 row`; the leave-one-out `h / (1 - h)` of a pose's own leverage `h`).
     pub(crate) fn variance_factor(&self, row: &[f64]) -> f64 {
+        self.whiten(row).iter().map(|v| v * v).sum()
+    }
+
+    /// `L^-1` of the scaled `row`: two whitened rows' dot product is `row_i^T (X^T X)^-1 row_j`.
+    fn whiten(&self, row: &[f64]) -> Vec<f64> {
         let scaled: Vec<f64> = row.iter().zip(&self.scale).map(|(v, s)| v / s).collect();
-        forward_substitute(&self.l, &scaled).iter().map(|v| v * v).sum()
+        forward_substitute(&self.l, &scaled)
     }
 
     /// The residuals of the fit at every pose, a training pose or not; `None` when `r` cannot be
@@ -269,55 +274,120 @@ pub(crate) fn kept_design(rows: &[Vec<f64>], dropped: &[bool]) -> Option<Design>
     Design::new(rows, (0..dropped.len()).filter(|&i| !dropped[i]).collect())
 }
 
-/// Cross-validation folds, each fold's fit on the others factored once: the held-out residuals of
-/// many residual vectors (noise draws) over one design.
+/// A fold of `fold_rows` rows is withheld through the full fit's hat matrix rather than refitted
+/// when they are no more than the design's `columns`: whitening them (`rows x columns^2 / 2`) and
+/// factoring `I - H_FF` then cost about what refitting the others does (their normal matrix, then
+/// `columns^3 / 6`), and a log of up to 40 poses leaves one pose and its segments out at a time.
+pub(crate) fn fold_is_small(fold_rows: usize, columns: usize) -> bool {
+    fold_rows <= columns
+}
+
+/// The lower triangle of `I - H_FF` for a fold's whitened rows `z` (`H_FF = Z Z^T`, the fold's
+/// block of the hat matrix).
+pub(crate) fn identity_less_hat(z: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    let hat = |j: usize, k: usize| z[j].iter().zip(&z[k]).map(|(a, b)| a * b).sum::<f64>();
+    (0..z.len()).map(|j| (0..=j).map(|k| f64::from(u8::from(j == k)) - hat(j, k)).collect()).collect()
+}
+
+/// Cross-validation folds, factored once: the held-out residuals of many residual vectors (noise
+/// draws) over one design.
 pub(crate) struct CvDesign {
-    /// Per fold with poses: its fit and its withheld poses with their prediction variance factor.
-    folds: Vec<(Design, Vec<(usize, f64)>)>,
+    /// The fit to every kept pose, when small folds are withheld through its hat matrix.
+    full: Option<Design>,
+    folds: Vec<Fold>,
+}
+
+/// One fold with poses: how it is withheld, and its withheld poses with their prediction variance
+/// factor.
+enum Fold {
+    /// Its fit on the other folds.
+    Refit(Design, Vec<(usize, f64)>),
+    /// Through the full fit's hat matrix `H` ([`fold_is_small`]): the residuals of fold `F`'s poses
+    /// under the others' fit are `(I - H_FF)^-1 e_F` (`e` the full fit's residuals): one
+    /// factorisation per design instead of one per fold. Kept: the lower Cholesky factor of
+    /// `I - H_FF`.
+    Hat(Vec<Vec<f64>>, Vec<(usize, f64)>),
 }
 
 impl CvDesign {
-    /// `None` when a fold with poses leaves too few others to fit. Each fold's normal matrix is the
-    /// sum of the others' ([`sums_without`]): the poses are summed once, not once per fold.
+    /// `None` when a fold with poses leaves too few others to fit.
     pub(crate) fn new(rows: &[Vec<f64>], fold: &[usize], folds: usize, dropped: &[bool]) -> Option<Self> {
         let p = rows.first()?.len();
         let n = fold.len();
+        let kept = (0..n).filter(|&i| !dropped[i]).count();
         let mut present = vec![false; folds];
         fold.iter().filter(|&&f| f < folds).for_each(|&f| present[f] = true);
         let withheld: Vec<(usize, Vec<usize>)> = (0..folds)
             .filter(|&f| present[f])
             .map(|f| (f, (0..n).filter(|&i| fold[i] == f && !dropped[i]).collect()))
             .collect();
-        let parts: Vec<_> = withheld.iter().map(|(_, poses)| normals(rows, poses.iter().copied())).collect();
-        let mut out = Vec::new();
-        for (a, (f, poses)) in
-            sums_without(&parts, vec![vec![0.0; p]; p], |a, b| add_matrices(a, b)).into_iter().zip(withheld)
-        {
-            let train = (0..n).filter(|&i| fold[i] != f && !dropped[i]).collect();
-            let design = Design::from_normals(a, train)?;
-            let withheld = poses.into_iter().map(|i| (i, design.variance_factor(&rows[i]))).collect();
-            out.push((design, withheld));
+        if withheld.iter().any(|(_, poses)| kept - poses.len() < p) {
+            return None;
         }
-        Some(Self { folds: out })
+        let refit = |f: usize, poses: Vec<usize>| -> Option<Fold> {
+            let design = Design::new(rows, (0..n).filter(|&i| fold[i] != f && !dropped[i]).collect())?;
+            let factors = poses.into_iter().map(|i| (i, design.variance_factor(&rows[i]))).collect();
+            Some(Fold::Refit(design, factors))
+        };
+        let full = withheld
+            .iter()
+            .all(|(_, poses)| fold_is_small(poses.len(), p))
+            .then(|| kept_design(rows, dropped))
+            .flatten();
+        let folds = withheld
+            .into_iter()
+            .map(|(f, poses)| {
+                full.as_ref().and_then(|full| Fold::through_hat(full, rows, &poses)).or_else(|| refit(f, poses))
+            })
+            .collect::<Option<_>>()?;
+        Some(Self { full, folds })
     }
 
     /// Each withheld pose predicted by its fold's fit of `r`; `None` for dropped poses and for one
     /// whose prediction's variance exceeds `max_variance_factor` times one pose's (see
     /// [`cv_residuals_predictable`]); all `None` when a fold cannot fit `r`.
     pub(crate) fn residuals(&self, rows: &[Vec<f64>], r: &[f64], max_variance_factor: f64) -> Option<Vec<Option<f64>>> {
-        let p = rows.first()?.len();
-        let parts: Vec<Vec<f64>> =
-            self.folds.iter().map(|(_, withheld)| rhs(rows, r, withheld.iter().map(|w| w.0))).collect();
+        let full_residuals = match &self.full {
+            Some(full) => Some(full.residuals_everywhere(rows, r)?),
+            None => None,
+        };
         let mut out = vec![None; r.len()];
-        for ((design, withheld), b) in
-            self.folds.iter().zip(sums_without(&parts, vec![0.0; p], |a, b| add_vectors(a, b)))
-        {
-            let x = design.solve_rhs(&b)?;
-            for &(i, _) in withheld.iter().filter(|(_, factor)| *factor <= max_variance_factor) {
-                out[i] = Some(predict(rows, r, &x, i));
+        for fold in &self.folds {
+            let (withheld, predicted) = match fold {
+                Fold::Refit(design, withheld) => {
+                    let x = design.solve(rows, r)?;
+                    (withheld, withheld.iter().map(|&(i, _)| predict(rows, r, &x, i)).collect())
+                }
+                Fold::Hat(l, withheld) => {
+                    let e = full_residuals.as_ref()?;
+                    (withheld, solve_factored(l, &withheld.iter().map(|&(i, _)| e[i]).collect::<Vec<_>>())?)
+                }
+            };
+            for (&(i, factor), value) in withheld.iter().zip(predicted) {
+                if factor <= max_variance_factor {
+                    out[i] = Some(value);
+                }
             }
         }
         Some(out)
+    }
+}
+
+impl Fold {
+    /// Fold `poses` withheld through the fit `full` to every kept pose; `None` when they leave the
+    /// others' fit undetermined (`I - H_FF` not positive definite).
+    fn through_hat(full: &Design, rows: &[Vec<f64>], poses: &[usize]) -> Option<Self> {
+        let z: Vec<Vec<f64>> = poses.iter().map(|&i| full.whiten(&rows[i])).collect();
+        let l = cholesky(&identity_less_hat(&z), 0.0)?;
+        // The variance factor of a withheld pose's prediction: the diagonal of H (I - H)^-1, that is
+        // of (I - H)^-1 less one (h / (1 - h) for a fold of one pose).
+        let factors = (0..z.len())
+            .map(|j| {
+                let unit: Vec<f64> = (0..z.len()).map(|k| f64::from(u8::from(j == k))).collect();
+                Some((poses[j], solve_factored(&l, &unit)?[j] - 1.0))
+            })
+            .collect::<Option<_>>()?;
+        Some(Fold::Hat(l, factors))
     }
 }
 
@@ -349,6 +419,34 @@ pub(crate) fn lstsq_with_covariance(rows: &[Vec<f64>], r: &[f64]) -> Option<(Vec
     Some((c, cov, ss / (rows.len() - p) as f64))
 }
 
+/// A symmetric positive definite system (lower triangle given), its columns scaled by the square
+/// roots of its diagonal and factored once, `ridge` added to the scaled diagonal.
+pub(crate) struct ScaledFactor {
+    scale: Vec<f64>,
+    l: Vec<Vec<f64>>,
+}
+
+impl ScaledFactor {
+    /// `None`: not positive definite.
+    pub(crate) fn new(a: Vec<Vec<f64>>, ridge: f64) -> Option<Self> {
+        let (scale, a) = scaled(a, 1);
+        Some(Self { l: cholesky(&a, ridge)?, scale })
+    }
+
+    /// The solution `x` of `a x = b` (`None` when not finite).
+    pub(crate) fn solve(&self, b: &[f64]) -> Option<Vec<f64>> {
+        let b: Vec<f64> = b.iter().zip(&self.scale).map(|(v, s)| v / s).collect();
+        Some(solve_factored(&self.l, &b)?.iter().zip(&self.scale).map(|(v, s)| v / s).collect())
+    }
+
+    /// `row` whitened: `L^-1` of the scaled row, so that two whitened rows' dot product is
+    /// `row_i^T a^-1 row_j`.
+    pub(crate) fn whiten(&self, row: &[f64]) -> Vec<f64> {
+        let scaled: Vec<f64> = row.iter().zip(&self.scale).map(|(v, s)| v / s).collect();
+        forward_substitute(&self.l, &scaled)
+    }
+}
+
 pub(crate) fn cholesky_solve(a: &[Vec<f64>], b: &[f64], ridge: f64) -> Option<Vec<f64>> {
     cholesky_solve_many(a, &[b], ridge)?.pop()
 }
@@ -374,31 +472,29 @@ fn solve_factored(l: &[Vec<f64>], b: &[f64]) -> Option<Vec<f64>> {
 /// `L y = b` for a lower-triangular `L`.
 fn forward_substitute(l: &[Vec<f64>], b: &[f64]) -> Vec<f64> {
     let mut y = vec![0.0; l.len()];
-    for i in 0..l.len() {
-        y[i] = (b[i] - (0..i).map(|k| l[i][k] * y[k]).sum::<f64>()) / l[i][i];
+    for (i, li) in l.iter().enumerate() {
+        y[i] = (b[i] - li[..i].iter().zip(&y[..i]).map(|(a, v)| a * v).sum::<f64>()) / li[i];
     }
     y
 }
 
-/// The lower Cholesky factor of `a + ridge I` (`None`: not positive definite).
+/// The lower Cholesky factor of `a + ridge I` (`None`: not positive definite), row by row: each
+/// entry subtracts its products in order, so slices replace the indexing of the inner loop.
 fn cholesky(a: &[Vec<f64>], ridge: f64) -> Option<Vec<Vec<f64>>> {
     let p = a.len();
-    let mut l = vec![vec![0.0; p]; p];
-    for i in 0..p {
-        for j in 0..=i {
-            let mut s = a[i][j] + if i == j { ridge } else { 0.0 };
-            for k in 0..j {
-                s -= l[i][k] * l[j][k];
-            }
-            if i == j {
-                if !(s > 0.0) {
-                    return None;
-                }
-                l[i][i] = s.sqrt();
-            } else {
-                l[i][j] = s / l[j][j];
-            }
+    let mut l: Vec<Vec<f64>> = Vec::with_capacity(p);
+    for (i, ai) in a.iter().enumerate() {
+        let mut row = vec![0.0; p];
+        for (j, lj) in l.iter().enumerate() {
+            let s = lj[..j].iter().zip(&row[..j]).fold(ai[j], |s, (x, y)| s - y * x);
+            row[j] = s / lj[j];
         }
+        let s = row[..i].iter().fold(ai[i] + ridge, |s, x| s - x * x);
+        if !(s > 0.0) {
+            return None;
+        }
+        row[i] = s.sqrt();
+        l.push(row);
     }
     Some(l)
 }
@@ -454,14 +550,23 @@ mod tests {
 
     #[test]
     fn a_design_factored_once_gives_every_draw_its_own_fits_residuals() {
-        // 10 poses, 3 columns, 4 folds, one pose dropped; residual vectors of different sizes.
+        // 10 poses, 3 columns, one pose dropped; residual vectors of different sizes. 4 folds of at
+        // most 3 poses are withheld through the hat matrix, 2 folds of 5 refitted.
+        for folds in [4, 2] {
+            each_draw_gets_its_own_fits_residuals(folds);
+        }
+    }
+
+    fn each_draw_gets_its_own_fits_residuals(folds: usize) {
         let n = 10;
         let rows: Vec<Vec<f64>> =
             (0..n).map(|i| vec![1.0, i as f64 * 0.3, ((i * 7) % 5) as f64 - 2.0 + 0.1 * i as f64]).collect();
-        let fold: Vec<usize> = (0..n).map(|i| i % 4).collect();
+        let fold: Vec<usize> = (0..n).map(|i| i % folds).collect();
         let mut dropped = vec![false; n];
         dropped[6] = true;
-        let design = CvDesign::new(&rows, &fold, 4, &dropped).unwrap();
+        let design = CvDesign::new(&rows, &fold, folds, &dropped).unwrap();
+        let through_hat = design.folds.iter().filter(|f| matches!(f, Fold::Hat(..))).count();
+        assert_eq!(through_hat, if folds == 4 { 4 } else { 0 }, "{folds} folds");
         let kept = kept_design(&rows, &dropped).unwrap();
         for draw in 0..3 {
             let r: Vec<f64> = (0..n).map(|i| ((i * 13 + draw * 5) % 11) as f64 * 0.01 * (draw + 1) as f64).collect();

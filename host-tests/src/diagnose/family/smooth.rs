@@ -14,7 +14,8 @@
 use super::{Context, Evaluation};
 use crate::diagnose::PARAMETER_PENALTY;
 use crate::diagnose::math::{
-    V3, add_matrices, add_vectors, axis, cholesky_solve_many, dot, normals, rhs, scaled, sums_without,
+    ScaledFactor, V3, add_matrices, add_vectors, axis, cholesky_solve, dot, fold_is_small, identity_less_hat, normals,
+    rhs, sums_without,
 };
 use std::ops::Range;
 
@@ -169,82 +170,118 @@ fn add_prior(a: &mut [Vec<f64>], base: usize, knots: usize, order: usize, step: 
     }
 }
 
-/// Normal equations `sum x x^T` (lower triangle), `sum x r` over the rows of every fold but one,
-/// for each fold, and over all rows: every shape of one knot count shares them.
-struct FoldNormals {
-    /// Index `f`: without fold `f`; the last: all folds.
-    sums: Vec<(Vec<Vec<f64>>, Vec<f64>)>,
+/// The normal equations every shape of one knot count shares: `sum x x^T` (lower triangle) and
+/// `sum x r` over every row, and how its folds are withheld.
+struct Normals {
+    all: (Vec<Vec<f64>>, Vec<f64>),
+    withheld: Withheld,
 }
 
-impl FoldNormals {
+enum Withheld {
+    /// Large folds, each refitted: per fold, the sums over the others' rows.
+    Refit(Vec<(Vec<Vec<f64>>, Vec<f64>)>),
+    /// Small folds (a pose and its segments, [`fold_is_small`]): per fold, its rows,
+    /// predicted through the fit to every row. For a fixed penalty the residuals of fold `F`'s
+    /// rows without it are `(I - H_FF)^-1 e_F` (`e` the full fit's residuals, `H` its hat
+    /// matrix): one factorisation per shape instead of one per fold.
+    Hat(Vec<Vec<usize>>),
+}
+
+impl Normals {
     fn new(rows: &[Vec<f64>], r: &[f64], fold: &[usize], folds: usize) -> Self {
         let p = rows.first().map_or(0, Vec::len);
         let n = rows.len().min(r.len()).min(fold.len());
         // Part `folds` is empty: the sum without it is the sum over all folds.
-        let parts: Vec<(Vec<Vec<f64>>, Vec<f64>)> = (0..=folds)
-            .map(|f| {
-                let poses = || (0..n).filter(move |&i| fold[i] == f);
-                (normals(rows, poses()), rhs(rows, r, poses()))
-            })
-            .collect();
+        let blocks: Vec<Vec<usize>> = (0..=folds).map(|f| (0..n).filter(|&i| fold[i] == f).collect()).collect();
+        if blocks.iter().all(|b| fold_is_small(b.len(), p)) {
+            let all = (normals(rows, 0..n), rhs(rows, r, 0..n));
+            return Self { all, withheld: Withheld::Hat(blocks) };
+        }
+        let parts: Vec<(Vec<Vec<f64>>, Vec<f64>)> =
+            blocks.iter().map(|b| (normals(rows, b.iter().copied()), rhs(rows, r, b.iter().copied()))).collect();
         let zero = (vec![vec![0.0; p]; p], vec![0.0; p]);
-        Self { sums: sums_without(&parts, zero, |a, b| (add_matrices(&a.0, &b.0), add_vectors(&a.1, &b.1))) }
-    }
-
-    /// The sums over every fold but `skip` (all of them for `None`).
-    fn without(&self, skip: Option<usize>) -> (Vec<Vec<f64>>, &[f64]) {
-        let (a, b) = &self.sums[skip.unwrap_or(self.sums.len() - 1)];
-        (a.clone(), b)
+        let mut without = sums_without(&parts, zero, |a, b| (add_matrices(&a.0, &b.0), add_vectors(&a.1, &b.1)));
+        let all = without.pop().expect("the empty part");
+        Self { all, withheld: Withheld::Refit(without) }
     }
 }
 
-/// A symmetric system (lower triangle given) solved with Jacobi scaling: the solution for each
-/// right-hand side.
-fn solve_scaled(a: Vec<Vec<f64>>, rhs: &[&[f64]]) -> Option<Vec<Vec<f64>>> {
-    // Each column scaled by the square root of its diagonal (the root mean square over one row).
-    let (d, scaled) = scaled(a, 1);
-    let scaled_rhs: Vec<Vec<f64>> = rhs.iter().map(|b| b.iter().zip(&d).map(|(v, s)| v / s).collect()).collect();
-    let refs: Vec<&[f64]> = scaled_rhs.iter().map(Vec::as_slice).collect();
-    let solved = cholesky_solve_many(&scaled, &refs, 1e-10)?;
-    Some(solved.into_iter().map(|x| x.iter().zip(&d).map(|(v, s)| v / s).collect()).collect())
-}
+/// Ridge on the scaled diagonal of a shape's normal matrix.
+const RIDGE: f64 = 1e-10;
 
 /// A shape's penalised held-out ratio, in-sample pose residuals (output unit), effective
 /// parameters and the bias at each knot per axis fitted to every pose (output unit; [`score`]).
 type ShapeScore = (f64, Vec<Option<f64>>, f64, Vec<V3>);
 
 /// Penalised held-out ratio, in-sample pose residuals (output unit) and effective parameters of
-/// one shape, from the design's fold normals.
+/// one shape, from the design's normals.
 fn score(
     ctx: &Context<'_>,
     design: &(Vec<Vec<f64>>, Vec<f64>, Vec<usize>),
-    normals: &FoldNormals,
+    normals: &Normals,
     shape: Shape,
 ) -> Option<ShapeScore> {
     let (rows, r, fold) = design;
     let (n, base) = (ctx.poses.len(), ctx.base_rows.first()?.len());
     let w = 1.0 / ctx.e_white.sqrt();
-    let predict = |x: &[f64], i: usize| r[i] + rows[i].iter().zip(x).map(|(a, b)| a * b).sum::<f64>();
-    let mut ss = 0.0;
-    for f in 0..ctx.folds {
-        let (mut a, b) = normals.without(Some(f));
+    let penalised = |(a, b): &(Vec<Vec<f64>>, Vec<f64>)| -> Option<Vec<f64>> {
+        let mut a = a.clone();
         add_prior(&mut a, base, shape.knots, shape.order, shape.step, w);
-        let x = solve_scaled(a, &[b])?.pop()?;
-        ss += (0..n).filter(|&i| fold[i] == f && ctx.scored(i)).map(|i| predict(&x, i).powi(2)).sum::<f64>();
-    }
-    let (mut a, b) = normals.without(None);
+        ScaledFactor::new(a, RIDGE)?.solve(b)
+    };
+    let mut a = normals.all.0.clone();
     add_prior(&mut a, base, shape.knots, shape.order, shape.step, w);
-    let mut rhs: Vec<&[f64]> = vec![b];
-    rhs.extend(rows[..n].iter().map(Vec::as_slice));
-    let solved = solve_scaled(a, &rhs)?;
+    let full = ScaledFactor::new(a, RIDGE)?;
+    let x = full.solve(&normals.all.1)?;
+    let predict = |x: &[f64], i: usize| r[i] + rows[i].iter().zip(x).map(|(a, b)| a * b).sum::<f64>();
+    let ss = match &normals.withheld {
+        Withheld::Refit(without) => {
+            let mut ss = 0.0;
+            for (f, sums) in without.iter().enumerate() {
+                let x = penalised(sums)?;
+                ss += (0..n).filter(|&i| fold[i] == f && ctx.scored(i)).map(|i| predict(&x, i).powi(2)).sum::<f64>();
+            }
+            ss
+        }
+        Withheld::Hat(blocks) => {
+            let e: Vec<f64> = (0..rows.len()).map(|i| predict(&x, i)).collect();
+            hat_heldout_ss(ctx, rows, &e, &full, blocks)?
+        }
+    };
     // Effective parameters: the trace of the pose rows' hat matrix less the calibration's.
-    let trace: f64 =
-        rows[..n].iter().zip(&solved[1..]).map(|(row, y)| row.iter().zip(y).map(|(p, q)| p * q).sum::<f64>()).sum();
+    let trace: f64 = rows[..n].iter().map(|row| full.whiten(row).iter().map(|v| v * v).sum::<f64>()).sum();
     let edf = (trace - base as f64).max(0.0);
     let ratio = ((ss + PARAMETER_PENALTY * edf) / ctx.n_scored() as f64).sqrt();
-    let after = (0..n).map(|i| Some(predict(&solved[0], i) / w)).collect();
-    let knots = solved[0][base..].chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
+    let after = (0..n).map(|i| Some(predict(&x, i) / w)).collect();
+    let knots = x[base..].chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
     Some((ratio, after, edf, knots))
+}
+
+/// The held-out sum of squares of the scored poses, each fold's rows (`blocks`) withheld through
+/// the full fit `full` with residuals `e` ([`withheld_through_hat`]).
+fn hat_heldout_ss(
+    ctx: &Context<'_>,
+    rows: &[Vec<f64>],
+    e: &[f64],
+    full: &ScaledFactor,
+    blocks: &[Vec<usize>],
+) -> Option<f64> {
+    let n = ctx.poses.len();
+    let mut ss = 0.0;
+    for block in blocks.iter().filter(|b| !b.is_empty()) {
+        let withheld = withheld_through_hat(rows, e, full, block)?;
+        ss += block.iter().zip(&withheld).filter(|(i, _)| **i < n && ctx.scored(**i)).map(|(_, v)| v * v).sum::<f64>();
+    }
+    Some(ss)
+}
+
+/// The residuals of rows `block` under the fit without them, from the fit `full` to every row and
+/// its residuals `e`: `(I - H_FF)^-1 e_F`, `H_FF` the block's part of the hat matrix; `None` when
+/// the block's rows leave the others' fit undetermined.
+fn withheld_through_hat(rows: &[Vec<f64>], e: &[f64], full: &ScaledFactor, block: &[usize]) -> Option<Vec<f64>> {
+    let z: Vec<Vec<f64>> = block.iter().map(|&i| full.whiten(&rows[i])).collect();
+    let e_block: Vec<f64> = block.iter().map(|&i| e[i]).collect();
+    cholesky_solve(&identity_less_hat(&z), &e_block, 0.0)
 }
 
 /// The knot count and prior step that predict the withheld pose means best, each scored by the
@@ -266,7 +303,7 @@ pub(crate) fn best_along(ctx: &Context<'_>, course: &Course<'_>) -> Option<Smoot
     let mut scored: Vec<(Shape, Option<ShapeScore>)> = Vec::new();
     for knots in KNOTS {
         let d = design(ctx, knots, course);
-        let normals = FoldNormals::new(&d.0, &d.1, &d.2, ctx.folds);
+        let normals = Normals::new(&d.0, &d.1, &d.2, ctx.folds);
         for order in [1, 2] {
             for step in STEP_SIGMAS {
                 let shape = Shape { knots, order, step };
@@ -368,6 +405,38 @@ mod tests {
         let knots = (0..count).map(|j| [0.0, 0.5 * (j as f64 - 1.0) * h, -0.25 * (j as f64 - 1.0) * h]).collect();
         let fit = SmoothFit { ratio: 1.0, after: Vec::new(), edf: 2.0, detail: String::new(), knots, span };
         assert!((fit.steepest(&[1.0, 6.0, 11.0]) - 0.5).abs() < 1e-9, "{}", fit.steepest(&[1.0, 6.0, 11.0]));
+    }
+
+    #[test]
+    fn a_fold_withheld_through_the_hat_matrix_is_the_fit_without_it() {
+        // 20 rows of 6 columns, a penalty on the last three; rows 4-6 withheld: refitted without
+        // them, and through the full fit's hat matrix.
+        let value = |i: usize, j: usize| ((i * 7 + j * 13) as f64 * 0.37).sin() + if i == j { 1.0 } else { 0.0 };
+        let rows: Vec<Vec<f64>> = (0..20).map(|i| (0..6).map(|j| value(i, j)).collect()).collect();
+        let r: Vec<f64> = (0..20).map(|i| (i as f64 * 1.3).cos()).collect();
+        let penalised = |kept: &dyn Fn(usize) -> bool| {
+            let mut a = normals(&rows, (0..20).filter(|&i| kept(i)));
+            (3..6).for_each(|j| a[j][j] += 2.0);
+            (a, rhs(&rows, &r, (0..20).filter(|&i| kept(i))))
+        };
+        let block = [4, 5, 6];
+        let (a, b) = penalised(&|i| !block.contains(&i));
+        let without = ScaledFactor::new(a, 0.0).unwrap().solve(&b).unwrap();
+        let (a, b) = penalised(&|_| true);
+        let full = ScaledFactor::new(a, 0.0).unwrap();
+        let x = full.solve(&b).unwrap();
+        let predict = |x: &[f64], i: usize| r[i] + rows[i].iter().zip(x).map(|(a, b)| a * b).sum::<f64>();
+        let e: Vec<f64> = (0..20).map(|i| predict(&x, i)).collect();
+        let through_hat = withheld_through_hat(&rows, &e, &full, &block).unwrap();
+        for (k, &i) in block.iter().enumerate() {
+            assert!(
+                (through_hat[k] - predict(&without, i)).abs() < 1e-9,
+                "row {i}: {} {}",
+                through_hat[k],
+                predict(&without, i)
+            );
+            assert!((through_hat[k] - e[i]).abs() > 1e-3, "row {i}: withholding it changes its residual");
+        }
     }
 
     #[test]
