@@ -324,22 +324,33 @@ impl CvDesign {
         if withheld.iter().any(|(_, poses)| kept - poses.len() < p) {
             return None;
         }
-        let refit = |f: usize, poses: Vec<usize>| -> Option<Fold> {
-            let design = Design::new(rows, (0..n).filter(|&i| fold[i] != f && !dropped[i]).collect())?;
-            let factors = poses.into_iter().map(|i| (i, design.variance_factor(&rows[i]))).collect();
-            Some(Fold::Refit(design, factors))
-        };
+        let train = |f: usize| -> Vec<usize> { (0..n).filter(|&i| fold[i] != f && !dropped[i]).collect() };
         let full = withheld
             .iter()
             .all(|(_, poses)| fold_is_small(poses.len(), p))
             .then(|| kept_design(rows, dropped))
             .flatten();
-        let folds = withheld
-            .into_iter()
-            .map(|(f, poses)| {
-                full.as_ref().and_then(|full| Fold::through_hat(full, rows, &poses)).or_else(|| refit(f, poses))
-            })
-            .collect::<Option<_>>()?;
+        let folds = match &full {
+            Some(full) => withheld
+                .into_iter()
+                .map(|(f, poses)| {
+                    Fold::through_hat(full, rows, &poses).or_else(|| {
+                        let train = train(f);
+                        Fold::refit(rows, normals(rows, train.iter().copied()), train, poses)
+                    })
+                })
+                .collect::<Option<_>>()?,
+            None => {
+                // Each fold's normal matrix is the sum of the others' ([`sums_without`]): the poses
+                // are summed once, not once per fold.
+                let parts: Vec<_> = withheld.iter().map(|(_, poses)| normals(rows, poses.iter().copied())).collect();
+                sums_without(&parts, vec![vec![0.0; p]; p], |a, b| add_matrices(a, b))
+                    .into_iter()
+                    .zip(withheld)
+                    .map(|(a, (f, poses))| Fold::refit(rows, a, train(f), poses))
+                    .collect::<Option<_>>()?
+            }
+        };
         Some(Self { full, folds })
     }
 
@@ -374,6 +385,14 @@ impl CvDesign {
 }
 
 impl Fold {
+    /// Fold `poses` refitted on the poses `train`, whose normal matrix is `a` (lower triangle,
+    /// unscaled).
+    fn refit(rows: &[Vec<f64>], a: Vec<Vec<f64>>, train: Vec<usize>, poses: Vec<usize>) -> Option<Self> {
+        let design = Design::from_normals(a, train)?;
+        let factors = poses.into_iter().map(|i| (i, design.variance_factor(&rows[i]))).collect();
+        Some(Fold::Refit(design, factors))
+    }
+
     /// Fold `poses` withheld through the fit `full` to every kept pose; `None` when they leave the
     /// others' fit undetermined (`I - H_FF` not positive definite).
     fn through_hat(full: &Design, rows: &[Vec<f64>], poses: &[usize]) -> Option<Self> {

@@ -51,16 +51,14 @@ fn periodogram(samples: &[[f64; 3]], start: usize, m: usize, cycles: &[f64]) -> 
         .iter()
         .map(|c| {
             let w = std::f64::consts::TAU * c;
-            (0..3)
-                .map(|a| {
-                    let (mut re, mut im) = (0.0, 0.0);
-                    for (n, s) in part.iter().enumerate() {
-                        let (sin, cos) = (w * n as f64).sin_cos();
-                        (re, im) = (re + (s[a] - mean[a]) * cos, im - (s[a] - mean[a]) * sin);
-                    }
-                    (re * re + im * im) / m as f64
-                })
-                .sum()
+            let (mut re, mut im) = ([0.0; 3], [0.0; 3]);
+            for (n, s) in part.iter().enumerate() {
+                let (sin, cos) = (w * n as f64).sin_cos();
+                for a in 0..3 {
+                    (re[a], im[a]) = (re[a] + (s[a] - mean[a]) * cos, im[a] - (s[a] - mean[a]) * sin);
+                }
+            }
+            (0..3).map(|a| (re[a] * re[a] + im[a] * im[a]) / m as f64).sum()
         })
         .collect()
 }
