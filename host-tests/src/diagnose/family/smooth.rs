@@ -224,21 +224,20 @@ fn score(
     let (rows, r, fold) = design;
     let (n, base) = (ctx.poses.len(), ctx.base_rows.first()?.len());
     let w = 1.0 / ctx.e_white.sqrt();
-    let penalised = |(a, b): &(Vec<Vec<f64>>, Vec<f64>)| -> Option<Vec<f64>> {
+    // A normal matrix with the shape's prior, factored.
+    let penalised = |a: &Vec<Vec<f64>>| -> Option<ScaledFactor> {
         let mut a = a.clone();
         add_prior(&mut a, base, shape.knots, shape.order, shape.step, w);
-        ScaledFactor::new(a, RIDGE)?.solve(b)
+        ScaledFactor::new(a, RIDGE)
     };
-    let mut a = normals.all.0.clone();
-    add_prior(&mut a, base, shape.knots, shape.order, shape.step, w);
-    let full = ScaledFactor::new(a, RIDGE)?;
+    let full = penalised(&normals.all.0)?;
     let x = full.solve(&normals.all.1)?;
     let predict = |x: &[f64], i: usize| r[i] + rows[i].iter().zip(x).map(|(a, b)| a * b).sum::<f64>();
     let ss = match &normals.withheld {
         Withheld::Refit(without) => {
             let mut ss = 0.0;
-            for (f, sums) in without.iter().enumerate() {
-                let x = penalised(sums)?;
+            for (f, (a, b)) in without.iter().enumerate() {
+                let x = penalised(a)?.solve(b)?;
                 ss += (0..n).filter(|&i| fold[i] == f && ctx.scored(i)).map(|i| predict(&x, i).powi(2)).sum::<f64>();
             }
             ss
