@@ -15,7 +15,7 @@ use super::{Context, Evaluation};
 use crate::diagnose::PARAMETER_PENALTY;
 use crate::diagnose::math::{
     ScaledFactor, V3, add_matrices, add_vectors, axis, cholesky_solve, dot, fold_is_small, identity_less_hat, normals,
-    rhs, sums_without,
+    predict, rhs, sums_without,
 };
 use std::ops::Range;
 
@@ -232,18 +232,20 @@ fn score(
     };
     let full = penalised(&normals.all.0)?;
     let x = full.solve(&normals.all.1)?;
-    let predict = |x: &[f64], i: usize| r[i] + rows[i].iter().zip(x).map(|(a, b)| a * b).sum::<f64>();
     let ss = match &normals.withheld {
         Withheld::Refit(without) => {
             let mut ss = 0.0;
             for (f, (a, b)) in without.iter().enumerate() {
                 let x = penalised(a)?.solve(b)?;
-                ss += (0..n).filter(|&i| fold[i] == f && ctx.scored(i)).map(|i| predict(&x, i).powi(2)).sum::<f64>();
+                ss += (0..n)
+                    .filter(|&i| fold[i] == f && ctx.scored(i))
+                    .map(|i| predict(rows, r, &x, i).powi(2))
+                    .sum::<f64>();
             }
             ss
         }
         Withheld::Hat(blocks) => {
-            let e: Vec<f64> = (0..rows.len()).map(|i| predict(&x, i)).collect();
+            let e: Vec<f64> = (0..rows.len()).map(|i| predict(rows, r, &x, i)).collect();
             hat_heldout_ss(ctx, rows, &e, &full, blocks)?
         }
     };
@@ -251,7 +253,7 @@ fn score(
     let trace: f64 = rows[..n].iter().map(|row| full.whiten(row).iter().map(|v| v * v).sum::<f64>()).sum();
     let edf = (trace - base as f64).max(0.0);
     let ratio = ((ss + PARAMETER_PENALTY * edf) / ctx.n_scored() as f64).sqrt();
-    let after = (0..n).map(|i| Some(predict(&x, i) / w)).collect();
+    let after = (0..n).map(|i| Some(predict(rows, r, &x, i) / w)).collect();
     let knots = x[base..].chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
     Some((ratio, after, edf, knots))
 }
@@ -424,15 +426,14 @@ mod tests {
         let (a, b) = penalised(&|_| true);
         let full = ScaledFactor::new(a, 0.0).unwrap();
         let x = full.solve(&b).unwrap();
-        let predict = |x: &[f64], i: usize| r[i] + rows[i].iter().zip(x).map(|(a, b)| a * b).sum::<f64>();
-        let e: Vec<f64> = (0..20).map(|i| predict(&x, i)).collect();
+        let e: Vec<f64> = (0..20).map(|i| predict(&rows, &r, &x, i)).collect();
         let through_hat = withheld_through_hat(&rows, &e, &full, &block).unwrap();
         for (k, &i) in block.iter().enumerate() {
             assert!(
-                (through_hat[k] - predict(&without, i)).abs() < 1e-9,
+                (through_hat[k] - predict(&rows, &r, &without, i)).abs() < 1e-9,
                 "row {i}: {} {}",
                 through_hat[k],
-                predict(&without, i)
+                predict(&rows, &r, &without, i)
             );
             assert!((through_hat[k] - e[i]).abs() > 1e-3, "row {i}: withholding it changes its residual");
         }
