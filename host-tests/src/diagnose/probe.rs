@@ -118,7 +118,14 @@ fn step_seen_in_holds(ctx: &Context<'_>, (after, step): (usize, V3)) -> bool {
 /// offset step a hold's segments showed at 7.2, its size 1.2 times the fitted step's, stayed a drift
 /// on the development sets.)
 fn jump_inside_hold(ctx: &Context<'_>, p: usize, step: V3) -> bool {
-    let Some((y, var, expected)) = hold_deviations_along(ctx, p, step) else { return false };
+    // The readings' change the calibrated step implies: `Ka^-1 step` (input unit).
+    let (moved, rest) = (ctx.m.model.invert(step), ctx.m.model.invert([0.0; 3]));
+    let change: V3 = std::array::from_fn(|a| moved[a] - rest[a]);
+    let expected = norm(change);
+    if !(expected > 0.0) {
+        return false;
+    }
+    let Some((y, var)) = segments_along(ctx, p, change.map(|c| c / expected)) else { return false };
     let jump = jump_in_hold(&[y], [var]);
     let size = jump.size[0];
     let agrees = size > 0.0 && (0.5..=2.0).contains(&(size / expected));
@@ -133,25 +140,16 @@ const JUMP_SEARCH_CHI2: f64 = 6.3;
 /// Pose `p`'s segment means as modulus deviations from its mean (output unit) and their variance
 /// under white noise; `None` with too few samples per segment.
 fn hold_deviations(ctx: &Context<'_>, p: usize) -> Option<([f64; SEGMENTS], f64)> {
-    let (pose, m) = (&ctx.poses[p], ctx.m);
-    let kt = m.model.kt_times(m.directions[p]);
-    let var: f64 = (0..3).map(|a| kt[a] * kt[a] * m.white[a]).sum::<f64>() / pose.seg_n as f64;
-    let y = std::array::from_fn(|j| dot(kt, std::array::from_fn(|a| pose.seg[j][a] - pose.mean[a])));
-    (pose.seg_n >= MIN_SEGMENT_READINGS && var > 0.0).then_some((y, var))
+    segments_along(ctx, p, ctx.m.model.kt_times(ctx.m.directions[p]))
 }
 
-/// Pose `p`'s segment means as deviations from its mean along the readings' change that the
-/// calibrated `step` implies (`Ka^-1 step`, input unit), their variance under white noise, and
-/// that change's size; `None` with too few samples per segment or no change.
-fn hold_deviations_along(ctx: &Context<'_>, p: usize, step: V3) -> Option<([f64; SEGMENTS], f64, f64)> {
+/// Pose `p`'s segment means as deviations from its mean projected on `along` (input unit per
+/// projected unit) and their variance under white noise; `None` with too few samples per segment.
+fn segments_along(ctx: &Context<'_>, p: usize, along: V3) -> Option<([f64; SEGMENTS], f64)> {
     let (pose, m) = (&ctx.poses[p], ctx.m);
-    let (moved, rest) = (m.model.invert(step), m.model.invert([0.0; 3]));
-    let change: V3 = std::array::from_fn(|a| moved[a] - rest[a]);
-    let size = norm(change);
-    let along = change.map(|c| c / size);
     let var: f64 = (0..3).map(|a| along[a] * along[a] * m.white[a]).sum::<f64>() / pose.seg_n as f64;
     let y = std::array::from_fn(|j| dot(along, std::array::from_fn(|a| pose.seg[j][a] - pose.mean[a])));
-    (pose.seg_n >= MIN_SEGMENT_READINGS && size > 0.0 && var > 0.0).then_some((y, var, size))
+    (pose.seg_n >= MIN_SEGMENT_READINGS && var > 0.0).then_some((y, var))
 }
 
 /// Fewest poses on each side of a probed bias step.
