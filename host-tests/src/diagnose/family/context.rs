@@ -684,7 +684,7 @@ impl<'a> Context<'a> {
         if !self.pose_level || !(self.e_white > 0.0) {
             return None;
         }
-        let (cw, covw, msw) = lstsq_with_covariance(&v.rows, &w.d)?;
+        let (cw, covw, msw) = lstsq_with_covariance(v.rows_on(w), w.channel_d())?;
         let (rows, r) = self.whitened_pose_rows(&v.pose_extra);
         let (cp, covp, msp) = lstsq_with_covariance(&rows, &r)?;
         let (k, base) = (cw.len(), cp.len() - cw.len());
@@ -700,7 +700,7 @@ impl<'a> Context<'a> {
     /// pose means are corrected by the effect it fitted and the nominal model refitted: that is the
     /// residual "after".
     pub(super) fn add_within(&self, e: &mut Evaluation, w: &Within, fit: WithinFit, disagreement: f64) {
-        let before = w.nominal_ratio.ln();
+        let before = w.channel_ratio().ln();
         let miss = if fit.heldout_ratio >= 1.0 {
             fit.heldout_ratio.ln()
         } else {

@@ -29,10 +29,10 @@ fn stacked(ctx: &Context<'_>, w: &Within, v: &WithinVariant) -> (Vec<Vec<f64>>, 
     let base = ctx.base_columns();
     let (mut rows, mut r) = ctx.whitened_pose_rows(&v.pose_extra);
     let mut fold = ctx.fold.clone();
-    for (i, row) in v.rows.iter().enumerate() {
+    for (i, row) in v.rows_on(w).iter().enumerate() {
         rows.push(std::iter::repeat_n(0.0, base).chain(row.iter().copied()).collect());
-        r.push(w.d[i]);
-        fold.push(ctx.fold[w.pose[i]]);
+        r.push(w.channel_d()[i]);
+        fold.push(ctx.fold[w.channel_pose()[i]]);
     }
     (rows, r, fold)
 }

@@ -143,10 +143,10 @@ fn design(ctx: &Context<'_>, knots: usize, course: &Course<'_>) -> (Vec<Vec<f64>
     let (mut rows, mut r) = ctx.whitened_pose_rows(&pose_extra);
     let mut fold = ctx.fold.clone();
     if let Some((within, v)) = within {
-        for (i, row) in v.rows.iter().enumerate() {
+        for (i, row) in v.rows_on(within).iter().enumerate() {
             rows.push(std::iter::repeat_n(0.0, base).chain(row.iter().copied()).collect());
-            r.push(within.d[i]);
-            fold.push(ctx.fold[within.pose[i]]);
+            r.push(within.channel_d()[i]);
+            fold.push(ctx.fold[within.channel_pose()[i]]);
         }
     }
     (rows, r, fold)
