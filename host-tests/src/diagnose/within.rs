@@ -104,7 +104,7 @@ pub(crate) struct Within {
 /// the three axes they see a bias moving across gravity, which the modulus does not. On longer logs
 /// the pose means test the families, and the three axes' stacked fits with them named aliased
 /// vibrations and steps drift (stop 94, on every log: +60 -46 on eighteen blind groups, 9 fewer
-/// out-of-catalogue logs honest); on logs of 16 poses or fewer (stop 95): +49 -27.
+/// out-of-catalogue logs honest); on logs of 16 poses or fewer (stop 95): +49 -28.
 const AXES_UP_TO_POSES: usize = 16;
 
 /// The segments' deviations on each axis of the readings (input unit, whitened per axis): an
@@ -565,8 +565,7 @@ impl Within {
     /// Penalised held-out ratio of a variant on the withheld poses' deviations.
     fn heldout_ratio(&self, v: &WithinVariant) -> Option<f64> {
         let dropped = vec![false; self.channel_d().len()];
-        let fold = if self.on_axes { &self.axes.fold } else { &self.fold };
-        let cv = cv_residuals(v.rows_on(self), self.channel_d(), fold, self.folds, &dropped)?;
+        let cv = cv_residuals(v.rows_on(self), self.channel_d(), self.channel_fold(), self.folds, &dropped)?;
         let (ss, count) = sum_sq(&cv);
         (count > 0).then(|| ((ss + PARAMETER_PENALTY * v.params as f64) / count as f64).sqrt())
     }
@@ -600,6 +599,11 @@ impl Within {
     /// The pose of each of the channel's rows.
     pub(crate) fn channel_pose(&self) -> &[usize] {
         if self.on_axes { &self.axes.pose } else { &self.pose }
+    }
+
+    /// The fold of each of the channel's rows (its pose's).
+    fn channel_fold(&self) -> &[usize] {
+        if self.on_axes { &self.axes.fold } else { &self.fold }
     }
 
     /// The channel's `sqrt(mean d^2)`.
