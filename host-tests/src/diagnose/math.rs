@@ -82,7 +82,11 @@ impl Model {
 
     /// The reading for calibrated `f`: `Ka^-1 (f + B)`.
     pub(crate) fn invert(&self, f: V3) -> V3 {
-        let y = [f[0] + self.bias[0], f[1] + self.bias[1], f[2] + self.bias[2]];
+        self.ka_inverse_times([f[0] + self.bias[0], f[1] + self.bias[1], f[2] + self.bias[2]])
+    }
+
+    /// `Ka^-1 y`: the reading change that moves the calibrated reading by `y` (forward substitution).
+    pub(crate) fn ka_inverse_times(&self, y: V3) -> V3 {
         let k = &self.ka;
         let x0 = y[0] / k[0][0];
         let x1 = (y[1] - k[1][0] * x0) / k[1][1];

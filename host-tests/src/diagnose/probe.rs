@@ -119,8 +119,7 @@ fn step_seen_in_holds(ctx: &Context<'_>, (after, step): (usize, V3)) -> bool {
 /// on the development sets.)
 fn jump_inside_hold(ctx: &Context<'_>, p: usize, step: V3) -> bool {
     // The readings' change the calibrated step implies: `Ka^-1 step` (input unit).
-    let (moved, rest) = (ctx.m.model.invert(step), ctx.m.model.invert([0.0; 3]));
-    let change: V3 = std::array::from_fn(|a| moved[a] - rest[a]);
+    let change = ctx.m.model.ka_inverse_times(step);
     let expected = norm(change);
     if !(expected > 0.0) {
         return false;

@@ -541,14 +541,10 @@ impl Within {
     /// taken back through `Ka^-1` to the readings (input unit), less its pose's mean, whitened per
     /// axis.
     fn axis_rows(&self, m: &Measured, params: usize, by_pose: &[Vec<(usize, Vec<V3>)>]) -> Vec<Vec<f64>> {
-        let origin = m.model.invert([0.0; 3]);
-        let reading = |e: &V3| -> V3 {
-            let moved = m.model.invert(*e);
-            std::array::from_fn(|a| moved[a] - origin[a])
-        };
         let mut rows = vec![vec![0.0; params]; self.axes.d.len()];
         for segs in by_pose.iter().filter(|segs| !segs.is_empty()) {
-            let readings: Vec<Vec<V3>> = segs.iter().map(|(_, c)| c.iter().map(reading).collect()).collect();
+            let readings: Vec<Vec<V3>> =
+                segs.iter().map(|(_, c)| c.iter().map(|e| m.model.ka_inverse_times(*e)).collect()).collect();
             let mean: Vec<V3> = (0..params)
                 .map(|j| std::array::from_fn(|a| readings.iter().map(|c| c[j][a]).sum::<f64>() / readings.len() as f64))
                 .collect();
