@@ -16,7 +16,12 @@ pub(crate) fn mean(v: &[f64]) -> f64 {
 }
 
 pub(crate) fn rms(v: &[f64]) -> f64 {
-    if v.is_empty() { f64::NAN } else { (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt() }
+    mean_square(v).sqrt()
+}
+
+/// The mean of the squares (NaN without values).
+pub(crate) fn mean_square(v: &[f64]) -> f64 {
+    if v.is_empty() { f64::NAN } else { v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64 }
 }
 
 pub(crate) fn std_dev(v: &[f64]) -> f64 {

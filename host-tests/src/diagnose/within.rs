@@ -15,7 +15,7 @@ use std::ops::Range;
 use super::PARAMETER_PENALTY;
 use super::SEGMENTS;
 use super::gap::{CORRELATION_BLOCK_S, Measured, PoseData, row_time};
-use super::math::{PrefixSums, V3, cv_residuals, dot, median, sum_sq};
+use super::math::{PrefixSums, V3, cv_residuals, dot, mean_square, median, sum_sq};
 use crate::csvio::Table;
 
 /// Most cross-validation folds (leave-one-pose-out up to this many poses).
@@ -120,6 +120,25 @@ pub(crate) struct Axes {
     fold: Vec<usize>,
     /// `sqrt(mean d^2)`: 1 for white noise.
     nominal_ratio: f64,
+}
+
+/// The within-pose channel's rows ([`Within::channel`]): the modulus' or, on short logs, the three
+/// axes' ([`Within::on_axes`]).
+pub(crate) struct Channel<'a> {
+    /// Whitened deviations.
+    pub(crate) d: &'a [f64],
+    /// The pose of each row.
+    pub(crate) pose: &'a [usize],
+    /// The fold of each row (its pose's).
+    pub(crate) fold: &'a [usize],
+    /// `sqrt(mean d^2)`: 1 for white noise.
+    pub(crate) ratio: f64,
+}
+
+/// Variance of a segment mean's deviation from its hold's mean (of [`SEGMENTS`]) under white noise
+/// of `per_reading` variance, with `seg_n` readings per segment.
+fn segment_deviation_variance(per_reading: f64, seg_n: usize) -> f64 {
+    per_reading / seg_n as f64 * (SEGMENTS - 1) as f64 / SEGMENTS as f64
 }
 
 /// The covariance of a Brownian path's means over segments `i` and `j` of a hold of unit duration
@@ -248,9 +267,7 @@ impl Within {
                 continue;
             }
             let kt = m.model.kt_times(m.directions[p]);
-            let var: f64 = (0..3).map(|a| kt[a] * kt[a] * white[a]).sum::<f64>() / pose.seg_n as f64
-                * (SEGMENTS - 1) as f64
-                / SEGMENTS as f64;
+            let var = segment_deviation_variance((0..3).map(|a| kt[a] * kt[a] * white[a]).sum::<f64>(), pose.seg_n);
             if !(var > 0.0 && var.is_finite()) {
                 continue;
             }
@@ -263,16 +280,27 @@ impl Within {
         if used < 3 {
             return None;
         }
-        let ms = w.d.iter().map(|v| v * v).sum::<f64>() / w.d.len() as f64;
+        let ms = mean_square(&w.d);
         w.nominal_ratio = ms.sqrt();
         w.significant = beyond_white(ms, used, SIGNIFICANT_Z);
         w.channel_significant = w.significant;
         if w.on_axes {
-            let axes_ms = w.axes.d.iter().map(|v| v * v).sum::<f64>() / w.axes.d.len() as f64;
+            let axes_ms = mean_square(&w.axes.d);
             w.axes.nominal_ratio = axes_ms.sqrt();
             w.channel_significant = beyond_white(axes_ms, 3 * used, SIGNIFICANT_Z);
         }
         Some(w)
+    }
+
+    /// The channel the families are fitted to and judged on: the three axes' on short logs
+    /// ([`Within::on_axes`]), else the modulus'.
+    pub(crate) fn channel(&self) -> Channel<'_> {
+        if self.on_axes {
+            let a = &self.axes;
+            Channel { d: &a.d, pose: &a.pose, fold: &a.fold, ratio: a.nominal_ratio }
+        } else {
+            Channel { d: &self.d, pose: &self.pose, fold: &self.fold, ratio: self.nominal_ratio }
+        }
     }
 
     /// The mean square of the whitened deviations a noise model predicts beyond white noise (0 for
@@ -560,8 +588,9 @@ impl Within {
 
     /// Penalised held-out ratio of a variant on the withheld poses' deviations.
     fn heldout_ratio(&self, v: &WithinVariant) -> Option<f64> {
-        let dropped = vec![false; self.channel_d().len()];
-        let cv = cv_residuals(v.rows_on(self), self.channel_d(), self.channel_fold(), self.folds, &dropped)?;
+        let channel = self.channel();
+        let dropped = vec![false; channel.d.len()];
+        let cv = cv_residuals(v.rows_on(self), channel.d, channel.fold, self.folds, &dropped)?;
         let (ss, count) = sum_sq(&cv);
         (count > 0).then(|| ((ss + PARAMETER_PENALTY * v.params as f64) / count as f64).sqrt())
     }
@@ -578,33 +607,11 @@ impl Within {
             }
         }
         let (heldout_ratio, i, v) = best?;
-        let train: Vec<usize> = (0..self.channel_d().len()).collect();
-        let coefficients = super::math::lstsq(v.rows_on(self), self.channel_d(), &train)?;
+        let train: Vec<usize> = (0..self.channel().d.len()).collect();
+        let coefficients = super::math::lstsq(v.rows_on(self), self.channel().d, &train)?;
         let fit =
             WithinFit { heldout_ratio, params: v.params, detail: v.detail, coefficients, pose_extra: v.pose_extra };
         Some((i, fit))
-    }
-}
-
-impl Within {
-    /// The channel's whitened deviations: the three axes' or the modulus' ([`Within::on_axes`]).
-    pub(crate) fn channel_d(&self) -> &[f64] {
-        if self.on_axes { &self.axes.d } else { &self.d }
-    }
-
-    /// The pose of each of the channel's rows.
-    pub(crate) fn channel_pose(&self) -> &[usize] {
-        if self.on_axes { &self.axes.pose } else { &self.pose }
-    }
-
-    /// The fold of each of the channel's rows (its pose's).
-    fn channel_fold(&self) -> &[usize] {
-        if self.on_axes { &self.axes.fold } else { &self.fold }
-    }
-
-    /// The channel's `sqrt(mean d^2)`.
-    pub(crate) fn channel_ratio(&self) -> f64 {
-        if self.on_axes { self.axes.nominal_ratio } else { self.nominal_ratio }
     }
 }
 
@@ -620,7 +627,7 @@ impl Axes {
     /// of a segment mean on that axis (`white`: per reading, input unit).
     fn push_pose(&mut self, pose: &PoseData, white: V3, p: usize, fold: usize) {
         let weight: V3 = std::array::from_fn(|a| {
-            let var = white[a] / pose.seg_n as f64 * (SEGMENTS - 1) as f64 / SEGMENTS as f64;
+            let var = segment_deviation_variance(white[a], pose.seg_n);
             if var > 0.0 { 1.0 / var.sqrt() } else { 0.0 }
         });
         let centre = super::math::mean_of(&pose.seg);

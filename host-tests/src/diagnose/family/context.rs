@@ -667,6 +667,28 @@ impl<'a> Context<'a> {
 
     /// The pose rows with `extra` columns (calibration columns first) and the nominal residuals,
     /// each weighted by `1 / sqrt(e_white)` (held-out white noise of a pose mean to 1).
+    /// [`Self::whitened_pose_rows`] with, below them, the rows of `within`'s variant on its channel
+    /// ([`WithinVariant::rows_on`]; zero in the calibration's columns, already whitened), and each
+    /// row's fold (a segment's is its pose's): the stacked design of the pose means and the holds.
+    pub(crate) fn stacked_rows(
+        &self,
+        pose_extra: &[Vec<f64>],
+        within: Option<(&Within, &WithinVariant)>,
+    ) -> (Vec<Vec<f64>>, Vec<f64>, Vec<usize>) {
+        let base = self.base_columns();
+        let (mut rows, mut r) = self.whitened_pose_rows(pose_extra);
+        let mut fold = self.fold.clone();
+        if let Some((w, v)) = within {
+            let channel = w.channel();
+            for (i, row) in v.rows_on(w).iter().enumerate() {
+                rows.push(std::iter::repeat_n(0.0, base).chain(row.iter().copied()).collect());
+                r.push(channel.d[i]);
+                fold.push(self.fold[channel.pose[i]]);
+            }
+        }
+        (rows, r, fold)
+    }
+
     pub(crate) fn whitened_pose_rows(&self, extra: &[Vec<f64>]) -> (Vec<Vec<f64>>, Vec<f64>) {
         let weight = 1.0 / self.e_white.sqrt();
         let rows = self.rows_with(extra).into_iter().map(|row| row.into_iter().map(|x| x * weight).collect()).collect();
@@ -684,7 +706,7 @@ impl<'a> Context<'a> {
         if !self.pose_level || !(self.e_white > 0.0) {
             return None;
         }
-        let (cw, covw, msw) = lstsq_with_covariance(v.rows_on(w), w.channel_d())?;
+        let (cw, covw, msw) = lstsq_with_covariance(v.rows_on(w), w.channel().d)?;
         let (rows, r) = self.whitened_pose_rows(&v.pose_extra);
         let (cp, covp, msp) = lstsq_with_covariance(&rows, &r)?;
         let (k, base) = (cw.len(), cp.len() - cw.len());
@@ -700,7 +722,7 @@ impl<'a> Context<'a> {
     /// pose means are corrected by the effect it fitted and the nominal model refitted: that is the
     /// residual "after".
     pub(super) fn add_within(&self, e: &mut Evaluation, w: &Within, fit: WithinFit, disagreement: f64) {
-        let before = w.channel_ratio().ln();
+        let before = w.channel().ratio.ln();
         let miss = if fit.heldout_ratio >= 1.0 {
             fit.heldout_ratio.ln()
         } else {

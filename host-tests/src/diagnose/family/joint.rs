@@ -26,15 +26,7 @@ pub(crate) struct JointFit {
 /// Rows of the stacked design (pose means first, weighted by `1 / sqrt(e_white)`, then the
 /// within-pose segments, already whitened), their targets and folds.
 fn stacked(ctx: &Context<'_>, w: &Within, v: &WithinVariant) -> (Vec<Vec<f64>>, Vec<f64>, Vec<usize>) {
-    let base = ctx.base_columns();
-    let (mut rows, mut r) = ctx.whitened_pose_rows(&v.pose_extra);
-    let mut fold = ctx.fold.clone();
-    for (i, row) in v.rows_on(w).iter().enumerate() {
-        rows.push(std::iter::repeat_n(0.0, base).chain(row.iter().copied()).collect());
-        r.push(w.channel_d()[i]);
-        fold.push(ctx.fold[w.channel_pose()[i]]);
-    }
-    (rows, r, fold)
+    ctx.stacked_rows(&v.pose_extra, Some((w, v)))
 }
 
 /// Penalised held-out ratio of the withheld pose means (1 for white noise and the nominal model),

@@ -124,7 +124,6 @@ fn bspline_rate(j: usize, count: usize, t_end: f64, t: f64) -> f64 {
 /// when the log has the within-pose channel, its segments' rows (the wander's course during each
 /// hold, already whitened); their targets and folds (a segment in its pose's fold).
 fn design(ctx: &Context<'_>, knots: usize, course: &Course<'_>) -> (Vec<Vec<f64>>, Vec<f64>, Vec<usize>) {
-    let base = ctx.base_columns();
     let span = course.span;
     let effect = |_: usize, t: f64, rows: Range<usize>| -> Vec<V3> {
         let x = (course.at)(t, rows);
@@ -140,16 +139,7 @@ fn design(ctx: &Context<'_>, knots: usize, course: &Course<'_>) -> (Vec<Vec<f64>
             .map(|(p, u)| effect(0, p.t_mid(), p.rows.clone()).iter().map(|e| dot(*u, *e)).collect())
             .collect(),
     };
-    let (mut rows, mut r) = ctx.whitened_pose_rows(&pose_extra);
-    let mut fold = ctx.fold.clone();
-    if let Some((within, v)) = within {
-        for (i, row) in v.rows_on(within).iter().enumerate() {
-            rows.push(std::iter::repeat_n(0.0, base).chain(row.iter().copied()).collect());
-            r.push(within.channel_d()[i]);
-            fold.push(ctx.fold[within.channel_pose()[i]]);
-        }
-    }
-    (rows, r, fold)
+    ctx.stacked_rows(&pose_extra, within.as_ref().map(|(w, v)| (*w, v)))
 }
 
 /// The prior's normal matrix per axis: the knots' differences of `order` (1: a random walk's
