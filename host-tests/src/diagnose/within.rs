@@ -231,6 +231,16 @@ fn median_block_difference(poses: &[PrefixSums], block: usize) -> f64 {
     median(&per_pose)
 }
 
+/// The white level per reading and axis the holds' segments are whitened against:
+/// [`block_difference_white`], at least the rounding's `q^2 / 12` (a quantised reading whose noise is
+/// below its step sits on one level, and the blocks' differences see only its rare flips); the gap's
+/// level where no pose is long enough.
+fn segment_white(table: &Table, m: &Measured) -> V3 {
+    let block = block_difference_white(table, &m.poses, m.rate);
+    let q = quantisation_step(table);
+    std::array::from_fn(|a| if block[a] > 0.0 { block[a].max(q[a] * q[a] / 12.0) } else { m.white[a] })
+}
+
 impl Within {
     /// A channel with no deviations yet, over `folds` folds.
     fn empty(folds: usize) -> Self {
@@ -251,22 +261,12 @@ impl Within {
     }
 
     /// The deviations of every pose with enough samples per segment, whitened against
-    /// [`block_difference_white`] (the gap's level where no pose is long enough), at least the
-    /// rounding's `q^2 / 12` per reading: a quantised reading whose noise is below its step sits on
-    /// one level, and the blocks' differences see only its rare flips; `None` when fewer than three
-    /// poses qualify or the noise is not measurable.
+    /// [`segment_white`]; `None` when fewer than three poses qualify or the noise is not measurable.
     pub(crate) fn new(table: &Table, m: &Measured) -> Option<Self> {
         // Withheld poses are spread in time (pose i in fold i mod folds): a smooth effect is then
         // interpolated between the kept neighbours, not extrapolated over a gap.
         let folds = m.poses.len().min(MAX_FOLDS);
-        let block_white = block_difference_white(table, &m.poses, m.rate);
-        let q = quantisation_step(table);
-        let white: V3 =
-            std::array::from_fn(
-                |a| {
-                    if block_white[a] > 0.0 { block_white[a].max(q[a] * q[a] / 12.0) } else { m.white[a] }
-                },
-            );
+        let white = segment_white(table, m);
         let mut w = Within::empty(folds);
         w.on_axes = m.poses.len() <= AXES_UP_TO_POSES;
         let mut used = 0;
