@@ -632,6 +632,22 @@ pub(crate) mod testing {
         table
     }
 
+    /// A clean simulated log rounded to a step `steps` times its per-reading noise: the readings
+    /// stay on one level for most of each hold and flip to the next only where the true value lies
+    /// near a rounding boundary.
+    pub(crate) fn coarsely_rounded(seed: u64, steps: f64) -> Table {
+        use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
+        let mut table = to_table(&generate(&random_scenario(EffectClass::None, seed)), "rounded").unwrap();
+        let noise: super::math::V3 = std::array::from_fn(|a| {
+            let mut d: Vec<f64> = table.samples.windows(2).map(|w| (w[1][a] - w[0][a]).abs()).collect();
+            super::math::median(&mut d) / 0.6745 / std::f64::consts::SQRT_2
+        });
+        for sample in &mut table.samples {
+            (0..3).for_each(|a| sample[a] = (sample[a] / (steps * noise[a])).round() * steps * noise[a]);
+        }
+        table
+    }
+
     /// `table` through a moving average of `width` readings: a digital low-pass filter of about
     /// `rate / (2 width)` Hz (a MEMS part's, correlating successive readings; the noise of a mean
     /// keeps its level while the per-reading variance falls by `width`).

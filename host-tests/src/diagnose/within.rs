@@ -1005,22 +1005,6 @@ mod tests {
         assert!((simulated / predicted - 1.0).abs() < 0.05, "simulated {simulated}, predicted {predicted}");
     }
 
-    /// A clean simulated log rounded to a step `steps` times its per-reading noise: the readings
-    /// stay on one level for most of each hold and flip to the next only where the true value lies
-    /// near a rounding boundary.
-    fn coarsely_rounded(seed: u64, steps: f64) -> Table {
-        use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
-        let mut table = to_table(&generate(&random_scenario(EffectClass::None, seed)), "rounded").unwrap();
-        let noise: V3 = std::array::from_fn(|a| {
-            let mut d: Vec<f64> = table.samples.windows(2).map(|w| (w[1][a] - w[0][a]).abs()).collect();
-            median(&mut d) / 0.6745 / std::f64::consts::SQRT_2
-        });
-        for sample in &mut table.samples {
-            (0..3).for_each(|a| sample[a] = (sample[a] / (steps * noise[a])).round() * steps * noise[a]);
-        }
-        table
-    }
-
     #[test]
     fn holds_of_a_coarsely_rounded_clean_log_do_not_move_beyond_their_rounding() {
         // Rounded to 6 or 12 times its noise, a clean log's readings sit on one level per hold and
@@ -1030,7 +1014,7 @@ mod tests {
         // reading as the least white level, 0.87-1.00 and 0.51-0.65.
         for seed in 1..=4 {
             for steps in [6.0, 12.0] {
-                let table = coarsely_rounded(seed, steps);
+                let table = crate::diagnose::testing::coarsely_rounded(seed, steps);
                 let m = super::super::gap::measure(&table, &crate::diagnose::DiagnoseOptions::DEFAULT).unwrap();
                 let w = Within::new(&table, &m).unwrap();
                 let ratio = w.nominal_ratio;
