@@ -639,8 +639,8 @@ pub(crate) mod testing {
         use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
         let mut table = to_table(&generate(&random_scenario(EffectClass::None, seed)), "rounded").unwrap();
         let noise: super::math::V3 = std::array::from_fn(|a| {
-            let mut d: Vec<f64> = table.samples.windows(2).map(|w| (w[1][a] - w[0][a]).abs()).collect();
-            super::math::median(&mut d) / 0.6745 / std::f64::consts::SQRT_2
+            let d: Vec<f64> = table.samples.windows(2).map(|w| (w[1][a] - w[0][a]).abs()).collect();
+            super::math::median(&d) / 0.6745 / std::f64::consts::SQRT_2
         });
         for sample in &mut table.samples {
             (0..3).for_each(|a| sample[a] = (sample[a] / (steps * noise[a])).round() * steps * noise[a]);
