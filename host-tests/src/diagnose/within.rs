@@ -1009,9 +1009,9 @@ mod tests {
     fn holds_of_a_coarsely_rounded_clean_log_do_not_move_beyond_their_rounding() {
         // Rounded to 6 or 12 times its noise, a clean log's readings sit on one level per hold and
         // axis but for rare flips, and the differences of successive block means see almost nothing.
-        // Whitened by that level alone, the holds of these seeds moved 1.5-2.0 (6) and 5.8 to 1.6e11
+        // Whitened by that level alone, the holds of these seeds moved 1.5-1.8 (6) and 6.9 to 2.1e11
         // (12) times white noise, significant on every one; with the rounding's own `q^2 / 12` per
-        // reading as the least white level, 0.87-1.00 and 0.51-0.65.
+        // reading as the least white level, 0.85-0.95 and 0.59-0.70.
         for seed in 1..=4 {
             for steps in [6.0, 12.0] {
                 let table = crate::diagnose::testing::coarsely_rounded(seed, steps);
