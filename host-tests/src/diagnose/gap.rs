@@ -609,9 +609,27 @@ fn trim_edge_tails(table: &Table, poses: &mut [PoseData], lib_poses: &mut [Pose]
 /// to 6 times their noise, 10-17 of 25-38 poses were trimmed so (none unrounded), and 0-3 with the
 /// floor.
 fn move_test_variance(table: &Table, poses: &[PoseData], rate: f64) -> V3 {
-    let (white, correlation) = (median_pose_variance(poses), correlation_factor(table, poses, rate));
-    let q = quantisation_step(table);
-    std::array::from_fn(|a| white[a].max(q[a] * q[a] / 12.0) * correlation[a])
+    white_equivalent(median_pose_variance(poses), rounding_variance(table), correlation_factor(table, poses, rate))
+}
+
+/// A variance per reading, at least the rounding's (`rounding`, [`rounding_variance`]), times the
+/// correlation factor: what it over `n` is the variance of a mean of `n` readings.
+fn white_equivalent(per_reading: V3, rounding: V3, correlation: V3) -> V3 {
+    std::array::from_fn(|a| per_reading[a].max(rounding[a]) * correlation[a])
+}
+
+/// The variance a reading's rounding adds, `q^2 / 12` per axis ([`quantisation_step`]; 0 for a
+/// reading that is not quantised).
+pub(crate) fn rounding_variance(table: &Table) -> V3 {
+    quantisation_step(table).map(|q| q * q / 12.0)
+}
+
+/// A white level per reading measured in the holds (`measured`; 0 on an axis where it could not be),
+/// at least the rounding's (`rounding`): a reading rounded to a step above its noise sits on one level
+/// and flips only now and then, and a level measured from its changes sees only the flips. Where it
+/// could not be measured, `fallback` (the gap's level).
+pub(crate) fn at_least_rounding(measured: V3, rounding: V3, fallback: V3) -> V3 {
+    std::array::from_fn(|a| if measured[a] > 0.0 { measured[a].max(rounding[a]) } else { fallback[a] })
 }
 
 /// The median within-pose variance per sample, per axis.
@@ -639,7 +657,7 @@ fn white_variance(table: &Table, poses: &[PoseData], rate: f64) -> Result<(V3, V
     }
     let floor = std::array::from_fn(|a| quantisation_floor(q[a], white[a]));
     let correlation = correlation_factor(table, poses, rate);
-    Ok((std::array::from_fn(|a| white[a].max(q[a] * q[a] / 12.0) * correlation[a]), floor, correlation))
+    Ok((white_equivalent(white, rounding_variance(table), correlation), floor, correlation))
 }
 
 /// Length of the blocks [`correlation_factor`] averages, seconds: longer than the correlation of a

@@ -14,7 +14,7 @@ use std::ops::Range;
 
 use super::PARAMETER_PENALTY;
 use super::SEGMENTS;
-use super::gap::{CORRELATION_BLOCK_S, Measured, PoseData, quantisation_step, row_time};
+use super::gap::{CORRELATION_BLOCK_S, Measured, PoseData, at_least_rounding, rounding_variance, row_time};
 use super::math::{PrefixSums, V3, cv_residuals, dot, mean_square, median, sum_sq};
 use crate::csvio::Table;
 
@@ -232,13 +232,10 @@ fn median_block_difference(poses: &[PrefixSums], block: usize) -> f64 {
 }
 
 /// The white level per reading and axis the holds' segments are whitened against:
-/// [`block_difference_white`], at least the rounding's `q^2 / 12` (a quantised reading whose noise is
-/// below its step sits on one level, and the blocks' differences see only its rare flips); the gap's
-/// level where no pose is long enough.
+/// [`block_difference_white`], at least the rounding's ([`at_least_rounding`]); the gap's level where
+/// no pose is long enough.
 fn segment_white(table: &Table, m: &Measured) -> V3 {
-    let block = block_difference_white(table, &m.poses, m.rate);
-    let q = quantisation_step(table);
-    std::array::from_fn(|a| if block[a] > 0.0 { block[a].max(q[a] * q[a] / 12.0) } else { m.white[a] })
+    at_least_rounding(block_difference_white(table, &m.poses, m.rate), rounding_variance(table), m.white)
 }
 
 impl Within {
@@ -615,8 +612,9 @@ impl Within {
             }
         }
         let (heldout_ratio, i, v) = best?;
-        let train: Vec<usize> = (0..self.channel().d.len()).collect();
-        let coefficients = super::math::lstsq(v.rows_on(self), self.channel().d, &train)?;
+        let d = self.channel().d;
+        let train: Vec<usize> = (0..d.len()).collect();
+        let coefficients = super::math::lstsq(v.rows_on(self), d, &train)?;
         let fit =
             WithinFit { heldout_ratio, params: v.params, detail: v.detail, coefficients, pose_extra: v.pose_extra };
         Some((i, fit))

@@ -665,8 +665,6 @@ impl<'a> Context<'a> {
         }
     }
 
-    /// The pose rows with `extra` columns (calibration columns first) and the nominal residuals,
-    /// each weighted by `1 / sqrt(e_white)` (held-out white noise of a pose mean to 1).
     /// [`Self::whitened_pose_rows`] with, below them, the rows of `within`'s variant on its channel
     /// ([`WithinVariant::rows_on`]; zero in the calibration's columns, already whitened), and each
     /// row's fold (a segment's is its pose's): the stacked design of the pose means and the holds.
@@ -689,6 +687,8 @@ impl<'a> Context<'a> {
         (rows, r, fold)
     }
 
+    /// The pose rows with `extra` columns (calibration columns first) and the nominal residuals,
+    /// each weighted by `1 / sqrt(e_white)` (held-out white noise of a pose mean to 1).
     pub(crate) fn whitened_pose_rows(&self, extra: &[Vec<f64>]) -> (Vec<Vec<f64>>, Vec<f64>) {
         let weight = 1.0 / self.e_white.sqrt();
         let rows = self.rows_with(extra).into_iter().map(|row| row.into_iter().map(|x| x * weight).collect()).collect();

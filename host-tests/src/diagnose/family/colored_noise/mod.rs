@@ -18,7 +18,9 @@ use allan::{colored_noise_estimate, pooled_estimate, pooled_markov};
 
 use super::{Candidate, Context, Evaluation, Family, Variant, periodic};
 use crate::diagnose::gap::Measured;
-use crate::diagnose::gap::{Noise, mean_cv_ms, quantisation_step, residual_noise_draws, simulate_gap};
+use crate::diagnose::gap::{
+    Noise, at_least_rounding, mean_cv_ms, residual_noise_draws, rounding_variance, simulate_gap,
+};
 use crate::diagnose::math::{V3, mean};
 use crate::diagnose::report::Probe;
 use crate::diagnose::verdict::NOISE_LEAVES_AT_MOST;
@@ -403,9 +405,8 @@ fn longest_rest(ctx: &Context<'_>) -> usize {
 /// Gauss-Markov noise is measured against the second only.
 fn hold_estimates(ctx: &Context<'_>) -> Vec<Estimate> {
     let m = ctx.m;
-    let q = quantisation_step(ctx.table);
     let diff = white_from_differences(ctx.table, ctx.poses, m.rate);
-    let white: V3 = std::array::from_fn(|a| if diff[a] > 0.0 { diff[a].max(q[a] * q[a] / 12.0) } else { m.white[a] });
+    let white = at_least_rounding(diff, rounding_variance(ctx.table), m.white);
     let rows = ctx.poses[longest_rest(ctx)].rows.clone();
     let pieces: Vec<Range<usize>> = ctx.poses.iter().map(|p| p.rows.clone()).collect();
     let mut estimates: Vec<Estimate> = [white, m.white]
