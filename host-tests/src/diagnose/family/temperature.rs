@@ -113,9 +113,9 @@ impl Source {
 /// Seconds over which the smooth course's rate of change is taken ([`Course::fit`]).
 const RATE_WINDOW_S: f64 = 2.0;
 
-/// The thermometer's smooth course ([`smoothed_temps`], knots [`SMOOTH_S`] apart) and its rate of
-/// change over [`RATE_WINDOW_S`], per row, K/s: a thermometer lagging the sensor by `tau` reads the
-/// course the sensor was at about `tau` times the rate earlier.
+/// The thermometer's course ([`smoothed_temps`], knots [`SMOOTH_S`] apart, or [`FINE_SMOOTH_S`] for
+/// the fine one) and its rate of change over [`RATE_WINDOW_S`], per row, K/s: a thermometer lagging
+/// the sensor by `tau` reads the course the sensor was at about `tau` times the rate earlier.
 struct Course {
     temps: Vec<f64>,
     rate: Vec<f64>,
