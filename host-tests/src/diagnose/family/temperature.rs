@@ -603,14 +603,7 @@ mod tests {
             let (mut table, times) = clean_log(seed);
             let die = |t: f64| 20.0 - 10.0 * (-t / 200.0).exp();
             add_bias_mg(&mut table, &times, |t| 0.4 * (die(t) - 10.0));
-            let (mut board, mut last_t) = (die(0.0), 0.0);
-            let mut thermometer = Vec::with_capacity(times.len());
-            for t in &times {
-                board += (1.0 - (-(t - last_t) / 25.0).exp()) * (die(*t) - board);
-                last_t = *t;
-                thermometer.push((board * 16.0).round() / 16.0);
-            }
-            table.temps_c = Some(thermometer);
+            table.temps_c = Some(board_thermometer(&times, die, 25.0));
             let d = diagnose(&table, &DiagnoseOptions::DEFAULT).unwrap();
             let temperature = d.candidates.iter().find(|c| c.effect == "temperature").unwrap();
             assert_eq!(d.verdict, "temperature", "seed {seed}: {}", d.to_text());
