@@ -244,6 +244,8 @@ pub(crate) struct Measured {
     pub(crate) correlation: V3,
     /// Variance of a pose mean from quantisation that averaging does not remove, per axis, input unit.
     pub(crate) quantisation: V3,
+    /// Variance a reading's rounding adds, `q^2 / 12` per axis ([`rounding_variance`]), input unit.
+    pub(crate) rounding: V3,
     /// Simulated RMSE of each repeat, mg.
     pub(crate) sims: Vec<f64>,
     pub(crate) gap: Gap,
@@ -620,8 +622,13 @@ fn white_equivalent(per_reading: V3, rounding: V3, correlation: V3) -> V3 {
 
 /// The variance a reading's rounding adds, `q^2 / 12` per axis ([`quantisation_step`]; 0 for a
 /// reading that is not quantised).
-pub(crate) fn rounding_variance(table: &Table) -> V3 {
-    quantisation_step(table).map(|q| q * q / 12.0)
+fn rounding_variance(table: &Table) -> V3 {
+    quantisation_step(table).map(step_variance)
+}
+
+/// The variance rounding to a step `q` adds to a reading: `q^2 / 12`.
+fn step_variance(q: f64) -> f64 {
+    q * q / 12.0
 }
 
 /// A white level per reading measured in the holds (`measured`; 0 on an axis where it could not be),
@@ -642,10 +649,9 @@ fn median_pose_variance(poses: &[PoseData]) -> V3 {
 /// least that is assumed) times the [`correlation_factor`], so that it over `n` is the variance of a
 /// mean of `n` samples.
 /// Also returns the quantisation floor of a pose mean per axis ([`quantisation_floor`]) and the
-/// correlation factor.
-fn white_variance(table: &Table, poses: &[PoseData], rate: f64) -> Result<(V3, V3, V3), DiagnoseError> {
+/// correlation factor. `q` is the readings' quantisation step per axis ([`quantisation_step`]).
+fn white_variance(table: &Table, poses: &[PoseData], rate: f64, q: V3) -> Result<(V3, V3, V3), DiagnoseError> {
     let white = median_pose_variance(poses);
-    let q = quantisation_step(table);
     // Readings that never change within a pose are a quantised sensor whose noise is below one step:
     // the rounding (q^2 / 12) is then the whole noise.
     let measurable = |a: usize| white[a] > 0.0 || q[a] > 0.0;
@@ -657,7 +663,7 @@ fn white_variance(table: &Table, poses: &[PoseData], rate: f64) -> Result<(V3, V
     }
     let floor = std::array::from_fn(|a| quantisation_floor(q[a], white[a]));
     let correlation = correlation_factor(table, poses, rate);
-    Ok((white_equivalent(white, rounding_variance(table), correlation), floor, correlation))
+    Ok((white_equivalent(white, q.map(step_variance), correlation), floor, correlation))
 }
 
 /// Length of the blocks [`correlation_factor`] averages, seconds: longer than the correlation of a
@@ -722,7 +728,7 @@ pub(crate) fn quantisation_floor(q: f64, measured_variance: f64) -> f64 {
     if q <= 0.0 || !q.is_finite() {
         return 0.0;
     }
-    let sigma_sq = (measured_variance - q * q / 12.0).max(0.0);
+    let sigma_sq = (measured_variance - step_variance(q)).max(0.0);
     let pi_sq = std::f64::consts::PI * std::f64::consts::PI;
     (1..=32)
         .map(|k| {
@@ -811,7 +817,8 @@ fn measure_found(table: &Table, opts: &DiagnoseOptions, found: Found) -> Result<
     let calibrated: Vec<V3> = means.iter().map(|m| model.apply(*m)).collect();
     let directions: Vec<V3> = calibrated.iter().map(|f| f.map(|c| c / norm(*f))).collect();
     let r = residuals(&model, &means, gravity);
-    let (white, quantisation, correlation) = white_variance(table, &poses, rate)?;
+    let q = quantisation_step(table);
+    let (white, quantisation, correlation) = white_variance(table, &poses, rate, q)?;
     let white_noise = Noise { white, floor: quantisation, ..Noise::default() };
     let sims = simulate_gap(&model, &directions, &poses, &white_noise, gravity, opts.repeats, opts.seed);
     if sims.len() < 2 {
@@ -835,6 +842,7 @@ fn measure_found(table: &Table, opts: &DiagnoseOptions, found: Found) -> Result<
         white,
         correlation,
         quantisation,
+        rounding: q.map(step_variance),
         sims,
         gap,
         gravity,

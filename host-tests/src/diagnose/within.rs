@@ -14,7 +14,7 @@ use std::ops::Range;
 
 use super::PARAMETER_PENALTY;
 use super::SEGMENTS;
-use super::gap::{CORRELATION_BLOCK_S, Measured, PoseData, at_least_rounding, rounding_variance, row_time};
+use super::gap::{CORRELATION_BLOCK_S, Measured, PoseData, at_least_rounding, row_time};
 use super::math::{PrefixSums, V3, cv_residuals, dot, mean_square, median, sum_sq};
 use crate::csvio::Table;
 
@@ -232,10 +232,10 @@ fn median_block_difference(poses: &[PrefixSums], block: usize) -> f64 {
 }
 
 /// The white level per reading and axis the holds' segments are whitened against:
-/// [`block_difference_white`], at least the rounding's ([`at_least_rounding`]); the gap's level where
+/// [`block_difference_white`], at least the rounding's ([`at_least_rounding`], `m.rounding`); the gap's level where
 /// no pose is long enough.
 fn segment_white(table: &Table, m: &Measured) -> V3 {
-    at_least_rounding(block_difference_white(table, &m.poses, m.rate), rounding_variance(table), m.white)
+    at_least_rounding(block_difference_white(table, &m.poses, m.rate), m.rounding, m.white)
 }
 
 impl Within {

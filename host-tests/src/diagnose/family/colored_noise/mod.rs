@@ -18,9 +18,7 @@ use allan::{colored_noise_estimate, pooled_estimate, pooled_markov};
 
 use super::{Candidate, Context, Evaluation, Family, Variant, periodic};
 use crate::diagnose::gap::Measured;
-use crate::diagnose::gap::{
-    Noise, at_least_rounding, mean_cv_ms, residual_noise_draws, rounding_variance, simulate_gap,
-};
+use crate::diagnose::gap::{Noise, at_least_rounding, mean_cv_ms, residual_noise_draws, simulate_gap};
 use crate::diagnose::math::{V3, mean};
 use crate::diagnose::report::Probe;
 use crate::diagnose::verdict::NOISE_LEAVES_AT_MOST;
@@ -406,7 +404,7 @@ fn longest_rest(ctx: &Context<'_>) -> usize {
 fn hold_estimates(ctx: &Context<'_>) -> Vec<Estimate> {
     let m = ctx.m;
     let diff = white_from_differences(ctx.table, ctx.poses, m.rate);
-    let white = at_least_rounding(diff, rounding_variance(ctx.table), m.white);
+    let white = at_least_rounding(diff, m.rounding, m.white);
     let rows = ctx.poses[longest_rest(ctx)].rows.clone();
     let pieces: Vec<Range<usize>> = ctx.poses.iter().map(|p| p.rows.clone()).collect();
     let mut estimates: Vec<Estimate> = [white, m.white]
