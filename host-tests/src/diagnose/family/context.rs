@@ -9,7 +9,7 @@ use std::ops::Range;
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
 
-use super::{Evaluation, Fitted, Variant, colored_noise, periodic, steady_line, tremor};
+use super::{Evaluation, Fitted, Variant, colored_noise, periodic, steady_line, temperature, tremor};
 use crate::csvio::Table;
 use crate::diagnose::gap::{Measured, Noise, PoseData, expected_fit_rmse_mg, mean_cv_ms, residual_noise_draws};
 use crate::diagnose::math::{
@@ -154,6 +154,8 @@ pub(crate) struct Context<'a> {
     periodic: OnceCell<Option<periodic::PeriodicFit>>,
     /// The holds' periodogram's line, once scanned ([`Context::periodic_line`]).
     periodic_line: OnceCell<Option<colored_noise::coherent::Line>>,
+    /// The thermometer's smooth course, once fitted ([`Context::thermometer_course`]).
+    thermometer_course: OnceCell<Option<temperature::Course>>,
 }
 
 /// `1 - ln(ratio) / |ln(nominal)|`, a ratio below 1 counting `overshoot_weight` times.
@@ -254,6 +256,7 @@ impl<'a> Context<'a> {
             steady_line: OnceCell::new(),
             periodic: OnceCell::new(),
             periodic_line: OnceCell::new(),
+            thermometer_course: OnceCell::new(),
         })
     }
 
@@ -281,6 +284,13 @@ impl<'a> Context<'a> {
         *self.periodic_line.get_or_init(|| {
             colored_noise::coherent::periodic_bias(self.table, &self.hold_rows(), self.m.rate, self.m.white)
         })
+    }
+
+    /// The thermometer's smooth course ([`temperature::Course::fit`], knots
+    /// [`temperature::SMOOTH_S`] apart; asked by the temperature family's within-pose variants, its
+    /// pose variants and its wander in temperature); `None` without a temperature column.
+    pub(crate) fn thermometer_course(&self) -> Option<&temperature::Course> {
+        self.thermometer_course.get_or_init(|| temperature::Course::fit(self, temperature::SMOOTH_S)).as_ref()
     }
 
     pub(crate) fn directions(&self) -> &[V3] {

@@ -34,7 +34,7 @@ const FINE_SMOOTH_S: f64 = 30.0;
 /// Knot spacing of the smooth course through which the thermometer is also read, s: a coarse
 /// thermometer (1 degC steps) is a staircase whose steps misplace a pose's temperature by up to half
 /// a step; the die's own temperature moves smoothly (its thermal time constants are minutes).
-const SMOOTH_S: f64 = 200.0;
+pub(crate) const SMOOTH_S: f64 = 200.0;
 
 /// Largest local temperature coefficient of a MEMS accelerometer's bias (per axis) a temperature
 /// fit may claim, mg/K: six times the largest datasheet figure of current parts (0 g offset vs
@@ -96,8 +96,8 @@ impl Source {
         }
     }
 
-    /// The temperature per row, `course` the thermometer's smooth course ([`Course::fit`], once per
-    /// search).
+    /// The temperature per row, `course` the thermometer's smooth course
+    /// ([`Context::thermometer_course`]).
     fn temps(&self, ctx: &Context<'_>, course: Option<&Course>) -> Option<Vec<f64>> {
         match self {
             Source::Smoothed => Some(course?.temps.clone()),
@@ -116,13 +116,13 @@ const RATE_WINDOW_S: f64 = 2.0;
 /// The thermometer's course ([`smoothed_temps`], knots [`SMOOTH_S`] apart, or [`FINE_SMOOTH_S`] for
 /// the fine one) and its rate of change over [`RATE_WINDOW_S`], per row, K/s: a thermometer lagging
 /// the sensor by `tau` reads the course the sensor was at about `tau` times the rate earlier.
-struct Course {
+pub(crate) struct Course {
     temps: Vec<f64>,
     rate: Vec<f64>,
 }
 
 impl Course {
-    fn fit(ctx: &Context<'_>, spacing: f64) -> Option<Self> {
+    pub(crate) fn fit(ctx: &Context<'_>, spacing: f64) -> Option<Self> {
         let temps = smoothed_temps(ctx, spacing)?;
         let times: Vec<f64> = (0..temps.len()).map(|i| row_time(ctx.table, i, ctx.m.rate)).collect();
         let (mut lo, mut hi) = (0, 0);
@@ -265,9 +265,9 @@ fn lagged_temps(ctx: &Context<'_>, tau: f64) -> Option<Vec<f64>> {
 /// quadratic in the (lagged) temperature of each segment.
 fn within_variants(ctx: &Context<'_>, w: &Within) -> Vec<WithinVariant> {
     let mut out = Vec::new();
-    let course = Course::fit(ctx, SMOOTH_S);
+    let course = ctx.thermometer_course();
     for source in Source::all() {
-        let Some(lagged) = source.temps(ctx, course.as_ref()) else { continue };
+        let Some(lagged) = source.temps(ctx, course) else { continue };
         let temps: Vec<f64> = w.rows.iter().map(|r| mean(&lagged[r.clone()])).collect();
         let t0 = mean(&temps);
         let lagged = &lagged;
@@ -437,11 +437,11 @@ const WANDER_SOURCES: [Source; 4] =
 /// [`MAX_BIAS_MG_PER_K`] at every pose (two blindgen2 wanders in time under room thermometers
 /// were courses of 5-15 mg/K through each reading tried).
 fn wander_in_temperature(ctx: &Context<'_>) -> Option<smooth::SmoothFit> {
-    let course = Course::fit(ctx, SMOOTH_S);
+    let course = ctx.thermometer_course();
     let limit = MAX_BIAS_MG_PER_K / ctx.m.to_mg(1.0);
     let mut best: Option<smooth::SmoothFit> = None;
     for source in WANDER_SOURCES {
-        let Some(temps) = source.temps(ctx, course.as_ref()) else { continue };
+        let Some(temps) = source.temps(ctx, course) else { continue };
         let pose_temps = pose_means(ctx, &temps);
         if !spans_enough(&pose_temps, mean(&pose_temps)) {
             continue;
@@ -466,9 +466,9 @@ fn wander_in_temperature(ctx: &Context<'_>) -> Option<smooth::SmoothFit> {
 /// The parametrisations whose fitted coefficients are not [`Grade::Implausible`], with their grade.
 fn graded_variants(ctx: &Context<'_>) -> Vec<(Variant, Grade)> {
     let mut out = Vec::new();
-    let course = Course::fit(ctx, SMOOTH_S);
+    let course = ctx.thermometer_course();
     for source in Source::all() {
-        let Some(temps) = pose_temps(ctx, source, course.as_ref()) else { continue };
+        let Some(temps) = pose_temps(ctx, source, course) else { continue };
         let t0 = mean(&temps);
         if !spans_enough(&temps, t0) {
             continue;
