@@ -72,6 +72,11 @@ fn slow_change(e: &Evaluation) -> bool {
     matches!(e.candidate.effect, "drift" | "temperature")
 }
 
+/// The family is a function of the orientation alone (a scale non-linearity): it moves no hold.
+fn orientation_only(e: &Evaluation) -> bool {
+    e.candidate.effect == "scale-nonlinearity"
+}
+
 /// A slow change (drift, temperature) or a settling transient whose pose-level gain rests on one
 /// pose (gone with the worst-predicted pose left out) and which the holds do not support: a slow
 /// change moves many poses, a transient follows every set-down; one pose alone is a transient of
@@ -187,8 +192,10 @@ fn strongest(evaluations: &[Evaluation]) -> (Option<Indexed<'_>>, Option<Indexed
 /// poses) or colored noise (2, the non-linearity's gain keeping the holds' settling out), and with
 /// no log of another family named a non-linearity or colored noise.
 fn settling_before_static<'e>(evaluations: &'e [Evaluation], best: Indexed<'e>) -> Indexed<'e> {
-    let settles = || evaluations.iter().enumerate().find(|(_, e)| settles_in_holds(e));
-    if best.1.candidate.effect == "scale-nonlinearity" { settles().unwrap_or(best) } else { best }
+    if !orientation_only(best.1) {
+        return best;
+    }
+    evaluations.iter().enumerate().find(|(_, e)| settles_in_holds(e)).unwrap_or(best)
 }
 
 /// Margin of evidence within which two families tie on the withheld poses ([`fits_far_closer_at_a_tie`]).
@@ -285,10 +292,9 @@ fn wander_dominated(e: &Evaluation, p: &Probe) -> bool {
 /// 0.98). A parametric family that predicts most of the withheld pose means of a long log keeps the
 /// verdict ([`predicts_most`]).
 fn walk_not_value_family(m: &Measured, v: &Evaluation, holds_walk: bool) -> bool {
-    let static_fit = v.candidate.effect == "scale-nonlinearity";
     holds_walk
         && !predicts_most(m, v)
-        && (slow_change(v) && !(v.candidate.within_gain > SLOW_CHANGE_MISSES_HOLDS) || static_fit)
+        && (slow_change(v) && !(v.candidate.within_gain > SLOW_CHANGE_MISSES_HOLDS) || orientation_only(v))
 }
 
 /// Held-out gain from which a value family's few parameters ([`predicts_most`]) predict the
