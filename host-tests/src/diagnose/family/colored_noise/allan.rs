@@ -91,7 +91,8 @@ fn hold_excesses(
 /// (the median hold's excess at its longest `tau` above [`WALK_EXCESS`]), or where a telegraph
 /// noise would ([`telegraph_moves`]): a noise moves many holds, one disturbed hold (a bias step
 /// within it) is none. Returns the fits `(variances, correlation time)` the holds tell apart from
-/// the best by less than [`MARKOV_MISFIT_SPAN`], the best first.
+/// the best by less than [`MARKOV_MISFIT_SPAN`] (widened by the best fit's misfit: [`fit_markov`]),
+/// the best first.
 pub(super) fn pooled_markov(table: &Table, holds: &[Range<usize>], rate: f64, white: V3) -> Vec<(V3, f64)> {
     let excesses: [Vec<AllanPoint>; 3] = std::array::from_fn(|a| {
         let (points, lasts) = hold_excesses(table, holds, rate, white[a], a);
@@ -129,7 +130,7 @@ fn telegraph_moves(lasts: &[f64]) -> bool {
         || beyond(FAR_EXCESS) >= TELEGRAPH_HOLDS
 }
 
-/// The Allan points (`tau`, excess, weight) re-weighted by the clusters over the white noise's
+/// The Allan points re-weighted by the clusters over the white noise's
 /// Allan variance squared instead of the observed one's: a telegraph noise moves some holds far
 /// more than others, and weights from the observed variance would fit the quiet holds only.
 fn white_weighted(points: &[AllanPoint], white: f64) -> Vec<AllanPoint> {
@@ -298,8 +299,8 @@ fn trend_design(table: &Table, first: usize, end: usize, rate: f64) -> Vec<Vec<f
 }
 
 /// Overlapping Allan variance in excess of white noise (`white` per sample) for `tau` from 1/50 to
-/// 1/5 of the record: `(tau s, excess, weight)` per `tau`, and the excess at the longest `tau` in
-/// units of the white Allan variance there.
+/// 1/5 of the record: an [`AllanPoint`] per `tau`, and the excess at the longest `tau` in units of
+/// the white Allan variance there.
 fn allan_excess(detrended: &[f64], rate: f64, white: f64) -> (Vec<AllanPoint>, f64) {
     let n = detrended.len();
     let sums = PrefixSums::new(detrended.iter().copied());
