@@ -53,18 +53,23 @@ impl PrefixSums {
     /// Mean over every start `i` of `S[i + 2m] - 2 S[i + m] + S[i]`: `m` times the difference of two
     /// successive clusters' means, averaged (`m` at most half the series).
     pub(crate) fn mean_second_difference(&self, m: usize) -> f64 {
-        let s = &self.0;
         let count = self.len() + 1 - 2 * m;
-        (0..count).map(|k| s[k + 2 * m] - 2.0 * s[k + m] + s[k]).sum::<f64>() / count as f64
+        self.second_differences(m).sum::<f64>() / count as f64
     }
 
     /// Overlapping Allan variance of clusters of `m` samples, `var(mean[i + m] - mean[i]) / 2`
     /// over every start `i`, in the series' units squared (`m` at most half the series).
     pub(crate) fn allan_variance(&self, m: usize) -> f64 {
-        let s = &self.0;
         let count = self.len() + 1 - 2 * m;
-        let sum: f64 = (0..count).map(|k| (s[k + 2 * m] - 2.0 * s[k + m] + s[k]).powi(2)).sum();
+        let sum: f64 = self.second_differences(m).map(|d| d.powi(2)).sum();
         sum / (2.0 * count as f64 * (m * m) as f64)
+    }
+
+    /// `S[i + 2m] - 2 S[i + m] + S[i]` for every start `i`: `m` times the difference of two
+    /// successive clusters' means.
+    fn second_differences(&self, m: usize) -> impl Iterator<Item = f64> + '_ {
+        let s = &self.0;
+        (0..self.len() + 1 - 2 * m).map(move |k| s[k + 2 * m] - 2.0 * s[k + m] + s[k])
     }
 }
 

@@ -222,10 +222,11 @@ fn cleared_curves(excesses: &[Vec<AllanPoint>; 3], rate: f64, tau_c: f64) -> [Ve
         excesses[a]
             .iter()
             .map(|p| {
-                if !records.iter().any(|(n, _)| *n == p.record) {
+                let i = records.iter().position(|(n, _)| *n == p.record).unwrap_or_else(|| {
                     records.push((p.record, ClearedMarkov::new(p.record, rate, tau_c)));
-                }
-                records.iter().find(|(n, _)| *n == p.record).map_or(0.0, |(_, c)| c.allan(p.cluster))
+                    records.len() - 1
+                });
+                records[i].1.allan(p.cluster)
             })
             .collect()
     })
