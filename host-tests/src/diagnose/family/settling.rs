@@ -11,8 +11,10 @@
 //!
 //! Any transient, whatever its shape (a ringing mount, an exponential), is also tested by leaving
 //! out the start of every hold (its first sixth or third): if the pose means of the rest agree
-//! better with the model on withheld poses, the start of the holds carried the gap. Motion (a tap,
-//! a sway) happens anywhere in a hold and is not removed so. A mount ringing through the hold is
+//! better with the model on withheld poses, the start of the holds carried the gap. A transient
+//! still decaying at a hold's end (a time constant near the hold's length) is tested by
+//! extrapolating every hold to its settled value (an exponential from its set-down, fitted to the
+//! hold's segment means). Motion (a tap, a sway) happens anywhere in a hold and is not removed so. A mount ringing through the hold is
 //! tested by leaving out the holds that ring (a damped oscillation at one common frequency).
 
 use super::{Context, Evaluation, Family, Variant, motion, ringing, standard_evaluation};
@@ -184,21 +186,97 @@ fn measured_transients(ctx: &Context<'_>) -> Vec<V3> {
         .collect()
 }
 
-/// The evaluation with the leading `drop` segments of every hold left out: pose means from the
-/// rest, their modulus residuals under the nominal model, cross-validated (one parameter: the trim).
-fn trimmed_start(ctx: &Context<'_>, drop: usize) -> Option<(f64, Vec<Option<f64>>, f64)> {
-    let m = ctx.m;
+/// Pose means corrected for a transient and scored as the nominal model's: the held-out ratio, the
+/// residuals of the fit to every pose and their gap ratio, the parameters charged, what was done.
+struct Corrected {
+    ratio: f64,
+    after: Vec<Option<f64>>,
+    ratio_after: f64,
+    params: usize,
+    detail: String,
+}
+
+/// The pose means with the leading `drop` segments of every hold left out (one parameter: the trim).
+fn trimmed_start(ctx: &Context<'_>, drop: usize) -> Option<Corrected> {
     let means: Vec<V3> = ctx.poses.iter().map(|p| if p.seg_n > 0 { mean_of(&p.seg[drop..]) } else { p.mean }).collect();
+    // Fewer samples per mean: more white noise in each.
+    let detail = format!("transient: the first {drop}/{SEGMENTS} of every hold left out");
+    score_means(ctx, &means, SEGMENTS as f64 / (SEGMENTS - drop) as f64, 1, detail)
+}
+
+/// The pose means settled: each hold's segment means fitted, per axis, by `c + b exp(-(t - t0) /
+/// tau)` from its set-down `t0` ([`placements`]), and `c`, the value the transient decays to, kept
+/// (a hold the log began in keeps its mean); with the white noise of `c` over the plain mean's,
+/// averaged over the poses. Where `tau` is near the hold's length the transient has not died out
+/// by the hold's end, and neither the mean nor the hold's last half is the settled value.
+fn settled_means(ctx: &Context<'_>, tau: f64) -> (Vec<V3>, f64) {
+    let n = SEGMENTS as f64;
+    let mut noise = 0.0;
+    let means = ctx
+        .poses
+        .iter()
+        .zip(placements(ctx))
+        .map(|(p, t0)| {
+            let Some(t0) = t0.filter(|_| p.seg_n > 0) else {
+                noise += 1.0;
+                return p.mean;
+            };
+            let x: Vec<f64> =
+                (0..SEGMENTS).map(|k| (-(p.t_start + (k as f64 + 0.5) / n * p.duration() - t0) / tau).exp()).collect();
+            let x_mean = x.iter().sum::<f64>() / n;
+            let sxx: f64 = x.iter().map(|v| (v - x_mean).powi(2)).sum();
+            noise += 1.0 + n * x_mean * x_mean / sxx;
+            let y_mean = mean_of(&p.seg);
+            std::array::from_fn(|a| {
+                let sxy: f64 = x.iter().zip(&p.seg).map(|(v, y)| (v - x_mean) * (y[a] - y_mean[a])).sum();
+                y_mean[a] - sxy / sxx * x_mean
+            })
+        })
+        .collect();
+    (means, noise / ctx.poses.len().max(1) as f64)
+}
+
+/// The best settled pose means ([`settled_means`]) over the time constants up to the median hold,
+/// charged one parameter and the search's `ln` (rounded up).
+fn settled(ctx: &Context<'_>) -> Option<Corrected> {
+    let hold = median(&ctx.poses.iter().map(|p| p.duration()).collect::<Vec<_>>());
+    let taus: Vec<f64> = WITHIN_TAUS_S.iter().copied().filter(|tau| *tau <= hold).collect();
+    let params = 1 + (taus.len().max(1) as f64).ln().ceil() as usize;
+    let detail = |tau| format!("transient: every hold extrapolated to its settled value (exponential, tau {tau} s)");
+    taus.iter()
+        .filter_map(|&tau| {
+            let (means, noise) = settled_means(ctx, tau);
+            score_means(ctx, &means, noise, params, detail(tau))
+        })
+        .min_by(|a, b| a.ratio.total_cmp(&b.ratio))
+}
+
+/// Pose means `means` whose white noise is `more_noise` times the plain means': their modulus
+/// residuals under the nominal model, cross-validated and charged `params`.
+fn score_means(ctx: &Context<'_>, means: &[V3], more_noise: f64, params: usize, detail: String) -> Option<Corrected> {
+    let m = ctx.m;
     let r: Vec<f64> = means.iter().map(|x| norm(m.model.apply(*x)) - m.gravity).collect();
     let cv = ctx.base_cv_residuals(&r)?;
-    // Fewer samples per mean: more white noise in each.
-    let more_noise = SEGMENTS as f64 / (SEGMENTS - drop) as f64;
     let expected = ctx.e_white * more_noise;
-    let ms = (sum_sq(&cv).0 + PARAMETER_PENALTY * expected) / ctx.n_scored() as f64;
+    let ms = (sum_sq(&cv).0 + params as f64 * PARAMETER_PENALTY * expected) / ctx.n_scored() as f64;
     let after = fit_residuals(&ctx.base_rows, &r, &ctx.none_dropped)?;
     let kept: Vec<f64> = after.iter().flatten().copied().collect();
     let ratio_after = m.to_mg(rms(&kept)) / (m.gap.sim_rmse_mg * more_noise.sqrt());
-    Some(((ms / expected).sqrt(), after, ratio_after))
+    Some(Corrected { ratio: (ms / expected).sqrt(), after, ratio_after, params, detail })
+}
+
+/// `e` becomes the corrected pose means' evaluation if they gain more on the withheld poses.
+fn take_if_better(ctx: &Context<'_>, e: &mut Evaluation, fit: Corrected) {
+    let gain = ctx.value_gain(fit.ratio);
+    if gain <= e.candidate.evidence() {
+        return;
+    }
+    let c = &mut e.candidate;
+    c.applicable = true;
+    (c.heldout_ratio, c.heldout_gain, c.ratio_after, c.extra_params) = (fit.ratio, gain, fit.ratio_after, fit.params);
+    c.detail = fit.detail;
+    e.after = fit.after;
+    e.gain_without_worst = f64::NAN;
 }
 
 /// The holds disturbed by a ringing mount (a damped oscillation at a common frequency) left out.
@@ -246,17 +324,9 @@ impl Family for Settling {
         {
             e = ring;
         }
-        let trims: &[usize] = if transient_decays(ctx) && moduli_settle(ctx) { &TRIMS } else { &[] };
-        for &drop in trims {
-            let Some((ratio, after, ratio_after)) = trimmed_start(ctx, drop) else { continue };
-            let c = &mut e.candidate;
-            if ctx.value_gain(ratio) > c.evidence() {
-                c.applicable = true;
-                (c.heldout_ratio, c.heldout_gain, c.ratio_after, c.extra_params) =
-                    (ratio, ctx.value_gain(ratio), ratio_after, 1);
-                c.detail = format!("transient: the first {drop}/{SEGMENTS} of every hold left out");
-                e.after = after;
-                e.gain_without_worst = f64::NAN;
+        if transient_decays(ctx) && moduli_settle(ctx) {
+            for fit in TRIMS.iter().filter_map(|&drop| trimmed_start(ctx, drop)).chain(settled(ctx)) {
+                take_if_better(ctx, &mut e, fit);
             }
         }
         // The measured transients, like every variant, are offered only when the holds settle,
@@ -463,42 +533,70 @@ mod tests {
         assert!(names.iter().all(|(_, v)| *v == "settling"), "{names:?}");
     }
 
-    #[test]
-    fn an_offset_recovering_in_a_fresh_direction_after_each_placement_is_settling() {
-        use crate::diagnose::diagnose;
+    /// After each placement the offset jumps by 1.5 mg in a random direction and recovers with a
+    /// time constant of `tau_s`.
+    fn recovering_in_fresh_directions(seed: u64, tau_s: f64) -> crate::csvio::Table {
         use crate::sim::random::standard_normal;
         use crate::sim::scenario::SimLog;
         use crate::sim::simulate_with;
         use rand_core::SeedableRng;
-        // After each placement the offset jumps by 1.5 mg in a random direction and recovers with a
-        // time constant of 1 s (holds of 4-8 s): each hold decays alike, the pose means scatter as
-        // independent offsets (the transient's average over each hold). (With the time constant at
-        // 2.5 s in 3 s holds two of the three seeds are `unexplained`.)
-        let mut names = Vec::new();
+        let scenario = random_scenario(EffectClass::None, seed);
+        let g = scenario.sim.gravity;
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed);
+        let (mut hold, mut start, mut direction) = (None, 0.0, [0.0; 3]);
+        let recording = simulate_with(
+            &scenario.sim,
+            &mut [&mut |t: f64, pose: Option<usize>, r: &mut [f64; 3]| {
+                if pose.is_some() && pose != hold {
+                    let v: [f64; 3] = std::array::from_fn(|_| standard_normal(&mut rng));
+                    let norm = v.iter().map(|c| c * c).sum::<f64>().sqrt();
+                    (hold, start, direction) = (pose, t, v.map(|c| c / norm));
+                }
+                if pose.is_some() {
+                    let offset = 1.5e-3 * g * (-(t - start) / tau_s).exp();
+                    (0..3).for_each(|a| r[a] += offset * direction[a]);
+                }
+            }],
+        );
+        let temps_c = vec![25.0; recording.samples.len()];
+        to_table(&SimLog { recording, temps_c }, "recovery").unwrap()
+    }
+
+    #[test]
+    fn an_offset_recovering_in_a_fresh_direction_after_each_placement_is_settling() {
+        // A time constant of 1 s (holds of 4-8 s): each hold decays alike, the pose means scatter as
+        // independent offsets (the transient's average over each hold).
         for seed in [31, 32, 33] {
-            let scenario = random_scenario(EffectClass::None, seed);
-            let g = scenario.sim.gravity;
-            let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed);
-            let (mut hold, mut start, mut direction) = (None, 0.0, [0.0; 3]);
-            let recording = simulate_with(
-                &scenario.sim,
-                &mut [&mut |t: f64, pose: Option<usize>, r: &mut [f64; 3]| {
-                    if pose.is_some() && pose != hold {
-                        let v: [f64; 3] = std::array::from_fn(|_| standard_normal(&mut rng));
-                        let norm = v.iter().map(|c| c * c).sum::<f64>().sqrt();
-                        (hold, start, direction) = (pose, t, v.map(|c| c / norm));
-                    }
-                    if pose.is_some() {
-                        let offset = 1.5e-3 * g * (-(t - start) / 1.0).exp();
-                        (0..3).for_each(|a| r[a] += offset * direction[a]);
-                    }
-                }],
-            );
-            let temps_c = vec![25.0; recording.samples.len()];
-            let table = to_table(&SimLog { recording, temps_c }, "recovery").unwrap();
-            let d = diagnose(&table, &DiagnoseOptions { seed, ..DiagnoseOptions::DEFAULT }).unwrap();
-            names.push((seed, d.verdict));
+            let table = recovering_in_fresh_directions(seed, 1.0);
+            let d = crate::diagnose::diagnose(&table, &DiagnoseOptions { seed, ..DiagnoseOptions::DEFAULT }).unwrap();
+            assert_eq!(d.verdict, "settling", "seed {seed}: {}", d.to_text());
         }
-        assert!(names.iter().all(|(_, v)| *v == "settling"), "{names:?}");
+    }
+
+    #[test]
+    fn an_offset_recovering_over_half_a_hold_is_settling_from_the_holds_extrapolated_to_their_settled_values() {
+        // A time constant of 2.5 s in holds of 4-8 s: the transient has not died out by a hold's
+        // end, so a hold's last half still carries it, and the measured transient (mean less last
+        // half) scales each hold's share unevenly (held-out ratios 1.7-2.4 on these seeds).
+        // Fitted per hold from its set-down, the exponential's settled value predicts the withheld
+        // poses to 1.05-1.25.
+        for seed in [31, 32, 33] {
+            let table = recovering_in_fresh_directions(seed, 2.5);
+            let d = crate::diagnose::diagnose(&table, &DiagnoseOptions { seed, ..DiagnoseOptions::DEFAULT }).unwrap();
+            assert_eq!(d.verdict, "settling", "seed {seed}: {}", d.to_text());
+            let settling = d.candidates.iter().find(|c| c.effect == "settling").unwrap();
+            assert!(
+                settling.detail.starts_with("transient: every hold extrapolated"),
+                "seed {seed}: {}",
+                settling.detail
+            );
+            let measured = settling.variants.iter().filter(|(detail, _)| detail.starts_with("measured transient"));
+            let best_measured = measured.map(|(_, ratio)| *ratio).fold(f64::INFINITY, f64::min);
+            assert!(
+                settling.heldout_ratio < 0.75 * best_measured,
+                "seed {seed}: {} against {best_measured}",
+                settling.heldout_ratio
+            );
+        }
     }
 }
