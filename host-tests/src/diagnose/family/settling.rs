@@ -20,6 +20,7 @@
 use super::{Context, Evaluation, Family, Variant, motion, ringing, standard_evaluation};
 use crate::diagnose::PARAMETER_PENALTY;
 use crate::diagnose::SEGMENTS;
+use crate::diagnose::gap::PoseData;
 use crate::diagnose::locate::{early_late, within_chi2_of};
 use crate::diagnose::math::{V3, axis, dot, fit_residuals, mean_of, median, norm, rms, sum_sq};
 use crate::diagnose::within::{Within, WithinVariant};
@@ -206,69 +207,55 @@ fn trimmed_start(ctx: &Context<'_>, drop: usize) -> Option<Corrected> {
 
 /// The pose means settled: each hold's segment means fitted, per axis, by `c + b exp(-(t - t0) /
 /// tau)` from its set-down `t0` ([`placements`]), and `c`, the value the transient decays to, kept
-/// (a hold the log began in keeps its mean); with the white noise of `c` over the plain mean's,
-/// averaged over the poses. Where `tau` is near the hold's length the transient has not died out
-/// by the hold's end, and neither the mean nor the hold's last half is the settled value.
-fn settled_means(ctx: &Context<'_>, tau: f64) -> (Vec<V3>, f64) {
+/// (a hold the log began in keeps its mean). Where `tau` is near the hold's length the transient
+/// has not died out by the hold's end, and neither the mean nor the hold's last half is the
+/// settled value.
+fn settled_means(ctx: &Context<'_>, tau: f64) -> Vec<V3> {
     let n = SEGMENTS as f64;
-    let mut noise = 0.0;
-    let means = ctx
-        .poses
-        .iter()
-        .zip(placements(ctx))
-        .map(|(p, t0)| {
-            let Some(t0) = t0.filter(|_| p.seg_n > 0) else {
-                noise += 1.0;
-                return p.mean;
-            };
-            let x: Vec<f64> =
-                (0..SEGMENTS).map(|k| (-(p.t_start + (k as f64 + 0.5) / n * p.duration() - t0) / tau).exp()).collect();
-            let x_mean = x.iter().sum::<f64>() / n;
-            let sxx: f64 = x.iter().map(|v| (v - x_mean).powi(2)).sum();
-            noise += 1.0 + n * x_mean * x_mean / sxx;
-            let y_mean = mean_of(&p.seg);
-            std::array::from_fn(|a| {
-                let sxy: f64 = x.iter().zip(&p.seg).map(|(v, y)| (v - x_mean) * (y[a] - y_mean[a])).sum();
-                y_mean[a] - sxy / sxx * x_mean
-            })
+    let settled = |p: &PoseData, t0: f64| -> V3 {
+        let x: Vec<f64> =
+            (0..SEGMENTS).map(|k| (-(p.t_start + (k as f64 + 0.5) / n * p.duration() - t0) / tau).exp()).collect();
+        let x_mean = x.iter().sum::<f64>() / n;
+        let sxx: f64 = x.iter().map(|v| (v - x_mean).powi(2)).sum();
+        let y_mean = mean_of(&p.seg);
+        std::array::from_fn(|a| {
+            let sxy: f64 = x.iter().zip(&p.seg).map(|(v, y)| (v - x_mean) * (y[a] - y_mean[a])).sum();
+            y_mean[a] - sxy / sxx * x_mean
         })
-        .collect();
-    (means, noise / ctx.poses.len().max(1) as f64)
+    };
+    let placed = placements(ctx);
+    ctx.poses.iter().zip(placed).map(|(p, t0)| t0.filter(|_| p.seg_n > 0).map_or(p.mean, |t0| settled(p, t0))).collect()
 }
 
 /// The best settled pose means ([`settled_means`]) over the time constants up to the median hold,
-/// charged one parameter and the search's `ln` (rounded up).
+/// charged one parameter and the search's `ln` (rounded up). They are scored against the plain
+/// means' white noise: the noise the extrapolation adds (the exponential and the constant are
+/// nearly collinear over a hold as long as `tau`) counts against it. Scored against its own larger
+/// noise, as the trimmed starts are against theirs, an extrapolation of a noise wandering through
+/// the holds (a walk, a telegraph, a mixture) looked explained: on the development sets 17 colored
+/// noises were named settling so.
 fn settled(ctx: &Context<'_>) -> Option<Corrected> {
     let hold = median(&ctx.poses.iter().map(|p| p.duration()).collect::<Vec<_>>());
     let taus: Vec<f64> = WITHIN_TAUS_S.iter().copied().filter(|tau| *tau <= hold).collect();
     let params = 1 + (taus.len().max(1) as f64).ln().ceil() as usize;
     let detail = |tau| format!("transient: every hold extrapolated to its settled value (exponential, tau {tau} s)");
     taus.iter()
-        .filter_map(|&tau| {
-            let (means, noise) = settled_means(ctx, tau);
-            score_means(ctx, &means, noise, params, detail(tau))
-        })
+        .filter_map(|&tau| score_means(ctx, &settled_means(ctx, tau), 1.0, params, detail(tau)))
         .min_by(|a, b| a.ratio.total_cmp(&b.ratio))
 }
 
 /// Pose means `means` whose white noise is `more_noise` times the plain means': their modulus
-/// residuals under the nominal model, cross-validated and charged `params`, with the white noise
-/// the correction adds taken off and the rest set against the plain means' white noise. Set against
-/// its own, larger white noise, a noise wandering through the holds (a walk, a telegraph), which
-/// an extrapolation follows as readily as a transient, would look explained (on the development
-/// sets seventeen colored noises were named settling so).
+/// residuals under the nominal model, cross-validated and charged `params`.
 fn score_means(ctx: &Context<'_>, means: &[V3], more_noise: f64, params: usize, detail: String) -> Option<Corrected> {
     let m = ctx.m;
     let r: Vec<f64> = means.iter().map(|x| norm(m.model.apply(*x)) - m.gravity).collect();
     let cv = ctx.base_cv_residuals(&r)?;
-    let added = more_noise - 1.0;
-    let ms = (sum_sq(&cv).0 + params as f64 * PARAMETER_PENALTY * ctx.e_white) / ctx.n_scored() as f64;
-    let ratio = ((ms - added * ctx.e_white).max(0.0) / ctx.e_white).sqrt();
+    let expected = ctx.e_white * more_noise;
+    let ms = (sum_sq(&cv).0 + params as f64 * PARAMETER_PENALTY * expected) / ctx.n_scored() as f64;
     let after = fit_residuals(&ctx.base_rows, &r, &ctx.none_dropped)?;
     let kept: Vec<f64> = after.iter().flatten().copied().collect();
-    let (rms_mg, white_mg) = (m.to_mg(rms(&kept)), m.gap.sim_rmse_mg);
-    let ratio_after = (rms_mg.powi(2) - added * white_mg.powi(2)).max(0.0).sqrt() / white_mg;
-    Some(Corrected { ratio, after, ratio_after, params, detail })
+    let ratio_after = m.to_mg(rms(&kept)) / (m.gap.sim_rmse_mg * more_noise.sqrt());
+    Some(Corrected { ratio: (ms / expected).sqrt(), after, ratio_after, params, detail })
 }
 
 /// `e` becomes the corrected pose means' evaluation if they gain more on the withheld poses.
@@ -582,10 +569,13 @@ mod tests {
     #[test]
     fn an_offset_recovering_over_half_a_hold_is_settling_from_the_holds_extrapolated_to_their_settled_values() {
         // A time constant of 2.5 s in holds of 4-8 s: the transient has not died out by a hold's
-        // end, so a hold's last half still carries it, and the measured transient (mean less last
-        // half) scales each hold's share unevenly (held-out ratios 1.7-2.2 on these seeds).
-        // Fitted per hold from its set-down, the exponential's settled value predicts the withheld
-        // poses to 1.0-1.5, the white noise the extrapolation adds taken off.
+        // end, so a hold's last half still carries it. Fitted per hold from its set-down, the
+        // exponential's settled value predicts the withheld poses better than the measured
+        // transient (mean less last half) does, the noise the extrapolation adds counted against
+        // it: 1.67-2.02 against 1.70-2.18 on these seeds. (On this simulator's long, quiet holds
+        // the margin is small; on the generators' holds of about one time constant it is wider: a
+        // blindgen2 exponential settling of gap ratio 18 in 2.9 s holds, 6.4 against 7.8, was
+        // colored noise before and is settling.)
         for seed in [31, 32, 33] {
             let table = recovering_in_fresh_directions(seed, 2.5);
             let d = crate::diagnose::diagnose(&table, &DiagnoseOptions { seed, ..DiagnoseOptions::DEFAULT }).unwrap();
@@ -599,7 +589,7 @@ mod tests {
             let measured = settling.variants.iter().filter(|(detail, _)| detail.starts_with("measured transient"));
             let best_measured = measured.map(|(_, ratio)| *ratio).fold(f64::INFINITY, f64::min);
             assert!(
-                settling.heldout_ratio < 0.75 * best_measured,
+                settling.heldout_ratio < best_measured,
                 "seed {seed}: {} against {best_measured}",
                 settling.heldout_ratio
             );
