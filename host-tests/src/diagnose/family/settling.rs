@@ -555,14 +555,20 @@ mod tests {
         to_table(&SimLog { recording, temps_c }, "recovery").unwrap()
     }
 
+    /// [`recovering_in_fresh_directions`] diagnosed, asserted settling.
+    fn named_settling(seed: u64, tau_s: f64) -> crate::diagnose::Diagnosis {
+        let table = recovering_in_fresh_directions(seed, tau_s);
+        let d = crate::diagnose::diagnose(&table, &DiagnoseOptions { seed, ..DiagnoseOptions::DEFAULT }).unwrap();
+        assert_eq!(d.verdict, "settling", "seed {seed}: {}", d.to_text());
+        d
+    }
+
     #[test]
     fn an_offset_recovering_in_a_fresh_direction_after_each_placement_is_settling() {
         // A time constant of 1 s (holds of 4-8 s): each hold decays alike, the pose means scatter as
         // independent offsets (the transient's average over each hold).
         for seed in [31, 32, 33] {
-            let table = recovering_in_fresh_directions(seed, 1.0);
-            let d = crate::diagnose::diagnose(&table, &DiagnoseOptions { seed, ..DiagnoseOptions::DEFAULT }).unwrap();
-            assert_eq!(d.verdict, "settling", "seed {seed}: {}", d.to_text());
+            named_settling(seed, 1.0);
         }
     }
 
@@ -577,9 +583,7 @@ mod tests {
         // blindgen2 exponential settling of gap ratio 18 in 2.9 s holds, 6.4 against 7.8, was
         // colored noise before and is settling.)
         for seed in [31, 32, 33] {
-            let table = recovering_in_fresh_directions(seed, 2.5);
-            let d = crate::diagnose::diagnose(&table, &DiagnoseOptions { seed, ..DiagnoseOptions::DEFAULT }).unwrap();
-            assert_eq!(d.verdict, "settling", "seed {seed}: {}", d.to_text());
+            let d = named_settling(seed, 2.5);
             let settling = d.candidates.iter().find(|c| c.effect == "settling").unwrap();
             assert!(
                 settling.detail.starts_with("transient: every hold extrapolated"),
