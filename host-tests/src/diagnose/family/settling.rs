@@ -14,8 +14,9 @@
 //! better with the model on withheld poses, the start of the holds carried the gap. A transient
 //! still decaying at a hold's end (a time constant near the hold's length) is tested by
 //! extrapolating every hold to its settled value (an exponential from its set-down, fitted to the
-//! hold's segment means). Motion (a tap, a sway) happens anywhere in a hold and is not removed so. A mount ringing through the hold is
-//! tested by leaving out the holds that ring (a damped oscillation at one common frequency).
+//! hold's segment means). Motion (a tap, a sway) happens anywhere in a hold and is not removed so.
+//! A mount ringing through the hold is tested by leaving out the holds that ring (a damped
+//! oscillation at one common frequency).
 
 use super::{Context, Evaluation, Family, Variant, motion, ringing, standard_evaluation};
 use crate::diagnose::PARAMETER_PENALTY;
@@ -200,17 +201,17 @@ struct Corrected {
 /// The pose means with the leading `drop` segments of every hold left out (one parameter: the trim).
 fn trimmed_start(ctx: &Context<'_>, drop: usize) -> Option<Corrected> {
     let means: Vec<V3> = ctx.poses.iter().map(|p| if p.seg_n > 0 { mean_of(&p.seg[drop..]) } else { p.mean }).collect();
-    // Fewer samples per mean: more white noise in each.
     let detail = format!("transient: the first {drop}/{SEGMENTS} of every hold left out");
+    // Fewer samples per mean: more white noise in each.
     score_means(ctx, &means, SEGMENTS as f64 / (SEGMENTS - drop) as f64, 1, detail)
 }
 
 /// The pose means settled: each hold's segment means fitted, per axis, by `c + b exp(-(t - t0) /
-/// tau)` from its set-down `t0` ([`placements`]), and `c`, the value the transient decays to, kept
-/// (a hold the log began in keeps its mean). Where `tau` is near the hold's length the transient
+/// tau)` from its set-down `t0` (`placed`, [`placements`]), and `c`, the value the transient
+/// decays to, kept (a hold the log began in keeps its mean). Where `tau` is near the hold's length the transient
 /// has not died out by the hold's end, and neither the mean nor the hold's last half is the
 /// settled value.
-fn settled_means(ctx: &Context<'_>, tau: f64) -> Vec<V3> {
+fn settled_means(ctx: &Context<'_>, placed: &[Option<f64>], tau: f64) -> Vec<V3> {
     let n = SEGMENTS as f64;
     let settled = |p: &PoseData, t0: f64| -> V3 {
         let x: Vec<f64> =
@@ -223,7 +224,6 @@ fn settled_means(ctx: &Context<'_>, tau: f64) -> Vec<V3> {
             y_mean[a] - sxy / sxx * x_mean
         })
     };
-    let placed = placements(ctx);
     ctx.poses.iter().zip(placed).map(|(p, t0)| t0.filter(|_| p.seg_n > 0).map_or(p.mean, |t0| settled(p, t0))).collect()
 }
 
@@ -239,8 +239,9 @@ fn settled(ctx: &Context<'_>) -> Option<Corrected> {
     let taus: Vec<f64> = WITHIN_TAUS_S.iter().copied().filter(|tau| *tau <= hold).collect();
     let params = 1 + (taus.len().max(1) as f64).ln().ceil() as usize;
     let detail = |tau| format!("transient: every hold extrapolated to its settled value (exponential, tau {tau} s)");
+    let placed = placements(ctx);
     taus.iter()
-        .filter_map(|&tau| score_means(ctx, &settled_means(ctx, tau), 1.0, params, detail(tau)))
+        .filter_map(|&tau| score_means(ctx, &settled_means(ctx, &placed, tau), 1.0, params, detail(tau)))
         .min_by(|a, b| a.ratio.total_cmp(&b.ratio))
 }
 
