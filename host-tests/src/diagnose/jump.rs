@@ -45,7 +45,7 @@ pub(crate) fn jump_in_hold<const N: usize>(y: &[[f64; SEGMENTS]; N], var: [f64; 
 
 /// Least squares of `y` (variance `var`) on a constant and one shape over the segments: the
 /// residual chi-square and the shape's coefficient.
-fn shape_fit(y: &[f64; SEGMENTS], var: f64, shape: &dyn Fn(usize) -> f64) -> (f64, f64) {
+pub(crate) fn shape_fit(y: &[f64; SEGMENTS], var: f64, shape: &dyn Fn(usize) -> f64) -> (f64, f64) {
     let n = SEGMENTS as f64;
     let (sx, sy) = ((0..SEGMENTS).map(shape).sum::<f64>() / n, y.iter().sum::<f64>() / n);
     let sxx: f64 = (0..SEGMENTS).map(|j| (shape(j) - sx).powi(2)).sum();

@@ -22,6 +22,7 @@ use super::{Context, Evaluation, Family, Variant, motion, ringing, standard_eval
 use crate::diagnose::PARAMETER_PENALTY;
 use crate::diagnose::SEGMENTS;
 use crate::diagnose::gap::PoseData;
+use crate::diagnose::jump::shape_fit;
 use crate::diagnose::locate::{early_late, within_chi2_of};
 use crate::diagnose::math::{V3, axis, dot, fit_residuals, mean_of, median, norm, rms, sum_sq};
 use crate::diagnose::within::{Within, WithinVariant};
@@ -213,18 +214,20 @@ fn trimmed_start(ctx: &Context<'_>, drop: usize) -> Option<Corrected> {
 /// settled value.
 fn settled_means(ctx: &Context<'_>, placed: &[Option<f64>], tau: f64) -> Vec<V3> {
     let n = SEGMENTS as f64;
-    let settled = |p: &PoseData, t0: f64| -> V3 {
-        let x: Vec<f64> =
-            (0..SEGMENTS).map(|k| (-(p.t_start + (k as f64 + 0.5) / n * p.duration() - t0) / tau).exp()).collect();
-        let x_mean = x.iter().sum::<f64>() / n;
-        let sxx: f64 = x.iter().map(|v| (v - x_mean).powi(2)).sum();
+    let extrapolated = |p: &PoseData, t0: f64| -> V3 {
+        let decay = |k: usize| (-(p.t_start + (k as f64 + 0.5) / n * p.duration() - t0) / tau).exp();
+        let decay_mean = (0..SEGMENTS).map(decay).sum::<f64>() / n;
         let y_mean = mean_of(&p.seg);
         std::array::from_fn(|a| {
-            let sxy: f64 = x.iter().zip(&p.seg).map(|(v, y)| (v - x_mean) * (y[a] - y_mean[a])).sum();
-            y_mean[a] - sxy / sxx * x_mean
+            let (_, b) = shape_fit(&p.seg.map(|y| y[a]), 1.0, &decay);
+            y_mean[a] - b * decay_mean
         })
     };
-    ctx.poses.iter().zip(placed).map(|(p, t0)| t0.filter(|_| p.seg_n > 0).map_or(p.mean, |t0| settled(p, t0))).collect()
+    ctx.poses
+        .iter()
+        .zip(placed)
+        .map(|(p, t0)| t0.filter(|_| p.seg_n > 0).map_or(p.mean, |t0| extrapolated(p, t0)))
+        .collect()
 }
 
 /// The best settled pose means ([`settled_means`]) over the time constants up to the median hold,
