@@ -5,6 +5,7 @@
 
 pub(crate) mod colored_noise;
 mod context;
+mod corrected;
 mod drift;
 mod joint;
 pub(crate) mod motion;

@@ -18,13 +18,13 @@
 //! A mount ringing through the hold is tested by leaving out the holds that ring (a damped
 //! oscillation at one common frequency).
 
+use super::corrected::{Corrected, score_means, take_if_better};
 use super::{Context, Evaluation, Family, Variant, motion, ringing, standard_evaluation};
-use crate::diagnose::PARAMETER_PENALTY;
 use crate::diagnose::SEGMENTS;
 use crate::diagnose::gap::PoseData;
 use crate::diagnose::jump::shape_fit;
 use crate::diagnose::locate::{early_late, within_chi2_of};
-use crate::diagnose::math::{V3, axis, dot, fit_residuals, mean_of, median, norm, rms, sum_sq};
+use crate::diagnose::math::{V3, axis, dot, mean_of, median};
 use crate::diagnose::within::{Within, WithinVariant};
 
 /// Leading segments of each hold left out by the start-trimmed variants.
@@ -189,16 +189,6 @@ fn measured_transients(ctx: &Context<'_>) -> Vec<V3> {
         .collect()
 }
 
-/// Pose means corrected for a transient and scored as the nominal model's: the held-out ratio, the
-/// residuals of the fit to every pose and their gap ratio, the parameters charged, what was done.
-struct Corrected {
-    ratio: f64,
-    after: Vec<Option<f64>>,
-    ratio_after: f64,
-    params: usize,
-    detail: String,
-}
-
 /// The pose means with the leading `drop` segments of every hold left out (one parameter: the trim).
 fn trimmed_start(ctx: &Context<'_>, drop: usize) -> Option<Corrected> {
     let means: Vec<V3> = ctx.poses.iter().map(|p| if p.seg_n > 0 { mean_of(&p.seg[drop..]) } else { p.mean }).collect();
@@ -246,34 +236,6 @@ fn settled(ctx: &Context<'_>) -> Option<Corrected> {
     taus.iter()
         .filter_map(|&tau| score_means(ctx, &settled_means(ctx, &placed, tau), 1.0, params, detail(tau)))
         .min_by(|a, b| a.ratio.total_cmp(&b.ratio))
-}
-
-/// Pose means `means` whose white noise is `more_noise` times the plain means': their modulus
-/// residuals under the nominal model, cross-validated and charged `params`.
-fn score_means(ctx: &Context<'_>, means: &[V3], more_noise: f64, params: usize, detail: String) -> Option<Corrected> {
-    let m = ctx.m;
-    let r: Vec<f64> = means.iter().map(|x| norm(m.model.apply(*x)) - m.gravity).collect();
-    let cv = ctx.base_cv_residuals(&r)?;
-    let expected = ctx.e_white * more_noise;
-    let ms = (sum_sq(&cv).0 + params as f64 * PARAMETER_PENALTY * expected) / ctx.n_scored() as f64;
-    let after = fit_residuals(&ctx.base_rows, &r, &ctx.none_dropped)?;
-    let kept: Vec<f64> = after.iter().flatten().copied().collect();
-    let ratio_after = m.to_mg(rms(&kept)) / (m.gap.sim_rmse_mg * more_noise.sqrt());
-    Some(Corrected { ratio: (ms / expected).sqrt(), after, ratio_after, params, detail })
-}
-
-/// `e` becomes the corrected pose means' evaluation if they gain more on the withheld poses.
-fn take_if_better(ctx: &Context<'_>, e: &mut Evaluation, fit: Corrected) {
-    let gain = ctx.value_gain(fit.ratio);
-    if gain <= e.candidate.evidence() {
-        return;
-    }
-    let c = &mut e.candidate;
-    c.applicable = true;
-    (c.heldout_ratio, c.heldout_gain, c.ratio_after, c.extra_params) = (fit.ratio, gain, fit.ratio_after, fit.params);
-    c.detail = fit.detail;
-    e.after = fit.after;
-    e.gain_without_worst = f64::NAN;
 }
 
 /// The holds disturbed by a ringing mount (a damped oscillation at a common frequency) left out.
