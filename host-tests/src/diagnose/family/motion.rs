@@ -2,8 +2,9 @@
 //! the first third of the hold (a transient at the start is settling, not motion) is robustly
 //! compared with the median pose's; so is the scatter of the readings about those segment means (a
 //! vibration faster than a segment: footsteps, a fan). Disturbed poses are dropped, each at the
-//! cost of an expected noise variance plus the penalty, and the gain is measured on the rest.
-//! Disturbed holds that decay, or ring at a common frequency (`ringing`), are settling.
+//! cost of an expected noise variance plus the penalty, and the gain is measured on the rest; or,
+//! where a burst shakes only some segments of a pose, those segments are left out and the pose
+//! kept. Disturbed holds that decay, or ring at a common frequency (`ringing`), are settling.
 
 use accelcal::model::PARAM_COUNT;
 
@@ -266,14 +267,25 @@ mod tests {
     use rand_xoshiro::Xoshiro256PlusPlus;
     use std::ops::Range;
 
+    /// The white noise's standard deviation of the clean log of `seed`, averaged over the axes, mg.
+    fn white_mg(seed: u64) -> f64 {
+        let clean = to_table(&generate(&random_scenario(EffectClass::None, seed)), "sim").unwrap();
+        let m = gap::measure(&clean, &DiagnoseOptions::DEFAULT).unwrap();
+        (m.white.iter().sum::<f64>() / 3.0).sqrt() / (clean.median_magnitude * 1e-3)
+    }
+
+    /// A footfall's ringing of the floor `since_step` s after it: 15 Hz, decaying in 50 ms, `peak_mg`
+    /// at the step.
+    fn footfall_mg(peak_mg: f64, since_step: f64) -> f64 {
+        peak_mg * (-since_step / 0.05).exp() * (std::f64::consts::TAU * 15.0 * since_step).sin()
+    }
+
     /// Footsteps near the bench during the holds `shaken`: a step about every 0.5 s rings the floor at
     /// 15 Hz (decaying in 50 ms, along one direction, 15 times the white noise's standard deviation
     /// at the step), and the walker's weight leans the bench, shifting the readings 1 mg along it.
     fn footsteps(seed: u64, shaken: &[usize]) -> crate::csvio::Table {
         let v = [0.3, -0.4, 0.866];
-        let clean = to_table(&generate(&random_scenario(EffectClass::None, seed)), "sim").unwrap();
-        let m = gap::measure(&clean, &DiagnoseOptions::DEFAULT).unwrap();
-        let white_mg = (m.white.iter().sum::<f64>() / 3.0).sqrt() / (clean.median_magnitude * 1e-3);
+        let white_mg = white_mg(seed);
         log_with(seed, &|p, t, _| {
             if !shaken.contains(&p) {
                 return [0.0; 3];
@@ -283,8 +295,7 @@ mod tests {
             let step_at = |k: f64| 0.5 * k + 0.1 * jitter(k as i64, p);
             let k = (t / 0.5).floor();
             let since_step = if t >= step_at(k) { t - step_at(k) } else { t - step_at(k - 1.0) };
-            let ring = 15.0 * white_mg * (-since_step / 0.05).exp() * (std::f64::consts::TAU * 15.0 * since_step).sin();
-            v.map(|c| c * (1.0 + ring))
+            v.map(|c| c * (1.0 + footfall_mg(15.0 * white_mg, since_step)))
         })
     }
 
@@ -330,22 +341,21 @@ mod tests {
     }
 
     /// Footsteps passing the bench in bursts: during 30 % of the holds (drawn at random), from 45 %
-    /// to 70 % of the hold, a step every 0.5 s rings the floor at 15 Hz (decaying in 50 ms, 10 times the white
-    /// noise's standard deviation at the step) and the walker's weight leans the bench along one
+    /// to 70 % of the hold, a step every 0.5 s rings the floor (10 times the white noise's standard
+    /// deviation at the step, [`footfall_mg`]) and the walker's weight leans the bench along one
     /// direction, up to 2 mg and back as half a sine.
     fn footsteps_in_bursts(seed: u64) -> crate::csvio::Table {
         let v = [0.3, -0.4, 0.866];
+        let white_mg = white_mg(seed);
         let clean = to_table(&generate(&random_scenario(EffectClass::None, seed)), "sim").unwrap();
         let m = gap::measure(&clean, &DiagnoseOptions::DEFAULT).unwrap();
-        let white_mg = (m.white.iter().sum::<f64>() / 3.0).sqrt() / (clean.median_magnitude * 1e-3);
         let holds_s: Vec<f64> = m.poses.iter().map(|p| p.t_end - p.t_start).collect();
         log_with(seed, &|p, t, _| {
             let (start, end) = (0.45 * holds_s[p], 0.7 * holds_s[p]);
             if jitter(-1, p) < 0.4 || t < start || t > end {
                 return [0.0; 3];
             }
-            let since_step = (t - start) % 0.5;
-            let ring = 10.0 * white_mg * (-since_step / 0.05).exp() * (std::f64::consts::TAU * 15.0 * since_step).sin();
+            let ring = footfall_mg(10.0 * white_mg, (t - start) % 0.5);
             let lean = 2.0 * (std::f64::consts::PI * (t - start) / (end - start)).sin();
             v.map(|c| c * (lean + ring))
         })
