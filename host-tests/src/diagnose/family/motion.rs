@@ -202,17 +202,13 @@ fn shaken_segments_left_out(ctx: &Context<'_>) -> Option<Corrected> {
         return None;
     }
     let shaken = shaken_segments(ctx);
-    let mut trimmed = vec![false; ctx.poses.len()];
-    let means: Vec<V3> = ctx
-        .poses
-        .iter()
-        .enumerate()
-        .map(|(i, p)| {
-            let quiet: Vec<V3> = (0..SEGMENTS).filter(|&k| !shaken[i][k]).map(|k| p.seg[k]).collect();
-            trimmed[i] = p.seg_n > 0 && quiet.len() >= QUIET_SEGMENTS_KEPT && quiet.len() < SEGMENTS;
-            if trimmed[i] { mean_of(&quiet) } else { p.mean }
-        })
-        .collect();
+    let (mut means, mut trimmed) = (Vec::with_capacity(ctx.poses.len()), Vec::with_capacity(ctx.poses.len()));
+    for (p, shaken) in ctx.poses.iter().zip(&shaken) {
+        let quiet: Vec<V3> = (0..SEGMENTS).filter(|&k| !shaken[k]).map(|k| p.seg[k]).collect();
+        let trim = p.seg_n > 0 && quiet.len() >= QUIET_SEGMENTS_KEPT && quiet.len() < SEGMENTS;
+        means.push(if trim { mean_of(&quiet) } else { p.mean });
+        trimmed.push(trim);
+    }
     if !trimmed.contains(&true) || in_one_hold(ctx, &trimmed) {
         return None;
     }
@@ -267,11 +263,13 @@ mod tests {
     use rand_xoshiro::Xoshiro256PlusPlus;
     use std::ops::Range;
 
-    /// The white noise's standard deviation of the clean log of `seed`, averaged over the axes, mg.
-    fn white_mg(seed: u64) -> f64 {
+    /// The clean log of `seed` measured: its poses, and its white noise's standard deviation averaged
+    /// over the axes, mg.
+    fn clean_measured(seed: u64) -> (gap::Measured, f64) {
         let clean = to_table(&generate(&random_scenario(EffectClass::None, seed)), "sim").unwrap();
         let m = gap::measure(&clean, &DiagnoseOptions::DEFAULT).unwrap();
-        (m.white.iter().sum::<f64>() / 3.0).sqrt() / (clean.median_magnitude * 1e-3)
+        let white_mg = (m.white.iter().sum::<f64>() / 3.0).sqrt() / (clean.median_magnitude * 1e-3);
+        (m, white_mg)
     }
 
     /// A footfall's ringing of the floor `since_step` s after it: 15 Hz, decaying in 50 ms, `peak_mg`
@@ -285,7 +283,7 @@ mod tests {
     /// at the step), and the walker's weight leans the bench, shifting the readings 1 mg along it.
     fn footsteps(seed: u64, shaken: &[usize]) -> crate::csvio::Table {
         let v = [0.3, -0.4, 0.866];
-        let white_mg = white_mg(seed);
+        let (_, white_mg) = clean_measured(seed);
         log_with(seed, &|p, t, _| {
             if !shaken.contains(&p) {
                 return [0.0; 3];
@@ -346,9 +344,7 @@ mod tests {
     /// direction, up to 2 mg and back as half a sine.
     fn footsteps_in_bursts(seed: u64) -> crate::csvio::Table {
         let v = [0.3, -0.4, 0.866];
-        let white_mg = white_mg(seed);
-        let clean = to_table(&generate(&random_scenario(EffectClass::None, seed)), "sim").unwrap();
-        let m = gap::measure(&clean, &DiagnoseOptions::DEFAULT).unwrap();
+        let (m, white_mg) = clean_measured(seed);
         let holds_s: Vec<f64> = m.poses.iter().map(|p| p.t_end - p.t_start).collect();
         log_with(seed, &|p, t, _| {
             let (start, end) = (0.45 * holds_s[p], 0.7 * holds_s[p]);
