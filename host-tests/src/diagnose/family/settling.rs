@@ -199,9 +199,9 @@ fn trimmed_start(ctx: &Context<'_>, drop: usize) -> Option<Corrected> {
 
 /// The pose means settled: each hold's segment means fitted, per axis, by `c + b exp(-(t - t0) /
 /// tau)` from its set-down `t0` (`placed`, [`placements`]), and `c`, the value the transient
-/// decays to, kept (a hold the log began in keeps its mean). Where `tau` is near the hold's length the transient
-/// has not died out by the hold's end, and neither the mean nor the hold's last half is the
-/// settled value.
+/// decays to, kept (a hold the log began in keeps its mean). Where `tau` is near the hold's length
+/// the transient has not died out by the hold's end, and neither the mean nor the hold's last half
+/// is the settled value.
 fn settled_means(ctx: &Context<'_>, placed: &[Option<f64>], tau: f64) -> Vec<V3> {
     let n = SEGMENTS as f64;
     let extrapolated = |p: &PoseData, t0: f64| -> V3 {
