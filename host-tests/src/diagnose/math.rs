@@ -480,6 +480,11 @@ impl ScaledFactor {
         Some(solve_factored(&self.l, &b)?.iter().zip(&self.scale).map(|(v, s)| v / s).collect())
     }
 
+    /// `ln det a` (of the system factored, its ridge included).
+    pub(crate) fn log_det(&self) -> f64 {
+        2.0 * self.scale.iter().chain(self.l.iter().enumerate().map(|(i, row)| &row[i])).map(|v| v.ln()).sum::<f64>()
+    }
+
     /// `row` whitened: `L^-1` of the scaled row, so that two whitened rows' dot product is
     /// `row_i^T a^-1 row_j`.
     pub(crate) fn whiten(&self, row: &[f64]) -> Vec<f64> {

@@ -228,7 +228,7 @@ fn diagnose_measured(table: &Table, opts: &DiagnoseOptions, m: &gap::Measured, s
     };
     let probes = ctx.as_ref().map(probe::run).unwrap_or_default();
     let from_holds = ctx.as_ref().and_then(family::from_holds);
-    let holds_walk = ctx.as_ref().is_some_and(family::colored_noise::walk_accounts_closely);
+    let holds_walk = ctx.as_ref().is_some_and(family::colored_noise::walk_accounts);
     let quiet_walk = |probe: Option<&Probe>| ctx.as_ref().and_then(|c| family::colored_noise::quiet_walk(c, probe));
     let decision = verdict::decide(m, &evaluations, &probes, from_holds, holds_walk, quiet_walk);
     let scale = m.scale();

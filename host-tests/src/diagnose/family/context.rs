@@ -146,6 +146,8 @@ pub(crate) struct Context<'a> {
     /// The random walk at the holds' level and its held-out ratio, once measured
     /// (`colored_noise::holds_walk`: asked by the noise model, the holds' answer and the verdict).
     pub(crate) holds_walk: OnceCell<Option<(V3, Option<f64>)>>,
+    /// Whether the pose means follow a random walk's course, once asked (`colored_noise::poses_walk`).
+    pub(crate) poses_walk: OnceCell<bool>,
     /// Motion in the tremor band, once measured ([`Context::tremor`]).
     tremor: OnceCell<Option<tremor::Tremor>>,
     /// A steady line in the holds, once searched ([`Context::steady_line`]).
@@ -252,6 +254,7 @@ impl<'a> Context<'a> {
             within,
             pose_level,
             holds_walk: OnceCell::new(),
+            poses_walk: OnceCell::new(),
             tremor: OnceCell::new(),
             steady_line: OnceCell::new(),
             periodic: OnceCell::new(),

@@ -8,6 +8,7 @@
 
 mod allan;
 pub(crate) mod coherent;
+mod course;
 mod telegraph;
 
 pub(crate) use telegraph::{Jumps, switching_holds};
@@ -214,6 +215,28 @@ const WALK_ACCOUNTS: f64 = 1.2;
 /// walk's path.
 pub(crate) fn walk_accounts_closely(ctx: &Context<'_>) -> bool {
     wander_alike(ctx) && holds_walk(ctx).and_then(|(_, ratio)| ratio).is_some_and(|ratio| ratio <= WALK_ACCOUNTS)
+}
+
+/// Restricted log-likelihood by which a random walk in time must explain the pose means better than
+/// every other course ([`course::walk_beats_others`]) for their course to be a walk's.
+const WALK_OVER_OTHERS: f64 = 2.0;
+
+/// The pose means follow a random walk's course in time, not a smooth one's, one step's or a
+/// scatter of each pose on its own ([`course::walk_beats_others`] by [`WALK_OVER_OTHERS`]), a walk
+/// at the holds' level accounts for their scatter within [`NOISE_LEAVES_AT_MOST`] and no period
+/// moves them: the holds and the pose means' course both read a walk, though the holds need not
+/// wander alike (a walk moves a long hold more than a short one). Asked once per log.
+fn poses_walk(ctx: &Context<'_>) -> bool {
+    *ctx.poses_walk.get_or_init(|| {
+        let accounts = holds_walk(ctx).and_then(|(_, ratio)| ratio).is_some_and(|r| r <= NOISE_LEAVES_AT_MOST);
+        ctx.pose_level && accounts && !follows_a_period(ctx) && course::walk_beats_others(ctx, WALK_OVER_OTHERS)
+    })
+}
+
+/// A walk accounts for the pose means: read from holds that wander alike
+/// ([`walk_accounts_closely`]), or from their own course in time ([`poses_walk`]).
+pub(crate) fn walk_accounts(ctx: &Context<'_>) -> bool {
+    walk_accounts_closely(ctx) || poses_walk(ctx)
 }
 
 /// Standard deviations (under white noise) by which quiet holds move beyond white noise at least for
@@ -479,7 +502,7 @@ impl ColoredNoise {
         let m = ctx.m;
         let mut estimates = hold_estimates(ctx);
         // The walk whose level the holds' wander measures, when it accounts for the pose means.
-        if walk_accounts_closely(ctx) {
+        if walk_accounts(ctx) {
             estimates.extend(holds_walk(ctx).map(|(walk, _)| (Colored { walk, ..Colored::default() }, true, 1.0)));
         }
         let best = self.best_noise(ctx, &estimates);
@@ -597,6 +620,18 @@ mod tests {
         for (i, sample) in table.samples.iter_mut().enumerate() {
             let along = amp_mg * mg * (std::f64::consts::TAU * i as f64 * dt / period_s).sin();
             (0..3).for_each(|a| sample[a] += along * direction[a]);
+        }
+        table
+    }
+
+    /// A clean simulated log with one bias step of `step_mg` mg half way through the log (inside a
+    /// hold or between two), along a fixed direction: a knock, a register reload.
+    fn step_log(seed: u64, step_mg: f64) -> Table {
+        let mut table = to_table(&generate(&random_scenario(EffectClass::None, seed)), "step").unwrap();
+        let mg = table.median_magnitude / 1000.0;
+        let half = table.samples.len() / 2;
+        for sample in &mut table.samples[half..] {
+            (0..3).for_each(|a| sample[a] += step_mg * mg * [0.36, -0.48, 0.8][a]);
         }
         table
     }
@@ -1004,5 +1039,30 @@ mod tests {
         );
         let temps_c = vec![25.0; recording.samples.len()];
         to_table(&SimLog { recording, temps_c }, "telegraph").unwrap()
+    }
+
+    #[test]
+    fn a_walks_course_through_the_pose_means_is_told_from_one_step_and_from_offsets_of_each_hold() {
+        // Walks of 0.05-0.1 mg per sqrt(s) whose pose means a slow change followed: seed 8's were
+        // named drift, seed 11's temperature (the log's thermometer) and seed 22's drift, before
+        // their course was asked. It is a walk's: rough down to the time between two poses.
+        let opts = DiagnoseOptions::DEFAULT;
+        for (seed, level) in [(8, 0.05), (8, 0.1), (11, 0.1), (22, 0.1)] {
+            let table = walk_log(seed, level, 0.0);
+            let m = gap::measure(&table, &opts).unwrap();
+            let ctx = Context::new(&table, &m, &opts).unwrap();
+            assert!(super::poses_walk(&ctx), "seed {seed}, {level} mg/sqrt(s)");
+            let d = diagnose(&table, &opts).unwrap();
+            assert_eq!(d.verdict, "colored-noise", "seed {seed}: {}", d.to_text());
+        }
+        // One bias step of 1 mg half way through (gap ratios 4.7-13.9 on these seeds) and an offset
+        // of 0.3 mg of its own from each hold on (4.6-17.8): neither course is a walk's.
+        for seed in 1..=5 {
+            for table in [step_log(seed, 1.0), walk_log(seed, 0.0, 0.3)] {
+                let m = gap::measure(&table, &opts).unwrap();
+                let ctx = Context::new(&table, &m, &opts).unwrap();
+                assert!(!super::course::walk_beats_others(&ctx, super::WALK_OVER_OTHERS), "seed {seed}");
+            }
+        }
     }
 }
