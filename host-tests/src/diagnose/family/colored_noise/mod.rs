@@ -225,7 +225,10 @@ const WALK_OVER_OTHERS: f64 = 2.0;
 /// scatter of each pose on its own ([`course::walk_beats_others`] by [`WALK_OVER_OTHERS`]), a walk
 /// at the holds' level accounts for their scatter within [`NOISE_LEAVES_AT_MOST`] and no period
 /// moves them: the holds and the pose means' course both read a walk, though the holds need not
-/// wander alike (a walk moves a long hold more than a short one). Asked once per log.
+/// wander alike (a walk moves a long hold more than a short one). Asked once per log. On the
+/// development sets (13 920 logs) it named 13 random walks colored noise (10 named drift before, 3
+/// `unexplained`) and 2 blindgen2 hysteresis logs (an offset by the sense of each turn, `unexplained`
+/// before); on the 2 016 logs held out from the choice no answer changed.
 fn poses_walk(ctx: &Context<'_>) -> bool {
     *ctx.poses_walk.get_or_init(|| {
         let accounts = holds_walk(ctx).and_then(|(_, ratio)| ratio).is_some_and(|r| r <= NOISE_LEAVES_AT_MOST);
