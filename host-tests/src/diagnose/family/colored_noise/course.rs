@@ -68,14 +68,14 @@ fn restricted_nll(c: Kernel, rows: &[Vec<f64>], r: &[f64]) -> Option<f64> {
 
 /// The pose means' noise and the two ways the calibration's columns see a process (its bias's and
 /// its scale's).
-struct Poses<'c, 'a> {
+struct PoseMeans<'c, 'a> {
     ctx: &'c Context<'a>,
     noise: Vec<f64>,
     sigma: f64,
     spatial: [Kernel; 2],
 }
 
-impl Poses<'_, '_> {
+impl PoseMeans<'_, '_> {
     /// The best restricted negative log-likelihood over `levels` of a bias and a scale process
     /// of time kernel `time`.
     fn best_nll(&self, time: &Kernel, levels: &[f64]) -> f64 {
@@ -110,6 +110,11 @@ fn time_kernel(ctx: &Context<'_>, f: &dyn Fn(f64, f64) -> f64) -> Kernel {
     t.iter().map(|&a| t.iter().map(|&b| f(a, b)).collect()).collect()
 }
 
+/// The time kernel of a scatter of each pose on its own: no two poses share it.
+fn own_kernel(n: usize) -> Kernel {
+    (0..n).map(|i| (0..n).map(|j| f64::from(u8::from(i == j))).collect()).collect()
+}
+
 /// Time kernels of one step: between pose `k - 1` and pose `k`, or during pose `k`'s hold at an
 /// unknown time (a uniform share of the hold after it: mean 1/2, variance 1/12).
 fn step_kernels(n: usize, k: usize) -> [Kernel; 2] {
@@ -122,7 +127,7 @@ fn step_kernels(n: usize, k: usize) -> [Kernel; 2] {
 }
 
 /// The best of one step at any time (coarser levels: it is searched over the poses).
-fn step_nll(poses: &Poses<'_, '_>) -> f64 {
+fn step_nll(poses: &PoseMeans<'_, '_>) -> f64 {
     let n = poses.noise.len();
     let levels: Vec<f64> = LEVELS.iter().step_by(2).copied().collect();
     (0..n)
@@ -146,13 +151,13 @@ pub(crate) fn walk_beats_others(ctx: &Context<'_>, margin: f64) -> bool {
     }
     let noise: Vec<f64> = (0..ctx.poses.len()).map(|p| pose_variance(ctx, p)).collect();
     let sigma = median(&noise.iter().map(|v| v.sqrt()).collect::<Vec<_>>());
-    let poses = Poses { ctx, noise, sigma, spatial: [spatial(ctx, 0..3), spatial(ctx, 3..6)] };
+    let poses = PoseMeans { ctx, noise, sigma, spatial: [spatial(ctx, 0..3), spatial(ctx, 3..6)] };
     let span = ctx.poses.last().map_or(0.0, |p| p.t_end) - ctx.poses.first().map_or(0.0, |p| p.t_start);
     let span = span.max(f64::MIN_POSITIVE);
     let walk = poses.best_nll(&time_kernel(ctx, &|a, b| a.min(b) / span), &LEVELS);
     let beaten = |other: f64| other - walk >= margin;
     let smooth = |share: f64| time_kernel(ctx, &|a, b| (-0.5 * ((a - b) / (share * span)).powi(2)).exp());
     SMOOTH_LENGTHS.iter().all(|&share| beaten(poses.best_nll(&smooth(share), &LEVELS)))
-        && beaten(poses.best_nll(&time_kernel(ctx, &|a, b| f64::from(u8::from(a == b))), &LEVELS))
+        && beaten(poses.best_nll(&own_kernel(ctx.poses.len()), &LEVELS))
         && beaten(step_nll(&poses))
 }
