@@ -214,7 +214,13 @@ const WALK_ACCOUNTS: f64 = 1.2;
 /// [`walk_accounts_for_poses`]' limit too): a time-varying fit of the pose means then follows the
 /// walk's path.
 pub(crate) fn walk_accounts_closely(ctx: &Context<'_>) -> bool {
-    wander_alike(ctx) && holds_walk(ctx).and_then(|(_, ratio)| ratio).is_some_and(|ratio| ratio <= WALK_ACCOUNTS)
+    wander_alike(ctx) && holds_walk_leaves_at_most(ctx, WALK_ACCOUNTS)
+}
+
+/// A random walk at the holds' level ([`holds_walk`]) leaves the withheld pose means' scatter at most
+/// `limit` times its prediction (`false` when it cannot be judged).
+fn holds_walk_leaves_at_most(ctx: &Context<'_>, limit: f64) -> bool {
+    holds_walk(ctx).and_then(|(_, ratio)| ratio).is_some_and(|ratio| ratio <= limit)
 }
 
 /// Restricted log-likelihood by which a random walk in time must explain the pose means better than
@@ -231,8 +237,10 @@ const WALK_OVER_OTHERS: f64 = 2.0;
 /// before); on the 2 016 logs held out from the choice no answer changed.
 fn poses_walk(ctx: &Context<'_>) -> bool {
     *ctx.poses_walk.get_or_init(|| {
-        let accounts = holds_walk(ctx).and_then(|(_, ratio)| ratio).is_some_and(|r| r <= NOISE_LEAVES_AT_MOST);
-        ctx.pose_level && accounts && !follows_a_period(ctx) && course::walk_beats_others(ctx, WALK_OVER_OTHERS)
+        ctx.pose_level
+            && holds_walk_leaves_at_most(ctx, NOISE_LEAVES_AT_MOST)
+            && !follows_a_period(ctx)
+            && course::walk_beats_others(ctx, WALK_OVER_OTHERS)
     })
 }
 
