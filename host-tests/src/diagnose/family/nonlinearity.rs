@@ -10,11 +10,11 @@ pub(crate) struct ScaleNonlinearity;
 type Shape = fn(f64) -> f64;
 
 fn square(a: f64) -> f64 {
-    a * a
+    a.powi(2)
 }
 
 fn cube(a: f64) -> f64 {
-    a * a * a
+    a.powi(3)
 }
 
 /// An odd compression (or expansion) growing with the square of the reading: a symmetric soft
