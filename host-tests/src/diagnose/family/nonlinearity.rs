@@ -140,29 +140,26 @@ mod tests {
 
     /// [`cube_log`] on another plan.
     fn plan_log(plan: Plan, seed: u64, k2: [f64; 3], k3: [f64; 3], keep: impl FnMut(&[f64; 3]) -> bool) -> Table {
-        let cfg = SimConfig { plan, ..SimConfig::paper(seed) };
-        let g = cfg.gravity;
-        let recording = simulate_with(
-            &cfg,
-            &mut [&mut |_t: f64, _p: Option<usize>, r: &mut [f64; 3]| {
-                (0..3).for_each(|a| r[a] += g * (k2[a] * (r[a] / g).powi(2) + k3[a] * (r[a] / g).powi(3)));
-            }],
-        );
-        crate::diagnose::testing::table_of_poses(recording, keep, "cube")
+        bowed_log(plan, seed, &|a, x| k2[a] * x.powi(2) + k3[a] * x.powi(3), keep)
     }
 
     /// Random orientations, each axis reading off by `ks a|a|` (g units): an odd compression or
     /// expansion growing with the square of the reading.
     fn signed_square_log(seed: u64, poses: usize, ks: [f64; 3]) -> Table {
-        let cfg = SimConfig { plan: Plan::Random(poses), ..SimConfig::paper(seed) };
+        bowed_log(Plan::Random(poses), seed, &|a, x| ks[a] * x * x.abs(), |_| true)
+    }
+
+    /// The poses of `plan` that `keep` keeps, axis `a` reading off by `bow(a, reading)` (g units).
+    fn bowed_log(plan: Plan, seed: u64, bow: &dyn Fn(usize, f64) -> f64, keep: impl FnMut(&[f64; 3]) -> bool) -> Table {
+        let cfg = SimConfig { plan, ..SimConfig::paper(seed) };
         let g = cfg.gravity;
         let recording = simulate_with(
             &cfg,
             &mut [&mut |_t: f64, _p: Option<usize>, r: &mut [f64; 3]| {
-                (0..3).for_each(|a| r[a] += g * ks[a] * (r[a] / g) * (r[a] / g).abs());
+                (0..3).for_each(|a| r[a] += g * bow(a, r[a] / g))
             }],
         );
-        crate::diagnose::testing::table_of_poses(recording, |_| true, "signed-square")
+        crate::diagnose::testing::table_of_poses(recording, keep, "bowed")
     }
 
     #[test]
