@@ -165,9 +165,9 @@ mod tests {
     #[test]
     fn signed_square_terms_on_fourteen_random_poses_are_named_by_their_own_shape() {
         // 14 random orientations, `ks a|a|` of 4, -5 and 6 mg at 1 g (gap ratios 5-22). On a face the
-        // term is a scale; on a tilted pose it departs from the scale by 0.5-0.8 of what a cube term
-        // does, by the tilt. Without the shape, square and cube terms named 10 of these 16 logs (held-out
-        // gains 0.08-0.77); with it 11, 7 of them by their own shape (gains 0.37-1.00).
+        // term is a scale; on a tilted pose it departs from the scale by `1 / (1 + |a|)` times what a
+        // cube term does. Without the shape, square and cube terms named 10 of these 16 logs (held-out
+        // gains 0.36-0.77); with it 11, 7 of them by their own shape (gains 0.45-1.00).
         let (mut named, mut own_shape) = (0, 0);
         for seed in 1..=16 {
             let table = signed_square_log(seed, 14, [4.0e-3, -5.0e-3, 6.0e-3]);
