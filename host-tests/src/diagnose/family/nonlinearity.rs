@@ -62,7 +62,7 @@ impl Family for ScaleNonlinearity {
             Variant { extra: both.clone(), params: 6, detail: "k2 a^2 + k3 a^3 per axis".into() },
             Variant { extra: common(signed_square), params: 1, detail: "ks a|a|, one ks for all axes".into() },
         ];
-        // The signed square per axis, a third odd shape of three columns beside the cube's: where
+        // The signed square per axis, a second odd shape of three columns beside the cube's: where
         // every fold's fit is exactly determined, the best of two such chances is no evidence (see
         // the one-axis variants below). Offered there too on the development sets, on logs of 13
         // poses it named two out-of-catalogue effects and a drift a non-linearity and lost one
