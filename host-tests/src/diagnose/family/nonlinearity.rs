@@ -49,26 +49,24 @@ impl Family for ScaleNonlinearity {
     }
 
     fn variants(&self, ctx: &Context<'_>) -> Vec<Variant> {
-        let common = |shape: Shape| -> Vec<Vec<f64>> {
-            per_axis_terms(ctx, &[shape]).into_iter().map(|row| vec![row.iter().sum::<f64>()]).collect()
-        };
+        let [squares, cubes, signed_squares] = [square, cube, signed_square].map(|shape| per_axis_terms(ctx, &[shape]));
+        let common = |terms: &[Vec<f64>]| -> Vec<Vec<f64>> { terms.iter().map(|row| vec![row.iter().sum()]).collect() };
         let both = per_axis_terms(ctx, &[square, cube]);
         let mut variants = vec![
             // One coefficient for all axes: testable on logs of few poses.
-            Variant { extra: common(square), params: 1, detail: "k2 a^2, one k2 for all axes".into() },
-            Variant { extra: common(cube), params: 1, detail: "k3 a^3, one k3 for all axes".into() },
-            Variant { extra: per_axis_terms(ctx, &[square]), params: 3, detail: "k2 a^2 per axis".into() },
-            Variant { extra: per_axis_terms(ctx, &[cube]), params: 3, detail: "k3 a^3 per axis".into() },
+            Variant { extra: common(&squares), params: 1, detail: "k2 a^2, one k2 for all axes".into() },
+            Variant { extra: common(&cubes), params: 1, detail: "k3 a^3, one k3 for all axes".into() },
+            Variant { extra: squares, params: 3, detail: "k2 a^2 per axis".into() },
+            Variant { extra: cubes, params: 3, detail: "k3 a^3 per axis".into() },
             Variant { extra: both.clone(), params: 6, detail: "k2 a^2 + k3 a^3 per axis".into() },
-            Variant { extra: common(signed_square), params: 1, detail: "ks a|a|, one ks for all axes".into() },
+            Variant { extra: common(&signed_squares), params: 1, detail: "ks a|a|, one ks for all axes".into() },
         ];
         // The signed square per axis, a second odd shape of three columns beside the cube's: where
         // every fold's fit is exactly determined, the best of two such chances is no evidence (see
         // the one-axis variants below). Offered there too on the development sets, on logs of 13
         // poses it named two out-of-catalogue effects and a drift a non-linearity and lost one
         // non-linearity to drift, for 3 non-linearities gained.
-        let signed =
-            Variant { extra: per_axis_terms(ctx, &[signed_square]), params: 3, detail: "ks a|a| per axis".into() };
+        let signed = Variant { extra: signed_squares, params: 3, detail: "ks a|a| per axis".into() };
         if ctx.trains_beyond(&signed.extra, AXIS_CHOICE_MIN_DOF) {
             variants.push(signed);
         }
