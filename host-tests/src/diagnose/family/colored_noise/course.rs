@@ -3,8 +3,9 @@
 //! the time between two poses, and neighbouring poses share its path. Three other courses move
 //! them too: a smooth one (a warm-up, a creep, a wander low-passed by the part's thermal mass) along
 //! a curve neighbouring poses share even more closely; one step (a knock, a register reload), a
-//! single jump in a quiet path; and a scatter of each pose on its own (a hysteresis of the
-//! previous pose, a bad pose), shared by no neighbour. Each is a Gaussian process in time, seen
+//! single jump in a quiet path; a scatter of each pose on its own (a hysteresis of the previous
+//! pose, a bad pose), shared by no neighbour; and a drift's rigid shape (a line, a parabola, a
+//! warm-up), one curve whose size alone is free. Each is a Gaussian process in time, seen
 //! through the poses' directions as the calibration's bias and scale columns see them, and scored
 //! by its restricted likelihood (the calibration's nine columns integrated out) at the levels that
 //! fit the pose means best.
@@ -17,6 +18,9 @@ const LEVELS: [f64; 13] = [0.0, 0.01, 0.023, 0.053, 0.12, 0.28, 0.65, 1.5, 3.4, 
 
 /// Correlation lengths of the smooth course, as shares of the log's span (a Gaussian kernel).
 const SMOOTH_LENGTHS: [f64; 5] = [0.08, 0.12, 0.18, 0.27, 0.4];
+
+/// Time constants of a warm-up's rigid course `1 - exp(-t / tau)`, as shares of the log's span.
+const WARM_UP_SHARES: [f64; 4] = [0.1, 0.2, 0.4, 0.8];
 
 /// Most poses whose course is read. Each likelihood costs the cube of the poses, for every level
 /// and step tried (a log of 181 poses took 11 s with it, 1.0 s without: stop 104); a log of more poses
@@ -126,6 +130,38 @@ fn step_kernels(n: usize, k: usize) -> [Kernel; 2] {
     [outer(&between, 0.0), outer(&during, 1.0 / 12.0)]
 }
 
+/// The best of a drift's rigid courses: a line, a parabola and warm-ups from the log's start
+/// ([`WARM_UP_SHARES`]), each one curve `f` in time whose size on each axis is free (kernel
+/// `f(t_i) f(t_j)`). A walk starts from nothing at the log's start and its variance grows with time,
+/// as a warm-up's course does: a warm-up's pose means, which no stationary smooth course follows
+/// as closely, otherwise read as a walk's.
+fn rigid_nll(ctx: &Context<'_>, poses: &PoseMeans<'_, '_>, span: f64) -> f64 {
+    let warm_ups = WARM_UP_SHARES.map(|share| move |x: f64| 1.0 - (-x / share).exp());
+    let mut curves: Vec<&dyn Fn(f64) -> f64> = vec![&|x| x, &|x| x * x];
+    curves.extend(warm_ups.iter().map(|f| f as &dyn Fn(f64) -> f64));
+    curves
+        .into_iter()
+        .map(|f| poses.best_nll(&time_kernel(ctx, &|a, b| f(a / span) * f(b / span)), &LEVELS))
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// A course the pose means may follow instead of a walk's.
+#[derive(Clone, Copy)]
+pub(crate) enum Course {
+    /// A smooth course (Gaussian in the time between two poses, its correlation length among
+    /// [`SMOOTH_LENGTHS`]).
+    Smooth,
+    /// A scatter of each pose on its own.
+    Own,
+    /// A drift's rigid shape ([`rigid_nll`]).
+    Rigid,
+    /// One step at any time ([`step_nll`]).
+    Step,
+}
+
+/// Every course a walk's is told from, cheapest first (the step is searched over the poses).
+pub(crate) const OTHER_COURSES: [Course; 4] = [Course::Smooth, Course::Own, Course::Rigid, Course::Step];
+
 /// The best of one step at any time (coarser levels: it is searched over the poses).
 fn step_nll(poses: &PoseMeans<'_, '_>) -> f64 {
     let n = poses.noise.len();
@@ -140,12 +176,16 @@ fn step_nll(poses: &PoseMeans<'_, '_>) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
-/// A random walk in time explains the pose means better than every other course by `margin` in
-/// restricted log-likelihood: the walk (kernel `min(t_i, t_j)`) against a smooth course (Gaussian in
-/// the time between two poses, its correlation length among [`SMOOTH_LENGTHS`]), a scatter of each
-/// pose on its own, and one step at any time (asked last: it is searched). Not asked beyond
-/// [`MAX_POSES`].
+/// A random walk in time explains the pose means better than every other course
+/// ([`OTHER_COURSES`]) by `margin` in restricted log-likelihood.
 pub(crate) fn walk_beats_others(ctx: &Context<'_>, margin: f64) -> bool {
+    walk_beats(ctx, margin, &OTHER_COURSES)
+}
+
+/// A random walk in time (kernel `min(t_i, t_j)`) explains the pose means better than each of
+/// `others` by `margin` in restricted log-likelihood, asked in their order. Not asked beyond
+/// [`MAX_POSES`].
+pub(crate) fn walk_beats(ctx: &Context<'_>, margin: f64, others: &[Course]) -> bool {
     if ctx.poses.len() > MAX_POSES {
         return false;
     }
@@ -157,7 +197,10 @@ pub(crate) fn walk_beats_others(ctx: &Context<'_>, margin: f64) -> bool {
     let walk = poses.best_nll(&time_kernel(ctx, &|a, b| a.min(b) / span), &LEVELS);
     let beaten = |other: f64| other - walk >= margin;
     let smooth = |share: f64| time_kernel(ctx, &|a, b| (-0.5 * ((a - b) / (share * span)).powi(2)).exp());
-    SMOOTH_LENGTHS.iter().all(|&share| beaten(poses.best_nll(&smooth(share), &LEVELS)))
-        && beaten(poses.best_nll(&own_kernel(ctx.poses.len()), &LEVELS))
-        && beaten(step_nll(&poses))
+    others.iter().all(|course| match course {
+        Course::Smooth => SMOOTH_LENGTHS.iter().all(|&share| beaten(poses.best_nll(&smooth(share), &LEVELS))),
+        Course::Own => beaten(poses.best_nll(&own_kernel(ctx.poses.len()), &LEVELS)),
+        Course::Rigid => beaten(rigid_nll(ctx, &poses, span)),
+        Course::Step => beaten(step_nll(&poses)),
+    })
 }
