@@ -577,6 +577,22 @@ pub(crate) mod testing {
         table
     }
 
+    /// A clean simulated log with a bias along one direction added as `shape(t / duration)` mg.
+    pub(crate) fn biased_log(seed: u64, shape: &dyn Fn(f64) -> f64) -> Table {
+        use crate::csvio::{self, AccumulateOptions};
+        use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
+        let mut table = to_table(&generate(&random_scenario(EffectClass::None, seed)), "bias").unwrap();
+        let acc = csvio::accumulate(&table, &AccumulateOptions::default()).unwrap();
+        let (mg, dt) = (table.median_magnitude / 1000.0, 1.0 / acc.sample_rate_hz.unwrap());
+        let duration = table.samples.len() as f64 * dt;
+        let direction = [0.36, -0.48, 0.8];
+        for (i, sample) in table.samples.iter_mut().enumerate() {
+            let along = shape(i as f64 * dt / duration) * mg;
+            (0..3).for_each(|a| sample[a] += along * direction[a]);
+        }
+        table
+    }
+
     /// The table of `recording` with only the poses whose direction `keep` keeps (the rows of the
     /// others, their holds, left out), at 25 C.
     pub(crate) fn table_of_poses(

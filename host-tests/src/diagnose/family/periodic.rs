@@ -79,23 +79,8 @@ pub(crate) fn location(ctx: &Context<'_>) -> Option<String> {
 
 #[cfg(test)]
 mod tests {
-    use crate::csvio::{self, AccumulateOptions, Table};
+    use crate::diagnose::testing::biased_log;
     use crate::diagnose::{DiagnoseOptions, diagnose};
-    use crate::sim::scenario::{EffectClass, generate, random_scenario, to_table};
-
-    /// A clean simulated log with a bias along one direction added as `shape(t / duration)` mg.
-    fn biased_log(seed: u64, shape: &dyn Fn(f64) -> f64) -> Table {
-        let mut table = to_table(&generate(&random_scenario(EffectClass::None, seed)), "bias").unwrap();
-        let acc = csvio::accumulate(&table, &AccumulateOptions::default()).unwrap();
-        let (mg, dt) = (table.median_magnitude / 1000.0, 1.0 / acc.sample_rate_hz.unwrap());
-        let duration = table.samples.len() as f64 * dt;
-        let direction = [0.36, -0.48, 0.8];
-        for (i, sample) in table.samples.iter_mut().enumerate() {
-            let along = shape(i as f64 * dt / duration) * mg;
-            (0..3).for_each(|a| sample[a] += along * direction[a]);
-        }
-        table
-    }
 
     #[test]
     fn a_slow_beat_over_the_log_is_no_drift_but_a_warm_up_as_large_is() {

@@ -1081,21 +1081,6 @@ mod tests {
         }
     }
 
-    /// A clean simulated log with a bias warming up along one direction from the log's start:
-    /// `amp_mg (1 - exp(-t / tau))` mg, `tau` a share `tau_share` of the log.
-    fn warm_up_log(seed: u64, amp_mg: f64, tau_share: f64) -> Table {
-        let mut table = to_table(&generate(&random_scenario(EffectClass::None, seed)), "warm").unwrap();
-        let acc = csvio::accumulate(&table, &AccumulateOptions::default()).unwrap();
-        let (mg, dt) = (table.median_magnitude / 1000.0, 1.0 / acc.sample_rate_hz.unwrap());
-        let duration = table.samples.len() as f64 * dt;
-        let direction = [0.36, -0.48, 0.8];
-        for (i, sample) in table.samples.iter_mut().enumerate() {
-            let along = amp_mg * mg * (1.0 - (-(i as f64 * dt) / (tau_share * duration)).exp());
-            (0..3).for_each(|a| sample[a] += along * direction[a]);
-        }
-        table
-    }
-
     #[test]
     fn a_walks_course_a_little_likelier_than_any_other_is_read_and_a_warm_ups_rigid_course_is_not_a_walks() {
         // Walks of 0.03-0.05 mg per sqrt(s) (gap ratios 4.5-8.3): their course beats every other by
@@ -1114,7 +1099,7 @@ mod tests {
         // A warm-up of 1 mg along one direction, its time constant 0.3 of the log (29 poses, gap
         // ratio 3.9): a walk's course beats a smooth one's, each pose's own scatter and one step's,
         // but not a warm-up's rigid course. It stays drift.
-        let table = warm_up_log(5, 1.0, 0.3);
+        let table = crate::diagnose::testing::biased_log(5, &|x| 1.0 - (-x / 0.3).exp());
         let m = gap::measure(&table, &opts).unwrap();
         let ctx = Context::new(&table, &m, &opts).unwrap();
         use super::course::{Course, walk_beats};
