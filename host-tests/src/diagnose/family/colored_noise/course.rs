@@ -1,7 +1,7 @@
 //! The pose means' course in time: a random walk's, or a course that is no walk's. A bias or scale
 //! that walks (integrated white noise) moves the pose means with steps at every time scale, down to
-//! the time between two poses, and neighbouring poses share its path. Three other courses move
-//! them too: a smooth one (a warm-up, a creep, a wander low-passed by the part's thermal mass) along
+//! the time between two poses, and neighbouring poses share its path. Four other courses move
+//! them too: a smooth one (a creep, a wander low-passed by the part's thermal mass) along
 //! a curve neighbouring poses share even more closely; one step (a knock, a register reload), a
 //! single jump in a quiet path; a scatter of each pose on its own (a hysteresis of the previous
 //! pose, a bad pose), shared by no neighbour; and a drift's rigid shape (a line, a parabola, a

@@ -236,11 +236,12 @@ const WALK_OVER_OTHERS: f64 = 0.5;
 /// The pose means follow a random walk's course in time, not a smooth one's, one step's, a scatter
 /// of each pose on its own or a drift's rigid shape ([`course::walk_beats_others`] by
 /// [`WALK_OVER_OTHERS`]), a walk at the holds' level accounts for their scatter within
-/// [`NOISE_LEAVES_AT_MOST`] and no period moves them: the holds and the pose means' course both read a walk, though the holds need not
-/// wander alike (a walk moves a long hold more than a short one). Asked once per log. On the
-/// development sets (13 920 logs) it named 13 random walks colored noise (10 named drift before, 3
-/// `unexplained`) and 2 blindgen2 hysteresis logs (an offset by the sense of each turn, `unexplained`
-/// before); on the 2 016 logs held out from the choice no answer changed.
+/// [`NOISE_LEAVES_AT_MOST`] and no period moves them: the holds and the pose means' course both read
+/// a walk, though the holds need not wander alike (a walk moves a long hold more than a short one).
+/// Asked once per log. On stop 103's development sets (13 920 logs) it named 13 random walks colored
+/// noise (10 named drift before, 3 `unexplained`) and 2 blindgen2 hysteresis logs (an offset by the
+/// sense of each turn, `unexplained` before); on the 2 016 logs held out from the choice no answer
+/// changed.
 fn poses_walk(ctx: &Context<'_>) -> bool {
     *ctx.poses_walk.get_or_init(|| {
         ctx.pose_level
@@ -1085,6 +1086,7 @@ mod tests {
 
     #[test]
     fn a_walks_course_a_little_likelier_than_any_other_is_read_and_a_warm_ups_rigid_course_is_not_a_walks() {
+        use super::course::{Course, walk_beats, walk_beats_others};
         // Walks of 0.03-0.05 mg per sqrt(s) (gap ratios 4.5-8.3): their course beats every other by
         // 0.5 in restricted log-likelihood but not by 2 (stop 103's margin), and they were named
         // drift (seeds 10, 20, 28, 29) or `unexplained` (seed 7).
@@ -1093,8 +1095,8 @@ mod tests {
             let table = walk_log(seed, level, 0.0);
             let m = gap::measure(&table, &opts).unwrap();
             let ctx = Context::new(&table, &m, &opts).unwrap();
-            assert!(super::course::walk_beats_others(&ctx, super::WALK_OVER_OTHERS), "seed {seed}");
-            assert!(!super::course::walk_beats_others(&ctx, 2.0), "seed {seed}");
+            assert!(walk_beats_others(&ctx, super::WALK_OVER_OTHERS), "seed {seed}");
+            assert!(!walk_beats_others(&ctx, 2.0), "seed {seed}");
             let d = diagnose(&table, &opts).unwrap();
             assert_eq!(d.verdict, "colored-noise", "seed {seed}: {}", d.to_text());
         }
@@ -1104,9 +1106,8 @@ mod tests {
         let table = crate::diagnose::testing::biased_log(5, &|x| 1.0 - (-x / 0.3).exp());
         let m = gap::measure(&table, &opts).unwrap();
         let ctx = Context::new(&table, &m, &opts).unwrap();
-        use super::course::{Course, walk_beats};
         assert!(walk_beats(&ctx, super::WALK_OVER_OTHERS, &[Course::Smooth, Course::Own, Course::Step]));
-        assert!(!super::course::walk_beats_others(&ctx, super::WALK_OVER_OTHERS));
+        assert!(!walk_beats_others(&ctx, super::WALK_OVER_OTHERS));
         let d = diagnose(&table, &opts).unwrap();
         assert_eq!(d.verdict, "drift", "{}", d.to_text());
     }
