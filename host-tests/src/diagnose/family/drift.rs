@@ -26,7 +26,7 @@ const KNOTS: [usize; 3] = [3, 5, 9];
 const HARMONICS: [usize; 5] = [1, 2, 3, 4, 6];
 
 /// Time constants tried, as fractions of the log's duration.
-const TAU_FACTORS: [f64; 6] = [0.05, 0.1, 0.2, 0.4, 0.8, 1.6];
+pub(crate) const TAU_FACTORS: [f64; 6] = [0.05, 0.1, 0.2, 0.4, 0.8, 1.6];
 
 /// Least share of the holds' movement beyond white noise a line per hold must explain for
 /// [`drifting_holds`] (a random walk's path: about 0.7; see [`Within::line_share`]).
@@ -110,7 +110,7 @@ pub(crate) fn drifting_holds(ctx: &Context<'_>) -> Option<String> {
 }
 
 /// A warm-up's course at `t`: `1 - exp(-t / tau)` (`t`, `tau` in one unit).
-fn warm_up(t: f64, tau: f64) -> f64 {
+pub(crate) fn warm_up(t: f64, tau: f64) -> f64 {
     1.0 - (-t / tau).exp()
 }
 

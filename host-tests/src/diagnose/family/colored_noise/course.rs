@@ -11,6 +11,7 @@
 //! fit the pose means best.
 
 use super::Context;
+use crate::diagnose::family::drift::{TAU_FACTORS, warm_up};
 use crate::diagnose::math::{ScaledFactor, median};
 
 /// Levels tried for a process, in the pose means' median noise standard deviations (0: absent).
@@ -19,8 +20,9 @@ const LEVELS: [f64; 13] = [0.0, 0.01, 0.023, 0.053, 0.12, 0.28, 0.65, 1.5, 3.4, 
 /// Correlation lengths of the smooth course, as shares of the log's span (a Gaussian kernel).
 const SMOOTH_LENGTHS: [f64; 5] = [0.08, 0.12, 0.18, 0.27, 0.4];
 
-/// Time constants of a warm-up's rigid course `1 - exp(-t / tau)`, as shares of the log's span.
-const WARM_UP_SHARES: [f64; 4] = [0.1, 0.2, 0.4, 0.8];
+/// Time constants of a warm-up's rigid course ([`warm_up`]), as shares of the log's span: the drift
+/// family's ([`TAU_FACTORS`]) but its fastest and its slowest (0.1-0.8).
+const WARM_UP_SHARES: [f64; 4] = [TAU_FACTORS[1], TAU_FACTORS[2], TAU_FACTORS[3], TAU_FACTORS[4]];
 
 /// Most poses whose course is read. Each likelihood costs the cube of the poses, for every level
 /// and step tried (a log of 181 poses took 11 s with it, 1.0 s without: stop 104); a log of more poses
@@ -136,7 +138,7 @@ fn step_kernels(n: usize, k: usize) -> [Kernel; 2] {
 /// as a warm-up's course does: a warm-up's pose means, which no stationary smooth course follows
 /// as closely, otherwise read as a walk's.
 fn rigid_nll(ctx: &Context<'_>, poses: &PoseMeans<'_, '_>, span: f64) -> f64 {
-    let warm_ups = WARM_UP_SHARES.map(|share| move |x: f64| 1.0 - (-x / share).exp());
+    let warm_ups = WARM_UP_SHARES.map(|share| move |x: f64| warm_up(x, share));
     let mut curves: Vec<&dyn Fn(f64) -> f64> = vec![&|x| x, &|x| x * x];
     curves.extend(warm_ups.iter().map(|f| f as &dyn Fn(f64) -> f64));
     curves
