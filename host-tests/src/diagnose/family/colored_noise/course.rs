@@ -138,13 +138,9 @@ fn step_kernels(n: usize, k: usize) -> [Kernel; 2] {
 /// as a warm-up's course does: a warm-up's pose means, which no stationary smooth course follows
 /// as closely, otherwise read as a walk's.
 fn rigid_nll(ctx: &Context<'_>, poses: &PoseMeans<'_, '_>, span: f64) -> f64 {
-    let warm_ups = WARM_UP_SHARES.map(|share| move |x: f64| warm_up(x, share));
-    let mut curves: Vec<&dyn Fn(f64) -> f64> = vec![&|x| x, &|x| x * x];
-    curves.extend(warm_ups.iter().map(|f| f as &dyn Fn(f64) -> f64));
-    curves
-        .into_iter()
-        .map(|f| poses.best_nll(&time_kernel(ctx, &|a, b| f(a / span) * f(b / span)), &LEVELS))
-        .fold(f64::INFINITY, f64::min)
+    let along = |f: &dyn Fn(f64) -> f64| poses.best_nll(&time_kernel(ctx, &|a, b| f(a / span) * f(b / span)), &LEVELS);
+    let warm_ups = WARM_UP_SHARES.iter().map(|&share| along(&|x| warm_up(x, share)));
+    warm_ups.fold(along(&|x| x).min(along(&|x| x * x)), f64::min)
 }
 
 /// A course the pose means may follow instead of a walk's.
