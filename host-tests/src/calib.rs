@@ -10,7 +10,9 @@ use accelcal::ga::Ga;
 use accelcal::model::{Params, STANDARD_GRAVITY_MPS2};
 
 use crate::csvio::{DroppedRows, Units};
-use accelcal::solve::levenberg_marquardt;
+use accelcal::ellipsoid::OutlierRule;
+use accelcal::linalg::Held;
+use accelcal::solve::{levenberg_marquardt, levenberg_marquardt_holding};
 use rand_core::SeedableRng;
 use rand_xoshiro::Xoshiro128PlusPlus;
 
@@ -152,6 +154,24 @@ fn loo_rmse_mg(poses: &[Pose], config: &CalibrationConfig, params: &Params) -> O
         sum += modulus_error_g * modulus_error_g;
     }
     Some(((sum / all.len() as f64).sqrt() * 1000.0) as f32)
+}
+
+/// An LM fit of every pose in `poses` (none left out as an outlier) started at `start` (paper
+/// convention) instead of the initial estimate, in the frame of `config`'s initial estimate, the
+/// parameters flagged in `held` held at nominal: the local minimum nearest `start`. `None` when the
+/// poses cannot be prepared or the fit fails.
+pub fn lm_from(poses: &[Pose], config: &CalibrationConfig, start: &Params, held: &[bool]) -> Option<Params> {
+    let keep_all = OutlierRule::KEEP_ALL;
+    let norm = NormalizedPoses::<MAX_POSES>::prepare(poses, config.init, config.gravity, &keep_all).ok()?;
+    let held = Held::from_flags(held);
+    let mut x0: Deviation = norm.frame().to_deviation(start);
+    for (i, x) in x0.iter_mut().enumerate() {
+        if held.contains(i) {
+            *x = 0.0;
+        }
+    }
+    let fit = levenberg_marquardt_holding(x0, norm.poses(), &config.lm, held).ok()?;
+    Some(norm.frame().to_params(&fit.x))
 }
 
 /// JSON of the parameters: `{"bias": [..], "scale": [..], "nonorth": [..]}` (the library's

@@ -5,8 +5,9 @@
 //!    cut up by motion, are counted and left out; all are used when too few full holds remain and
 //!    the holds do not move). The library fits the nominal 9-parameter model ([`calib::run`](crate::calib::run),
 //!    TAGA+LM). The same experiment (the fitted orientations, sample counts, durations and the
-//!    white noise measured within the poses) is simulated `repeats` times and refitted by the
-//!    library (LM); the gap is the real modulus RMSE over the mean simulated RMSE (1 = no gap),
+//!    white noise measured within the poses) is simulated `repeats` times and refitted as the real
+//!    log was (the library's LM from the truth on every pose, the real fit's held parameters held:
+//!    a repeat's own initial estimate could hold more, or leave a pose out); the gap is the real modulus RMSE over the mean simulated RMSE (1 = no gap),
 //!    significant when the real RMSE is at least [`SIGNIFICANT_Z`] simulated standard deviations
 //!    above the simulated mean and the ratio at least [`SIGNIFICANT_RATIO`] (the noise model's own
 //!    error on logs from other generators).
