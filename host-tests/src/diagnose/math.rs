@@ -95,7 +95,7 @@ impl Model {
     }
 
     /// The library's parameters of this model (f32; the inverse of [`Model::from_params`]).
-    pub(crate) fn to_params(&self) -> Params {
+    pub(crate) fn to_params(self) -> Params {
         let (k, f) = (&self.ka, |v: f64| v as f32);
         Params {
             bias: self.bias.map(f),
