@@ -1117,13 +1117,14 @@ mod repeat_tests {
 
     #[test]
     fn a_repeat_is_fitted_as_the_real_log_was_so_its_own_start_cannot_inflate_the_spread() {
-        // 11 poses, 3 mg per pose mean, the non-orthogonality held (as the library holds it there).
+        // 11 poses, 3 mg per pose mean, the three non-orthogonality terms held.
         let (directions, poses) = few_poses(11, 73);
         let noise = Noise { white: [9e-6 * 500.0; 3], ..Noise::default() };
         let opts = DiagnoseOptions { gravity: 1.0, ..DiagnoseOptions::DEFAULT };
         let own = own_start_rmses_mg(&directions, &poses, &noise, &opts);
         let worst_over_median = |v: &[f64]| v.iter().copied().fold(0.0, f64::max) / median(v);
-        // From its own start, one repeat's fit ends far off (an initial estimate that holds a scale).
+        // From its own start, one repeat's fit ends far off (its initial estimate leaves a pose out or
+        // holds a scale factor).
         assert!(worst_over_median(&own) > 8.0, "{own:?}");
         let held = [false, false, false, false, false, false, true, true, true];
         let model = Model::from_params(&Params::IDENTITY);
