@@ -134,11 +134,11 @@ pub(crate) fn residuals(model: &Model, means: &[V3], gravity: f64) -> Vec<f64> {
     means.iter().map(|m| norm(model.apply(*m)) - gravity).collect()
 }
 
-/// Step 1's simulation: the fitted experiment with `noise`, each repeat refitted by the library's LM
-/// from the truth on every pose, holding `held` (the real fit's held parameters); the RMSE of each
-/// repeat, mg.
+/// Step 1's simulation: the experiment fitted as `truth` with `noise`, each repeat refitted by the
+/// library's LM from the truth on every pose, holding `held` (the real fit's held parameters); the
+/// RMSE of each repeat, mg.
 pub(crate) fn simulate_gap(
-    model: &Model,
+    truth: &Params,
     held: &[bool],
     directions: &[V3],
     poses: &[PoseData],
@@ -147,9 +147,9 @@ pub(crate) fn simulate_gap(
 ) -> Vec<f64> {
     let (gravity, seed) = (opts.gravity, opts.seed);
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x0006_A951_u64);
+    let model = Model::from_params(truth);
     let clean: Vec<V3> = directions.iter().map(|u| model.invert(u.map(|c| c * gravity))).collect();
     let config = CalibrationConfig { gravity: gravity as f32, ..CalibrationConfig::DEFAULT };
-    let truth = model.to_params();
     let mut out = Vec::with_capacity(opts.repeats);
     for _ in 0..opts.repeats {
         let draws = draw_noise(poses, noise, &mut rng);
@@ -169,7 +169,7 @@ pub(crate) fn simulate_gap(
         let f32_means: Vec<V3> = lib_poses.iter().map(|p| p.mean.map(f64::from)).collect();
         // Fitted as the real log was (the same parameters held), without its search: a repeat has no
         // outliers, and its own initial estimate could hold a parameter the real fit left free.
-        if let Some(fitted) = calib::lm_from(&lib_poses, &config, &truth, held) {
+        if let Some(fitted) = calib::lm_from(&lib_poses, &config, truth, held) {
             out.push(rms(&residuals(&Model::from_params(&fitted), &f32_means, gravity)) / gravity * 1000.0);
         }
     }
@@ -826,7 +826,7 @@ fn measure_found(table: &Table, opts: &DiagnoseOptions, found: Found) -> Result<
     let (white, quantisation, correlation) = white_variance(table, &poses, rate, q)?;
     let white_noise = Noise { white, floor: quantisation, ..Noise::default() };
     let held = cal.verdict.warnings.held;
-    let sims = simulate_gap(&model, &held, &directions, &poses, &white_noise, opts);
+    let sims = simulate_gap(&cal.params, &held, &directions, &poses, &white_noise, opts);
     if sims.len() < 2 {
         return Err(Refusal::Undetermined { still_poses: lib_poses.len() });
     }
@@ -1127,8 +1127,7 @@ mod repeat_tests {
         // holds a scale factor).
         assert!(worst_over_median(&own) > 8.0, "{own:?}");
         let held = [false, false, false, false, false, false, true, true, true];
-        let model = Model::from_params(&Params::IDENTITY);
-        let sims = simulate_gap(&model, &held, &directions, &poses, &noise, &opts);
+        let sims = simulate_gap(&Params::IDENTITY, &held, &directions, &poses, &noise, &opts);
         assert_eq!(sims.len(), opts.repeats);
         assert!(worst_over_median(&sims) < 4.0, "{sims:?}");
     }

@@ -94,16 +94,6 @@ impl Model {
         Self { ka: [[s[0], 0.0, 0.0], [m[0], s[1], 0.0], [m[1], m[2], s[2]]], bias: p.bias.map(f64::from) }
     }
 
-    /// The library's parameters of this model (f32; the inverse of [`Model::from_params`]).
-    pub(crate) fn to_params(self) -> Params {
-        let (k, f) = (&self.ka, |v: f64| v as f32);
-        Params {
-            bias: self.bias.map(f),
-            scale: [f(k[0][0]), f(k[1][1]), f(k[2][2])],
-            nonorth: [f(k[1][0]), f(k[2][0]), f(k[2][1])],
-        }
-    }
-
     pub(crate) fn apply(&self, m: V3) -> V3 {
         std::array::from_fn(|i| (0..3).map(|j| self.ka[i][j] * m[j]).sum::<f64>() - self.bias[i])
     }

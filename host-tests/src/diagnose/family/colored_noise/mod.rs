@@ -529,7 +529,7 @@ impl ColoredNoise {
         let (heldout_ratio, c) = best.unwrap_or((ctx.heldout_ratio_nominal, estimates[0].0));
         let noise = c.noise(m);
         let sim_after = if applicable {
-            let sims = simulate_gap(&m.model, &m.held, &m.directions, &m.poses, &noise, ctx.opts);
+            let sims = simulate_gap(&m.params, &m.held, &m.directions, &m.poses, &noise, ctx.opts);
             mean(&sims)
         } else {
             m.gap.sim_rmse_mg
